@@ -1,0 +1,68 @@
+"""Validation helpers shared by the parameter dataclasses.
+
+Every check raises :class:`ParameterError` naming the offending field, so a user
+sees ``sensor_delay_s must be >= 0 (got -0.001)`` rather than a traceback from
+deep inside Drake.
+"""
+
+from __future__ import annotations
+
+import math
+
+__all__ = [
+    "ParameterError",
+    "check_finite",
+    "check_positive",
+    "check_nonnegative",
+    "check_positive_or_inf",
+    "check_choice",
+]
+
+
+class ParameterError(ValueError):
+    """A parameter given by the user is out of its physical range."""
+
+
+def check_finite(name: str, value: float) -> float:
+    """Return ``value`` as a float, or raise if it is not a finite number."""
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be a number (got {value!r})") from None
+    if not math.isfinite(x):
+        raise ParameterError(f"{name} must be finite (got {value!r})")
+    return x
+
+
+def check_positive(name: str, value: float) -> float:
+    """Return ``value`` if it is a finite number > 0."""
+    x = check_finite(name, value)
+    if x <= 0.0:
+        raise ParameterError(f"{name} must be > 0 (got {value!r})")
+    return x
+
+
+def check_nonnegative(name: str, value: float) -> float:
+    """Return ``value`` if it is a finite number >= 0."""
+    x = check_finite(name, value)
+    if x < 0.0:
+        raise ParameterError(f"{name} must be >= 0 (got {value!r})")
+    return x
+
+
+def check_positive_or_inf(name: str, value: float) -> float:
+    """Return ``value`` if it is > 0; ``math.inf`` is allowed (an ideal element)."""
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be a number (got {value!r})") from None
+    if math.isnan(x) or x <= 0.0:
+        raise ParameterError(f"{name} must be > 0 or inf (got {value!r})")
+    return x
+
+
+def check_choice(name: str, value: str, choices: tuple[str, ...]) -> str:
+    """Return ``value`` if it is one of ``choices``."""
+    if value not in choices:
+        raise ParameterError(f"{name} must be one of {', '.join(choices)} (got {value!r})")
+    return value

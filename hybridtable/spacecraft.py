@@ -1,0 +1,119 @@
+"""The spacecraft numerical model, Eq. 1 of the paper: m d2p_des/dt2 = -f_sim.
+
+Sign convention (``../shared/measurement-format.md``): ``p > 0`` is penetration,
+the spacecraft approaches with positive velocity, and a compression force
+``f_sim > 0`` pushes the spacecraft back, so its acceleration is ``-f_sim / m``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from pydrake.systems.framework import Diagram, DiagramBuilder
+from pydrake.systems.primitives import LinearSystem
+
+from hybridtable._validation import check_finite, check_positive
+
+__all__ = ["SpacecraftParams", "Spacecraft", "spacecraft_matrices"]
+
+
+@dataclass(frozen=True)
+class SpacecraftParams:
+    """Parameters of the spacecraft model.
+
+    Parameters
+    ----------
+    mass_kg : float
+        Mass (or inertia along the docking axis) of the spacecraft model, > 0.
+    """
+
+    mass_kg: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "mass_kg", check_positive("mass_kg", self.mass_kg))
+
+
+def spacecraft_matrices(
+    mass_kg: float, sample_period_s: float | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """State-space matrices (A, B, C, D) of the spacecraft, state ``[p_des, v_des]``.
+
+    Continuous: ``d/dt [p, v] = [v, -f/m]``. Sampled with period ``h``: the
+    semi-implicit Euler step of the rig's computer, ``v+ = v - f h / m`` then
+    ``p+ = p + v+ h``.
+    """
+    m = check_positive("mass_kg", mass_kg)
+    C = np.eye(2)
+    D = np.zeros((2, 1))
+    if sample_period_s is None:
+        A = np.array([[0.0, 1.0], [0.0, 0.0]])
+        B = np.array([[0.0], [-1.0 / m]])
+    else:
+        h = check_positive("sample_period_s", sample_period_s)
+        A = np.array([[1.0, h], [0.0, 1.0]])
+        B = np.array([[-h * h / m], [-h / m]])
+    return A, B, C, D
+
+
+class Spacecraft(Diagram):
+    """The spacecraft model as a Drake system (a ``LinearSystem`` inside).
+
+    Ports
+    -----
+    Input ``force`` (size 1, N)
+        The simulated contact force f_sim (compression positive); the
+        spacecraft is pushed by ``-force``.
+    Output ``state`` (size 2: m, m/s)
+        ``[p_des, v_des]``, the desired relative position sent to the table as
+        its command, and the spacecraft velocity. No direct feedthrough.
+
+    Parameters
+    ----------
+    params : SpacecraftParams
+    sample_period_s : float, optional
+        ``None`` (default) for the continuous model of the paper; a period for
+        the rig computer's semi-implicit Euler integration, whose state output
+        is then held between ticks (the zero-order-held command).
+    initial_position_m, initial_velocity_m_per_s : float
+        Default state.
+    """
+
+    def __init__(
+        self,
+        params: SpacecraftParams,
+        sample_period_s: float | None = None,
+        initial_position_m: float = 0.0,
+        initial_velocity_m_per_s: float = 0.0,
+    ) -> None:
+        Diagram.__init__(self)
+        self.params = params
+        self.sample_period_s = sample_period_s
+        A, B, C, D = spacecraft_matrices(params.mass_kg, sample_period_s)
+        builder = DiagramBuilder()
+        self._linear = builder.AddNamedSystem(
+            "double_integrator",
+            LinearSystem(A, B, C, D, 0.0 if sample_period_s is None else sample_period_s),
+        )
+        builder.ExportInput(self._linear.get_input_port(), "force")
+        builder.ExportOutput(self._linear.get_output_port(), "state")
+        builder.BuildInto(self)
+        self._x0 = np.array(
+            [
+                check_finite("initial_position_m", initial_position_m),
+                check_finite("initial_velocity_m_per_s", initial_velocity_m_per_s),
+            ]
+        )
+
+    def set_initial_state(self, context, position_m: float, velocity_m_per_s: float) -> None:
+        """Set ``[p_des, v_des]`` in this system's (sub)context."""
+        sub = self.GetSubsystemContext(self._linear, context)
+        x = np.array([position_m, velocity_m_per_s])
+        if self.sample_period_s is None:
+            sub.SetContinuousState(x)
+        else:
+            sub.SetDiscreteState(x)
+
+    def set_default_state(self, context) -> None:
+        """Apply the constructor's initial position and velocity."""
+        self.set_initial_state(context, *self._x0)

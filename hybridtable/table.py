@@ -1,0 +1,139 @@
+"""The motion table's response: a linear second-order model (paper, Sec. II).
+
+``p_act'' = w^2 (p_des - p_act) - 2 zeta w p_act'`` with ``w = 2 pi f_resp``.
+An infinite response frequency gives the ideal table, ``p_act = p_des``.
+
+The table is one of the two swappable back-ends of the hybrid loop. Any back-end
+has the same ports: input ``commanded_state`` (2) and output ``motion`` (3).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from pydrake.systems.framework import Diagram, DiagramBuilder
+from pydrake.systems.primitives import LinearSystem, MatrixGain
+
+from hybridtable._validation import check_nonnegative, check_positive_or_inf
+
+__all__ = ["TableParams", "SecondOrderTable", "table_matrices", "table_step_response"]
+
+
+@dataclass(frozen=True)
+class TableParams:
+    """Parameters of the second-order table model.
+
+    Parameters
+    ----------
+    response_frequency_hz : float
+        Undamped natural frequency f_resp of the table, > 0; ``math.inf`` for
+        an ideal table that follows its command exactly.
+    damping_ratio : float
+        Damping ratio zeta_resp, >= 0.
+    """
+
+    response_frequency_hz: float = 25.0
+    damping_ratio: float = 0.8
+
+    def __post_init__(self) -> None:
+        object.__setattr__(
+            self,
+            "response_frequency_hz",
+            check_positive_or_inf("response_frequency_hz", self.response_frequency_hz),
+        )
+        object.__setattr__(
+            self, "damping_ratio", check_nonnegative("damping_ratio", self.damping_ratio)
+        )
+
+    @property
+    def is_ideal(self) -> bool:
+        """True for an infinitely fast table."""
+        return math.isinf(self.response_frequency_hz)
+
+    @property
+    def omega_rad_per_s(self) -> float:
+        """Undamped natural frequency in rad/s."""
+        return 2.0 * math.pi * self.response_frequency_hz
+
+    @property
+    def ramp_lag_s(self) -> float:
+        """Steady-state lag of the table behind a ramp command, 2 zeta / omega."""
+        return 0.0 if self.is_ideal else 2.0 * self.damping_ratio / self.omega_rad_per_s
+
+
+def table_matrices(params: TableParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """State-space (A, B, C, D) of the table; state ``[p_act, v_act]``.
+
+    Input ``[p_des, v_des]`` (only ``p_des`` drives a second-order table);
+    output ``[p_act, v_act, a_act]``.
+    """
+    if params.is_ideal:
+        raise ValueError("an ideal table has no state")
+    w = params.omega_rad_per_s
+    z = params.damping_ratio
+    A = np.array([[0.0, 1.0], [-w * w, -2.0 * z * w]])
+    B = np.array([[0.0, 0.0], [w * w, 0.0]])
+    C = np.vstack([np.eye(2), A[1]])
+    D = np.vstack([np.zeros((2, 2)), B[1]])
+    return A, B, C, D
+
+
+def table_step_response(params: TableParams, t_s: np.ndarray) -> np.ndarray:
+    """Closed-form unit-step response p_act(t) of the table, from rest at 0."""
+    t = np.asarray(t_s, dtype=float)
+    if params.is_ideal:
+        return np.ones_like(t)
+    w = params.omega_rad_per_s
+    z = params.damping_ratio
+    if z < 1.0:
+        wd = w * math.sqrt(1.0 - z * z)
+        return 1.0 - np.exp(-z * w * t) * (np.cos(wd * t) + z * w / wd * np.sin(wd * t))
+    if z == 1.0:
+        return 1.0 - np.exp(-w * t) * (1.0 + w * t)
+    r = math.sqrt(z * z - 1.0)
+    s1, s2 = -w * (z - r), -w * (z + r)
+    return 1.0 + (s2 * np.exp(s1 * t) - s1 * np.exp(s2 * t)) / (s1 - s2)
+
+
+class SecondOrderTable(Diagram):
+    """The table response model as a Drake system (a ``LinearSystem`` inside).
+
+    Ports
+    -----
+    Input ``commanded_state`` (size 2: m, m/s)
+        ``[p_des, v_des]`` from the spacecraft model. The second-order model
+        follows ``p_des`` only; the ideal table follows both.
+    Output ``motion`` (size 3: m, m/s, m/s^2)
+        ``[p_act, v_act, a_act]`` of the table (the active contact device).
+        An ideal table reports ``a_act = 0``: its true acceleration is the
+        spacecraft's, which would close an algebraic loop; only the force rate
+        of a damped contact uses it.
+
+    The state of a second-order table is ``[p_act, v_act]``.
+    """
+
+    def __init__(self, params: TableParams) -> None:
+        Diagram.__init__(self)
+        self.params = params
+        builder = DiagramBuilder()
+        if params.is_ideal:
+            self._linear = None
+            inner = builder.AddNamedSystem(
+                "ideal_table", MatrixGain(np.vstack([np.eye(2), np.zeros((1, 2))]))
+            )
+        else:
+            A, B, C, D = table_matrices(params)
+            self._linear = inner = builder.AddNamedSystem(
+                "second_order_table", LinearSystem(A, B, C, D)
+            )
+        builder.ExportInput(inner.get_input_port(), "commanded_state")
+        builder.ExportOutput(inner.get_output_port(), "motion")
+        builder.BuildInto(self)
+
+    def set_initial_state(self, context, position_m: float, velocity_m_per_s: float) -> None:
+        """Set ``[p_act, v_act]`` (no-op for the ideal table)."""
+        if self._linear is not None:
+            sub = self.GetSubsystemContext(self._linear, context)
+            sub.SetContinuousState(np.array([position_m, velocity_m_per_s]))
