@@ -113,9 +113,7 @@ def Compensator_(T):
                 self._h = float(derivative_period_s)
                 self._prev = self.DeclareDiscreteState(1)
                 self.DeclarePeriodicDiscreteUpdateEvent(self._h, 0.0, self._store)
-            self.DeclareVectorOutputPort(
-                "compensated_force", BasicVector_[T](1), self._calc_force
-            )
+            self.DeclareVectorOutputPort("compensated_force", BasicVector_[T](1), self._calc_force)
 
         def _construct_copy(self, other, converter=None):
             Impl._construct(

@@ -40,7 +40,9 @@ class ContactParams:
             self, "stiffness_n_per_m", check_positive("stiffness_n_per_m", self.stiffness_n_per_m)
         )
         object.__setattr__(
-            self, "damping_n_s_per_m", check_nonnegative("damping_n_s_per_m", self.damping_n_s_per_m)
+            self,
+            "damping_n_s_per_m",
+            check_nonnegative("damping_n_s_per_m", self.damping_n_s_per_m),
         )
 
 

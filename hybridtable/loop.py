@@ -37,7 +37,14 @@ from hybridtable.sensor import ForceSensorDelay, SensorParams, continuous_delay_
 from hybridtable.spacecraft import Spacecraft, SpacecraftParams
 from hybridtable.table import SecondOrderTable, TableParams
 
-__all__ = ["TABLE_INITIAL_STATES", "HybridLoopParams", "HybridLoop", "add_hybrid_loop", "build_hybrid_loop", "LOGGED"]
+__all__ = [
+    "TABLE_INITIAL_STATES",
+    "HybridLoopParams",
+    "HybridLoop",
+    "add_hybrid_loop",
+    "build_hybrid_loop",
+    "LOGGED",
+]
 
 TABLE_INITIAL_STATES: tuple[str, ...] = ("tracking", "command", "rest")
 
@@ -129,10 +136,18 @@ class HybridLoopParams:
             "initial_gap_m",
         ):
             s(self, name, check_nonnegative(name, getattr(self, name)))
-        s(self, "table_response_hz", check_positive_or_inf("table_response_hz", self.table_response_hz))
+        s(
+            self,
+            "table_response_hz",
+            check_positive_or_inf("table_response_hz", self.table_response_hz),
+        )
         check_choice("compensator", self.compensator, COMPENSATORS)
         check_choice("table_initial_state", self.table_initial_state, TABLE_INITIAL_STATES)
-        for name in ("lead_time_s", "compensator_stiffness_n_per_m", "compensator_damping_n_s_per_m"):
+        for name in (
+            "lead_time_s",
+            "compensator_stiffness_n_per_m",
+            "compensator_damping_n_s_per_m",
+        ):
             if getattr(self, name) is not None:
                 s(self, name, check_nonnegative(name, getattr(self, name)))
         if self.sample_rate_hz is not None:
@@ -151,7 +166,9 @@ class HybridLoopParams:
         ``f_con = sqrt(k / m) / (2 pi)`` (how the paper specifies its runs)."""
         f = check_positive("contact_frequency_hz", contact_frequency_hz)
         k = check_positive("contact_stiffness_n_per_m", contact_stiffness_n_per_m)
-        return cls(spacecraft_mass_kg=k / (2.0 * math.pi * f) ** 2, contact_stiffness_n_per_m=k, **kwargs)
+        return cls(
+            spacecraft_mass_kg=k / (2.0 * math.pi * f) ** 2, contact_stiffness_n_per_m=k, **kwargs
+        )
 
     @property
     def contact_frequency_hz(self) -> float:
@@ -191,8 +208,12 @@ class HybridLoopParams:
         return CompensatorParams(
             kind=self.compensator,
             lead_time_s=pick(self.lead_time_s, self.sensor_delay_s),
-            stiffness_n_per_m=pick(self.compensator_stiffness_n_per_m, self.contact_stiffness_n_per_m),
-            damping_n_s_per_m=pick(self.compensator_damping_n_s_per_m, self.contact_damping_n_s_per_m),
+            stiffness_n_per_m=pick(
+                self.compensator_stiffness_n_per_m, self.contact_stiffness_n_per_m
+            ),
+            damping_n_s_per_m=pick(
+                self.compensator_damping_n_s_per_m, self.contact_damping_n_s_per_m
+            ),
             force_deadband_n=self.force_deadband_n,
             clamp_nonnegative=self.clamp_nonnegative,
         )
@@ -241,6 +262,7 @@ def add_hybrid_loop(
     params: HybridLoopParams,
     table: System | None = None,
     contact: System | None = None,
+    compensator: System | None = None,
     log: bool = True,
 ) -> HybridLoop:
     """Add the hybrid loop's systems to ``builder``, wire them, and return them.
@@ -253,6 +275,9 @@ def add_hybrid_loop(
         Swappable back-ends (default: :class:`SecondOrderTable`,
         :class:`UnilateralSpringContact`). They must have the ports described
         in :mod:`hybridtable.loop`; they are added to the builder here.
+    compensator : System, optional
+        A compensator with the ports of :class:`~hybridtable.compensator.Compensator`
+        (default: built from ``params.compensator_params()``).
     log : bool
         Add a ``VectorLogSink`` for every signal in :data:`LOGGED`.
     """
@@ -270,19 +295,28 @@ def add_hybrid_loop(
         spacecraft = Spacecraft(params.spacecraft(), sample_period_s=h_sample)
     spacecraft = builder.AddNamedSystem("spacecraft", spacecraft)
     table = builder.AddNamedSystem("table", table or SecondOrderTable(params.table()))
-    contact = builder.AddNamedSystem("contact", contact or UnilateralSpringContact(params.contact()))
+    contact = builder.AddNamedSystem(
+        "contact", contact or UnilateralSpringContact(params.contact())
+    )
     sensor = builder.AddNamedSystem("force_sensor", sensor)
     compensator = builder.AddNamedSystem(
-        "compensator", Compensator(params.compensator_params(), derivative_period_s=h_computer)
+        "compensator",
+        compensator or Compensator(params.compensator_params(), derivative_period_s=h_computer),
     )
     builder.Connect(spacecraft.GetOutputPort("state"), table.GetInputPort("commanded_state"))
     builder.Connect(table.GetOutputPort("motion"), contact.GetInputPort("motion"))
     builder.Connect(contact.GetOutputPort("force"), sensor.GetInputPort("force"))
-    builder.Connect(sensor.GetOutputPort("measured_force"), compensator.GetInputPort("measured_force"))
+    builder.Connect(
+        sensor.GetOutputPort("measured_force"), compensator.GetInputPort("measured_force")
+    )
     builder.Connect(table.GetOutputPort("motion"), compensator.GetInputPort("table_motion"))
     builder.Connect(spacecraft.GetOutputPort("state"), compensator.GetInputPort("commanded_state"))
-    builder.Connect(compensator.GetOutputPort("compensated_force"), spacecraft.GetInputPort("force"))
-    loop = HybridLoop(params, spacecraft, table, contact, sensor, compensator, computer_period_s=h_computer)
+    builder.Connect(
+        compensator.GetOutputPort("compensated_force"), spacecraft.GetInputPort("force")
+    )
+    loop = HybridLoop(
+        params, spacecraft, table, contact, sensor, compensator, computer_period_s=h_computer
+    )
     if log:
         # Continuous: every integration step. Sampled: once per tick, before
         # the tick's discrete update (the values the rig computer reads).
@@ -308,4 +342,3 @@ def build_hybrid_loop(params: HybridLoopParams, **kwargs) -> HybridLoop:
     loop.diagram = builder.Build()
     loop.diagram.set_name("hybrid_loop")
     return loop
-

@@ -71,7 +71,9 @@ def paper_params(
     )
 
 
-def table1_params(compensator: str, tables: dict[str, Any] | None = None, **kwargs: Any) -> HybridLoopParams:
+def table1_params(
+    compensator: str, tables: dict[str, Any] | None = None, **kwargs: Any
+) -> HybridLoopParams:
     """Parameters of Table 1 for one compensator."""
     tables = tables or load_tables()
     p = dict(tables["table1_simulation"]["parameters"])

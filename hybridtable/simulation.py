@@ -49,9 +49,9 @@ class SimulationResult:
 
 
 def _default_t_max(params: HybridLoopParams) -> float:
-    approach = (params.initial_gap_m + params.table().ramp_lag_s * params.initial_velocity_m_per_s) / (
-        params.initial_velocity_m_per_s
-    )
+    approach = (
+        params.initial_gap_m + params.table().ramp_lag_s * params.initial_velocity_m_per_s
+    ) / (params.initial_velocity_m_per_s)
     return approach + 10.0 / params.contact_frequency_hz + 20.0 * params.effective_delay_s + 1.0
 
 
@@ -96,8 +96,10 @@ def run_loop(
     settle = params.sensor_delay_s + 5.0 * loop.computer_period_s
     if not table.is_ideal:
         settle += 5.0 / max(table.damping_ratio * table.omega_rad_per_s, 1e-9)
-    f_scale = params.contact_stiffness_n_per_m * params.initial_velocity_m_per_s / (
-        2 * math.pi * params.contact_frequency_hz
+    f_scale = (
+        params.contact_stiffness_n_per_m
+        * params.initial_velocity_m_per_s
+        / (2 * math.pi * params.contact_frequency_hz)
     )
     contact_ctx = loop.contact.GetMyContextFromRoot(context)
     sensor_ctx = loop.sensor.GetMyContextFromRoot(context)

@@ -1,0 +1,1 @@
+"""Sub-commands of the ``hybridtable`` CLI, one module each (see :mod:`hybridtable.cli`)."""
