@@ -50,7 +50,7 @@ def contact_intervals(time_s: np.ndarray, active: np.ndarray) -> list[tuple[floa
     edges = np.diff(np.concatenate([[0], active.astype(int), [0]]))
     starts = np.flatnonzero(edges == 1)
     ends = np.flatnonzero(edges == -1) - 1
-    return [(float(time_s[a]), float(time_s[b])) for a, b in zip(starts, ends)]
+    return [(float(time_s[a]), float(time_s[b])) for a, b in zip(starts, ends, strict=True)]
 
 
 def contact_metrics(

@@ -84,7 +84,7 @@ def table2_rows(tables: dict[str, Any] | None = None) -> list[dict[str, float]]:
     """Rows of Table 2, in the paper's order, with the paper's units."""
     tables = tables or load_tables()
     t2 = tables["table2_simulation_sdmdc"]
-    return [dict(zip(t2["columns"], row)) for row in t2["rows"]]
+    return [dict(zip(t2["columns"], row, strict=True)) for row in t2["rows"]]
 
 
 def table2_params(row: dict[str, float], **kwargs: Any) -> HybridLoopParams:

@@ -32,7 +32,7 @@ def plot_velocities(
 ) -> Path:
     """Spacecraft velocity of several runs, overlaid (the paper's Figs. 3-6)."""
     fig, ax = plt.subplots(figsize=(7, 4))
-    for r, label in zip(results, labels):
+    for r, label in zip(results, labels, strict=True):
         ax.plot(r.time_s, r.v_des_m_per_s, label=f"{label} (CoR {r.metrics.cor:.4f})")
     window = _contact_window(results)
     if window:
@@ -59,7 +59,7 @@ def plot_forces(
     fig, ax = plt.subplots(figsize=(7, 4))
     if results:
         ax.plot(results[0].time_s, results[0].f_act_n, "k--", lw=1, label="actual force f_act")
-    for r, label in zip(results, labels):
+    for r, label in zip(results, labels, strict=True):
         ax.plot(r.time_s, r.f_comp_n, label=f"{label}: f_comp")
     window = _contact_window(results, 0.05)
     if window:
