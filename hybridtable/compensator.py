@@ -5,9 +5,14 @@
   ``df_resp = k_con (p_des - p_act) + c_con (v_des - v_act)``.
 - SDMDC: ``f_comp = f_hat + df_resp``.
 
-The compensation acts during contact only: while the measured force is at or
-below ``force_deadband_n`` the compensated force is zero (an MDC term acting in
-free flight would drag the spacecraft). The paper's simulations feed
+The compensation acts during contact only (an MDC term acting in free flight
+would drag the spacecraft). Two ways to tell contact, ``contact_gate``:
+
+- ``"measured_force"`` (default, what a rig computer does and the
+  ``hybridtable-run/1`` format defines): while the measured force is at or below
+  ``force_deadband_n`` the compensated force is zero;
+- ``"table_position"``: the MDC term acts while the table's position says the
+  devices touch (``p_act > 0``); the measured force and its lead always pass. The paper's simulations feed
 ``f_comp`` to the spacecraft unclamped; a rig may clamp it at zero
 (``clamp_nonnegative``), as the ``hybridtable-run/1`` format does.
 """
@@ -22,9 +27,10 @@ from pydrake.systems.scalar_conversion import TemplateSystem
 
 from hybridtable._validation import check_choice, check_nonnegative
 
-__all__ = ["COMPENSATORS", "CompensatorParams", "Compensator", "Compensator_"]
+__all__ = ["COMPENSATORS", "CONTACT_GATES", "CompensatorParams", "Compensator", "Compensator_"]
 
 COMPENSATORS: tuple[str, ...] = ("none", "SDC", "MDC", "SDMDC")
+CONTACT_GATES: tuple[str, ...] = ("measured_force", "table_position")
 
 
 @dataclass(frozen=True)
@@ -44,6 +50,8 @@ class CompensatorParams:
         Measured forces at or below this are "no contact": f_comp = 0.
     clamp_nonnegative : bool
         Clamp f_comp at zero (the compensated contact never pulls).
+    contact_gate : {"measured_force", "table_position"}
+        How the compensator tells contact (see the module docstring).
     """
 
     kind: str = "none"
@@ -52,9 +60,11 @@ class CompensatorParams:
     damping_n_s_per_m: float = 0.0
     force_deadband_n: float = 0.0
     clamp_nonnegative: bool = False
+    contact_gate: str = "measured_force"
 
     def __post_init__(self) -> None:
         check_choice("compensator", self.kind, COMPENSATORS)
+        check_choice("contact_gate", self.contact_gate, CONTACT_GATES)
         for name in ("lead_time_s", "stiffness_n_per_m", "damping_n_s_per_m", "force_deadband_n"):
             object.__setattr__(self, name, check_nonnegative(name, getattr(self, name)))
 
@@ -126,7 +136,8 @@ def Compensator_(T):
         def _calc_force(self, context, output):
             p = self.params
             f_mea = self._f.Eval(context)[0]
-            if self.gated and not (f_mea > p.force_deadband_n):
+            by_force = p.contact_gate == "measured_force"
+            if self.gated and by_force and not (f_mea > p.force_deadband_n):
                 output.SetAtIndex(0, 0.0 * f_mea)
                 return
             f = f_mea
@@ -136,8 +147,8 @@ def Compensator_(T):
                 else:
                     rate = (f_mea - context.get_discrete_state(0).GetAtIndex(0)) / self._h
                 f = f + p.lead_time_s * rate
-            if p.uses_motion_correction:
-                p_act, v_act, _ = self._table.Eval(context)
+            p_act, v_act, _ = self._table.Eval(context)
+            if p.uses_motion_correction and (by_force or not self.gated or p_act > 0.0):
                 p_des, v_des = self._cmd.Eval(context)
                 f = f + p.stiffness_n_per_m * (p_des - p_act)
                 if p.damping_n_s_per_m > 0.0:

@@ -87,6 +87,8 @@ class HybridLoopParams:
         Measured forces at or below this are "no contact".
     clamp_nonnegative : bool
         Clamp the compensated force at zero.
+    contact_gate : {"measured_force", "table_position"}
+        How the compensator tells contact (:mod:`hybridtable.compensator`).
     initial_velocity_m_per_s : float
         Approach velocity of the spacecraft model, > 0.
     initial_gap_m : float
@@ -117,6 +119,7 @@ class HybridLoopParams:
     compensator_damping_n_s_per_m: float | None = None
     force_deadband_n: float = 0.0
     clamp_nonnegative: bool = False
+    contact_gate: str = "measured_force"
     initial_velocity_m_per_s: float = 0.1
     initial_gap_m: float = 0.001
     table_initial_state: str = "tracking"
@@ -216,6 +219,7 @@ class HybridLoopParams:
             ),
             force_deadband_n=self.force_deadband_n,
             clamp_nonnegative=self.clamp_nonnegative,
+            contact_gate=self.contact_gate,
         )
 
     def initial_conditions(self) -> dict[str, float]:
