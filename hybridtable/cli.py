@@ -25,7 +25,10 @@ from hybridtable.simulation import SimulationError
 __all__ = ["main", "CommandError", "write_json", "parse_float", "COMMAND_MODULES"]
 
 #: Modules that register sub-commands, in the order ``--help`` lists them.
-COMMAND_MODULES: tuple[str, ...] = ("hybridtable.commands.simulate",)
+COMMAND_MODULES: tuple[str, ...] = (
+    "hybridtable.commands.simulate",
+    "hybridtable.commands.reproduce",
+)
 
 
 class CommandError(Exception):
