@@ -268,6 +268,7 @@ def add_hybrid_loop(
     contact: System | None = None,
     compensator: System | None = None,
     log: bool = True,
+    sensor: System | None = None,
 ) -> HybridLoop:
     """Add the hybrid loop's systems to ``builder``, wire them, and return them.
 
@@ -284,7 +285,13 @@ def add_hybrid_loop(
         (default: built from ``params.compensator_params()``).
     log : bool
         Add a ``VectorLogSink`` for every signal in :data:`LOGGED`.
+    sensor : System, optional
+        A force-measurement back-end with the ports of
+        :class:`~hybridtable.sensor.ForceSensorDelay` (input ``force``, output
+        ``measured_force``); default: the delay of ``params`` (sampled at the
+        sample rate, or the continuous delay line).
     """
+    sensor_backend = sensor
     h_sample = params.sample_period_s
     if h_sample is None:
         if params.sensor_delay_s > 0.0:
@@ -302,7 +309,7 @@ def add_hybrid_loop(
     contact = builder.AddNamedSystem(
         "contact", contact or UnilateralSpringContact(params.contact())
     )
-    sensor = builder.AddNamedSystem("force_sensor", sensor)
+    sensor = builder.AddNamedSystem("force_sensor", sensor_backend or sensor)
     compensator = builder.AddNamedSystem(
         "compensator",
         compensator or Compensator(params.compensator_params(), derivative_period_s=h_computer),
