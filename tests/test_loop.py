@@ -1,0 +1,131 @@
+"""The closed hybrid loop: CoR facts and the paper's Table 1."""
+
+import math
+
+import numpy as np
+import pytest
+
+from hybridtable import HybridLoopParams, ParameterError, simulate
+from hybridtable.paper import cor_estimate, load_tables, paper_params, table1_params
+
+
+def test_ideal_loop_conserves_energy():
+    # No delay, ideal table, no compensation: an elastic bounce.
+    r = simulate(paper_params(sensor_delay_s=0.0, table_response_hz=math.inf))
+    assert r.metrics.cor == pytest.approx(1.0, abs=1e-4)
+    # Contact lasts half a contact period, peak force is k v0 / w_con.
+    k, m, v0 = 1e5, r.params.spacecraft_mass_kg, 0.1
+    assert r.metrics.contact_duration_s == pytest.approx(math.pi * math.sqrt(m / k), abs=2e-4)
+    assert r.metrics.peak_force_n == pytest.approx(v0 * math.sqrt(k * m), rel=1e-4)
+
+
+@pytest.mark.parametrize(
+    "delay_s, table_hz, contact_hz",
+    [
+        (0.005, 25.0, 1.0),
+        (0.001, 100.0, 1.0),
+        (0.003, 50.0, 2.0),
+        (0.0, 25.0, 1.0),
+        (0.005, math.inf, 1.0),
+    ],
+)
+def test_uncompensated_cor_matches_effective_delay_estimate(delay_s, table_hz, contact_hz):
+    p = paper_params(
+        sensor_delay_s=delay_s, table_response_hz=table_hz, contact_frequency_hz=contact_hz
+    )
+    r = simulate(p)
+    assert r.metrics.cor == pytest.approx(cor_estimate(p), abs=0.005)
+    assert r.metrics.cor > 1.0 or delay_s == 0.0 and math.isinf(table_hz)
+
+
+def test_energy_gain_matches_cor():
+    r = simulate(table1_params("none"))
+    m, v_in = r.params.spacecraft_mass_kg, r.metrics.v_in_m_per_s
+    assert r.metrics.energy_gain_j == pytest.approx(
+        0.5 * m * v_in**2 * (r.metrics.cor**2 - 1), rel=1e-9
+    )
+    assert r.metrics.energy_gain_j > 0
+
+
+@pytest.fixture(scope="module")
+def table1():
+    paper = load_tables()["table1_simulation"]["cor"]
+    runs = {}
+    for c in ("none", "SDC", "MDC", "SDMDC"):
+        p = table1_params(c)
+        runs[c] = (
+            simulate(p).metrics.cor,
+            simulate(p.with_(time_step_s=p.time_step_s / 2)).metrics.cor,
+        )
+    return paper, runs
+
+
+@pytest.mark.parametrize("compensator", ["none", "SDC", "MDC", "SDMDC"])
+def test_table1_within_0p003_of_paper(table1, compensator):
+    paper, runs = table1
+    assert runs[compensator][0] == pytest.approx(paper[compensator], abs=0.003)
+
+
+@pytest.mark.parametrize("compensator", ["none", "SDC", "MDC", "SDMDC"])
+def test_halving_the_step_changes_cor_by_less_than_0p0005(table1, compensator):
+    _, runs = table1
+    assert abs(runs[compensator][0] - runs[compensator][1]) < 5e-4
+
+
+def test_compensation_ordering_of_table1(table1):
+    _, runs = table1
+    cor = {c: v[0] for c, v in runs.items()}
+    assert cor["none"] > cor["SDC"] > cor["MDC"] > cor["SDMDC"]
+
+
+def test_sampled_loop_momentum_equals_impulse_of_fed_force():
+    p = table1_params("SDMDC", sample_rate_hz=1000.0, clamp_nonnegative=True)
+    r = simulate(p)
+    h = 1e-3
+    # Semi-implicit Euler: m (v_out - v0) = -sum(f_comp[k]) h exactly.
+    dv = r.v_des_m_per_s[-1] - p.initial_velocity_m_per_s
+    assert p.spacecraft_mass_kg * dv == pytest.approx(-np.sum(r.f_comp_n) * h, rel=1e-9)
+    assert np.all(r.f_comp_n >= 0.0)
+    np.testing.assert_allclose(np.diff(r.time_s), h, rtol=1e-9)
+
+
+def test_sampled_loop_converges_to_continuous_as_rate_grows():
+    cont = simulate(table1_params("none")).metrics.cor
+    errs = [
+        abs(simulate(table1_params("none", sample_rate_hz=fs)).metrics.cor - cont)
+        for fs in (1000, 4000)
+    ]
+    assert errs[1] < errs[0]
+    assert errs[1] < 0.01
+
+
+def test_large_delay_throws_the_spacecraft_back():
+    # A 20 ms sensor delay against a 5 Hz contact: one bounce, far more energy out.
+    p = paper_params(sensor_delay_s=0.02, contact_frequency_hz=5.0)
+    r = simulate(p)
+    assert r.metrics.cor > 1.5
+    assert r.metrics.energy_gain_j > 0
+
+
+def test_contact_that_does_not_end_is_an_error():
+    from hybridtable import SimulationError
+
+    with pytest.raises(SimulationError, match="did not end"):
+        simulate(table1_params("none"), t_max_s=0.2)
+
+
+@pytest.mark.parametrize(
+    "kwargs, field",
+    [
+        ({"spacecraft_mass_kg": 0.0}, "spacecraft_mass_kg"),
+        ({"sensor_delay_s": -0.001}, "sensor_delay_s"),
+        ({"compensator": "magic"}, "compensator"),
+        ({"initial_velocity_m_per_s": float("nan")}, "initial_velocity_m_per_s"),
+        ({"sample_rate_hz": 1000.0, "sensor_delay_s": 0.0025}, "sensor_delay_s"),
+        ({"table_initial_state": "flying"}, "table_initial_state"),
+    ],
+)
+def test_bad_parameters_name_the_field(kwargs, field):
+    base = dict(spacecraft_mass_kg=100.0, contact_stiffness_n_per_m=1e5)
+    with pytest.raises(ParameterError, match=field):
+        HybridLoopParams(**{**base, **kwargs})
