@@ -19,15 +19,30 @@ would drag the spacecraft). Two ways to tell contact, ``contact_gate``:
 
 from __future__ import annotations
 
+import importlib
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 from pydrake.autodiffutils import AutoDiffXd
-from pydrake.systems.framework import BasicVector_, LeafSystem_
+from pydrake.systems.framework import BasicVector_, LeafSystem_, System
 from pydrake.systems.scalar_conversion import TemplateSystem
 
 from hybridtable._validation import check_choice, check_nonnegative
 
-__all__ = ["COMPENSATORS", "CONTACT_GATES", "CompensatorParams", "Compensator", "Compensator_"]
+__all__ = [
+    "COMPENSATORS",
+    "CONTACT_GATES",
+    "CompensatorParams",
+    "Compensator",
+    "Compensator_",
+    "CompensatorFactory",
+    "PLUGIN_MODULES",
+    "register_compensator",
+    "compensator_names",
+    "compensator_factory",
+    "make_compensator",
+]
 
 COMPENSATORS: tuple[str, ...] = ("none", "SDC", "MDC", "SDMDC")
 CONTACT_GATES: tuple[str, ...] = ("measured_force", "table_position")
@@ -161,3 +176,76 @@ def Compensator_(T):
 
 
 Compensator = Compensator_[None]
+
+
+# -- registry of compensators (name -> factory) -------------------------------
+
+#: ``factory(params, derivative_period_s) -> System``: a compensator with the
+#: ports of :class:`Compensator` for a :class:`~hybridtable.loop.HybridLoopParams`;
+#: ``derivative_period_s`` is the period of the rig computer's discrete updates.
+CompensatorFactory = Callable[[Any, float | None], System]
+
+#: Modules imported on first use of the registry; importing one registers its
+#: compensators with :func:`register_compensator`.
+PLUGIN_MODULES: tuple[str, ...] = ("hybridtable.plugins",)
+
+_REGISTRY: dict[str, CompensatorFactory] = {}
+_plugins_loaded = False
+
+
+def _paper_compensator(params: Any, derivative_period_s: float | None) -> System:
+    return Compensator(params.compensator_params(), derivative_period_s=derivative_period_s)
+
+
+for _name in COMPENSATORS:
+    _REGISTRY[_name] = _paper_compensator
+
+
+def _load_plugins() -> None:
+    global _plugins_loaded
+    if not _plugins_loaded:
+        _plugins_loaded = True
+        for module in PLUGIN_MODULES:
+            importlib.import_module(module)
+
+
+def register_compensator(name: str, factory: CompensatorFactory, replace: bool = False) -> None:
+    """Make ``name`` a choice of ``HybridLoopParams.compensator``.
+
+    Raises
+    ------
+    ValueError
+        If ``name`` is taken (unless ``replace``) or is one of the paper's
+        compensators.
+    """
+    if name in COMPENSATORS or (name in _REGISTRY and not replace):
+        raise ValueError(f"compensator {name!r} is already registered")
+    _REGISTRY[name] = factory
+
+
+def compensator_names() -> tuple[str, ...]:
+    """Names of the registered compensators (the paper's first)."""
+    _load_plugins()
+    return tuple(_REGISTRY)
+
+
+def compensator_factory(name: str) -> CompensatorFactory:
+    """The factory registered under ``name`` (ParameterError if none)."""
+    check_choice("compensator", name, compensator_names())
+    return _REGISTRY[name]
+
+
+def make_compensator(
+    params: Any, derivative_period_s: float | None, system: System | None = None
+) -> System:
+    """The loop's compensator for ``params``: ``system`` if given, else the one
+    registered under ``params.compensator``; wrapped in the time-domain
+    passivity guard (:mod:`hybridtable.plugins.passivity`) when
+    ``params.passivity`` is true."""
+    if system is None:
+        system = compensator_factory(params.compensator)(params, derivative_period_s)
+    if getattr(params, "passivity", False):
+        from hybridtable.plugins.passivity import passivity_guarded
+
+        system = passivity_guarded(system, params, derivative_period_s)
+    return system

@@ -31,7 +31,7 @@ from hybridtable._validation import (
     check_positive,
     check_positive_or_inf,
 )
-from hybridtable.compensator import COMPENSATORS, Compensator, CompensatorParams
+from hybridtable.compensator import CompensatorParams, compensator_names, make_compensator
 from hybridtable.contact import ContactParams, UnilateralSpringContact
 from hybridtable.sensor import ForceSensorDelay, SensorParams, continuous_delay_period
 from hybridtable.spacecraft import Spacecraft, SpacecraftParams
@@ -78,7 +78,9 @@ class HybridLoopParams:
         Table response frequency f_resp, > 0, ``math.inf`` for an ideal table.
     table_damping_ratio : float
         Table damping ratio, >= 0.
-    compensator : {"none", "SDC", "MDC", "SDMDC"}
+    compensator : str
+        A registered compensator (:func:`hybridtable.compensator.compensator_names`):
+        the paper's "none", "SDC", "MDC", "SDMDC", or a plug-in.
     lead_time_s : float or None
         SDC lead time; ``None`` means ``sensor_delay_s`` (the paper's choice).
     compensator_stiffness_n_per_m, compensator_damping_n_s_per_m : float or None
@@ -105,6 +107,9 @@ class HybridLoopParams:
         computer loop.
     time_step_s : float
         Continuous mode: the largest integration step and delay-line period.
+    passivity : bool
+        Guard the compensator with the time-domain passivity observer and
+        controller (:mod:`hybridtable.plugins.passivity`).
     """
 
     spacecraft_mass_kg: float
@@ -125,6 +130,7 @@ class HybridLoopParams:
     table_initial_state: str = "tracking"
     sample_rate_hz: float | None = None
     time_step_s: float = 1e-4
+    passivity: bool = False
 
     def __post_init__(self) -> None:
         s = object.__setattr__
@@ -144,7 +150,7 @@ class HybridLoopParams:
             "table_response_hz",
             check_positive_or_inf("table_response_hz", self.table_response_hz),
         )
-        check_choice("compensator", self.compensator, COMPENSATORS)
+        check_choice("compensator", self.compensator, compensator_names())
         check_choice("table_initial_state", self.table_initial_state, TABLE_INITIAL_STATES)
         for name in (
             "lead_time_s",
@@ -282,7 +288,8 @@ def add_hybrid_loop(
         in :mod:`hybridtable.loop`; they are added to the builder here.
     compensator : System, optional
         A compensator with the ports of :class:`~hybridtable.compensator.Compensator`
-        (default: built from ``params.compensator_params()``).
+        (default: the one registered under ``params.compensator``); wrapped in the
+        passivity guard when ``params.passivity``.
     log : bool
         Add a ``VectorLogSink`` for every signal in :data:`LOGGED`.
     sensor : System, optional
@@ -311,8 +318,7 @@ def add_hybrid_loop(
     )
     sensor = builder.AddNamedSystem("force_sensor", sensor_backend or sensor)
     compensator = builder.AddNamedSystem(
-        "compensator",
-        compensator or Compensator(params.compensator_params(), derivative_period_s=h_computer),
+        "compensator", make_compensator(params, h_computer, compensator)
     )
     builder.Connect(spacecraft.GetOutputPort("state"), table.GetInputPort("commanded_state"))
     builder.Connect(table.GetOutputPort("motion"), contact.GetInputPort("motion"))

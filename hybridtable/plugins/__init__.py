@@ -1,0 +1,28 @@
+"""Compensator plug-ins beyond the paper's SDMDC, registered on import.
+
+=================  ==========================================================
+name               compensator
+=================  ==========================================================
+``sdmdc-online``   SDMDC with online stiffness/damping identification
+                   (:mod:`hybridtable.plugins.online`)
+``polynomial``     polynomial extrapolation of the measured force over the
+                   loop delay (:mod:`hybridtable.plugins.polynomial`)
+``smith``          model-based Smith predictor (:mod:`hybridtable.plugins.smith`)
+=================  ==========================================================
+
+The time-domain passivity guard (:mod:`hybridtable.plugins.passivity`) wraps
+any of them (``HybridLoopParams.passivity``); :mod:`hybridtable.plugins.noise`
+adds seeded measurement noise in front of a compensator.
+"""
+
+from __future__ import annotations
+
+from hybridtable.compensator import register_compensator
+from hybridtable.plugins.online import make_online_sdmdc
+
+__all__ = ["PLUGIN_COMPENSATORS"]
+
+#: Compensators this package registers.
+PLUGIN_COMPENSATORS: tuple[str, ...] = ("sdmdc-online",)
+
+register_compensator("sdmdc-online", make_online_sdmdc)
