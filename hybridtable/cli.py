@@ -28,6 +28,7 @@ __all__ = ["main", "CommandError", "write_json", "parse_float", "COMMAND_MODULES
 COMMAND_MODULES: tuple[str, ...] = (
     "hybridtable.commands.simulate",
     "hybridtable.commands.reproduce",
+    "hybridtable.commands.compare",
 )
 
 
