@@ -134,6 +134,17 @@ def Compensator_(T):
             self._fdot = self.DeclareVectorInputPort("measured_force_rate", 1)
             self._table = self.DeclareVectorInputPort("table_motion", 3)
             self._cmd = self.DeclareVectorInputPort("commanded_state", 2)
+            # Flags of the hot path.
+            p = params
+            self._lead = p.lead_time_s if p.uses_lead else 0.0
+            self._mdc = p.uses_motion_correction
+            self._k = p.stiffness_n_per_m
+            self._c = p.damping_n_s_per_m
+            self._deadband = p.force_deadband_n
+            self._gate_by_force = self.gated and p.contact_gate == "measured_force"
+            self._gate_by_position = self.gated and p.contact_gate == "table_position"
+            self._clamp = self.gated and p.clamp_nonnegative
+            self._h = None
             if derivative_period_s is not None:
                 self._h = float(derivative_period_s)
                 self._prev = self.DeclareDiscreteState(1)
@@ -149,26 +160,26 @@ def Compensator_(T):
             discrete_state.get_mutable_vector(0).SetAtIndex(0, self._f.Eval(context)[0])
 
         def _calc_force(self, context, output):
-            p = self.params
+            # Hot path (called at every integrator stage): flags precomputed.
             f_mea = self._f.Eval(context)[0]
-            by_force = p.contact_gate == "measured_force"
-            if self.gated and by_force and not (f_mea > p.force_deadband_n):
+            if self._gate_by_force and not (f_mea > self._deadband):
                 output.SetAtIndex(0, 0.0 * f_mea)
                 return
             f = f_mea
-            if p.uses_lead and p.lead_time_s > 0.0:
-                if self.derivative_period_s is None:
+            if self._lead > 0.0:
+                if self._h is None:
                     rate = self._fdot.Eval(context)[0]
                 else:
                     rate = (f_mea - context.get_discrete_state(0).GetAtIndex(0)) / self._h
-                f = f + p.lead_time_s * rate
-            p_act, v_act, _ = self._table.Eval(context)
-            if p.uses_motion_correction and (by_force or not self.gated or p_act > 0.0):
-                p_des, v_des = self._cmd.Eval(context)
-                f = f + p.stiffness_n_per_m * (p_des - p_act)
-                if p.damping_n_s_per_m > 0.0:
-                    f = f + p.damping_n_s_per_m * (v_des - v_act)
-            if self.gated and p.clamp_nonnegative and f < 0.0:
+                f = f + self._lead * rate
+            if self._mdc:
+                p_act, v_act, _ = self._table.Eval(context)
+                if p_act > 0.0 or not self._gate_by_position:
+                    p_des, v_des = self._cmd.Eval(context)
+                    f = f + self._k * (p_des - p_act)
+                    if self._c > 0.0:
+                        f = f + self._c * (v_des - v_act)
+            if self._clamp and f < 0.0:
                 f = 0.0 * f
             output.SetAtIndex(0, f)
 
