@@ -307,16 +307,15 @@ def _read_series(
         if name in seen:
             raise MeasurementError(f"{path} line {header_line}: column {c!r} appears twice")
         seen.add(name)
+    unmatched = [f"{f}={log}" for f, log in (column_map or {}).items() if log not in header]
+    if unmatched:
+        raise MeasurementError(
+            f"{path} line {header_line}: column map entries not in the header: "
+            f"{', '.join(unmatched)}"
+        )
     missing = [c for c in RUN_COLUMNS if c not in seen]
     if missing:
-        hint = ""
-        if column_map:
-            unmatched = [f"{f}={log}" for f, log in column_map.items() if log not in header]
-            if unmatched:
-                hint = f" (column map entries not in the header: {', '.join(unmatched)})"
-        raise MeasurementError(
-            f"{path} line {header_line}: missing column(s) {', '.join(missing)}{hint}"
-        )
+        raise MeasurementError(f"{path} line {header_line}: missing column(s) {', '.join(missing)}")
     extra = [c for c, name in zip(header, names, strict=True) if name not in RUN_COLUMNS]
     if extra:
         raise MeasurementError(
