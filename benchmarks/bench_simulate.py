@@ -81,7 +81,7 @@ def main() -> None:
     ap.add_argument("--compensator", default="SDMDC")
     args = ap.parse_args()
     p = table1_params(args.compensator)
-    reference = simulate(p.with_(time_step_s=p.time_step_s / 8)).metrics.cor
+    reference = simulate(p.with_(time_step_s=p.step_s / 8)).metrics.cor
     t0 = time.perf_counter()
     drake = simulate(p).metrics.cor
     t_drake = time.perf_counter() - t0

@@ -20,10 +20,10 @@ rate with a zero-order-held command and sampled sensors.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 from pydrake.systems.framework import Diagram, DiagramBuilder, System
-from pydrake.systems.primitives import LogVectorOutput, VectorLogSink
+from pydrake.systems.primitives import LogVectorOutput, Multiplexer, VectorLogSink
 
 from hybridtable._validation import (
     check_choice,
@@ -47,6 +47,18 @@ __all__ = [
 ]
 
 TABLE_INITIAL_STATES: tuple[str, ...] = ("tracking", "command", "rest")
+
+#: Rows of the loop's log, in order.
+LOG_ROWS: tuple[str, ...] = (
+    "p_des_m",
+    "v_des_m_per_s",
+    "p_act_m",
+    "v_act_m_per_s",
+    "a_act_m_per_s2",
+    "f_act_n",
+    "f_mea_n",
+    "f_comp_n",
+)
 
 #: Signals logged by the loop, name -> (unit, description).
 LOGGED: dict[str, tuple[str, str]] = {
@@ -129,14 +141,16 @@ class HybridLoopParams:
     initial_gap_m: float = 0.001
     table_initial_state: str = "tracking"
     sample_rate_hz: float | None = None
-    time_step_s: float = 1e-4
+    time_step_s: float | None = None
     passivity: bool = False
 
     def __post_init__(self) -> None:
         s = object.__setattr__
         s(self, "spacecraft_mass_kg", check_positive("spacecraft_mass_kg", self.spacecraft_mass_kg))
-        for name in ("contact_stiffness_n_per_m", "initial_velocity_m_per_s", "time_step_s"):
+        for name in ("contact_stiffness_n_per_m", "initial_velocity_m_per_s"):
             s(self, name, check_positive(name, getattr(self, name)))
+        if self.time_step_s is not None:
+            s(self, "time_step_s", check_positive("time_step_s", self.time_step_s))
         for name in (
             "contact_damping_n_s_per_m",
             "sensor_delay_s",
@@ -183,6 +197,13 @@ class HybridLoopParams:
     def contact_frequency_hz(self) -> float:
         """Undamped contact natural frequency sqrt(k/m) / 2 pi."""
         return math.sqrt(self.contact_stiffness_n_per_m / self.spacecraft_mass_kg) / (2 * math.pi)
+
+    @property
+    def step_s(self) -> float:
+        """The continuous mode's step: ``time_step_s`` or its default."""
+        if self.time_step_s is not None:
+            return self.time_step_s
+        return min(2e-4, 1.0 / (5000.0 * self.contact_frequency_hz))
 
     @property
     def sample_period_s(self) -> float | None:
@@ -243,7 +264,7 @@ class HybridLoopParams:
 
 @dataclass
 class HybridLoop:
-    """Handles to the systems and loggers that :func:`add_hybrid_loop` added."""
+    """Handles to the systems and the logger that :func:`add_hybrid_loop` added."""
 
     params: HybridLoopParams
     spacecraft: Spacecraft
@@ -251,7 +272,9 @@ class HybridLoop:
     contact: System
     sensor: ForceSensorDelay
     compensator: System
-    loggers: dict[str, VectorLogSink] = field(default_factory=dict)
+    #: Logs ``[p_des, v_des, p_act, v_act, a_act, f_act, f_mea, f_comp]``
+    #: (rows of :data:`LOG_ROWS`).
+    logger: VectorLogSink | None = None
     diagram: Diagram | None = None
     #: Period of the rig computer's discrete events (sample period, or the
     #: continuous mode's delay-line period).
@@ -302,10 +325,10 @@ def add_hybrid_loop(
     h_sample = params.sample_period_s
     if h_sample is None:
         if params.sensor_delay_s > 0.0:
-            h_computer, _ = continuous_delay_period(params.sensor_delay_s, params.time_step_s)
+            h_computer, _ = continuous_delay_period(params.sensor_delay_s, params.step_s)
         else:
-            h_computer = params.time_step_s
-        sensor = ForceSensorDelay(params.sensor(), "continuous", params.time_step_s)
+            h_computer = params.step_s
+        sensor = ForceSensorDelay(params.sensor(), "continuous", params.step_s)
         spacecraft = Spacecraft(params.spacecraft())
     else:
         h_computer = h_sample
@@ -335,20 +358,24 @@ def add_hybrid_loop(
         params, spacecraft, table, contact, sensor, compensator, computer_period_s=h_computer
     )
     if log:
+        # One sink for all signals (one logger per step is cheaper than five).
         # Continuous: every integration step. Sampled: once per tick, before
         # the tick's discrete update (the values the rig computer reads).
-        period = 0.0 if h_sample is None else h_sample
-        ports = {
-            "spacecraft_state": spacecraft.GetOutputPort("state"),
-            "table_motion": table.GetOutputPort("motion"),
-            "f_act_n": contact.GetOutputPort("force"),
-            "f_mea_n": sensor.GetOutputPort("measured_force"),
-            "f_comp_n": compensator.GetOutputPort("compensated_force"),
-        }
-        for name, port in ports.items():
-            sink = LogVectorOutput(port, builder, period)
-            sink.set_name(f"log_{name}")
-            loop.loggers[name] = sink
+        ports = [
+            spacecraft.GetOutputPort("state"),
+            table.GetOutputPort("motion"),
+            contact.GetOutputPort("force"),
+            sensor.GetOutputPort("measured_force"),
+            compensator.GetOutputPort("compensated_force"),
+        ]
+        mux = builder.AddNamedSystem("log_mux", Multiplexer([p.size() for p in ports]))
+        for i, port in enumerate(ports):
+            builder.Connect(port, mux.get_input_port(i))
+        sink = LogVectorOutput(
+            mux.get_output_port(), builder, 0.0 if h_sample is None else h_sample
+        )
+        sink.set_name("log")
+        loop.logger = sink
     return loop
 
 

@@ -8,10 +8,12 @@ from dataclasses import dataclass
 import numpy as np
 from pydrake.systems.analysis import Simulator
 
-from hybridtable.loop import HybridLoop, HybridLoopParams, build_hybrid_loop
+from hybridtable.loop import LOG_ROWS, HybridLoop, HybridLoopParams, build_hybrid_loop
 from hybridtable.metrics import ContactMetrics, contact_metrics
 
 __all__ = ["SimulationError", "SimulationResult", "simulate", "run_loop"]
+
+_F_ACT = LOG_ROWS.index("f_act_n")
 
 
 class SimulationError(RuntimeError):
@@ -109,7 +111,7 @@ def run_loop(
 
     # Advance in chunks and look at the forces between chunks (a per-step
     # Python monitor would cost as much as the systems themselves). The
-    # loggers hold every step; a chunk only decides when to stop.
+    # logger holds every step; a chunk only decides when to stop.
     chunk = max(10.0 * loop.computer_period_s, settle / 4.0)
     simulator.Initialize()
     started, last_active = False, -math.inf
@@ -128,7 +130,7 @@ def run_loop(
             raise SimulationError(
                 f"simulation diverged by t = {t:.4f} s (the loop is unstable for these parameters)"
             )
-        log = loop.loggers["f_act_n"].FindLog(context).data()[0]
+        log = loop.logger.FindLog(context).data()[_F_ACT]
         if f_act > 0.0 or f_mea > params.force_deadband_n or f_comp != 0.0:
             started, last_active = True, t
         elif not started and (log > 0.0).any():
@@ -148,35 +150,27 @@ def run_loop(
 
 def _collect(loop: HybridLoop, context, steps: int) -> SimulationResult:
     params = loop.params
-    logs = {name: sink.FindLog(context) for name, sink in loop.loggers.items()}
-    t = logs["spacecraft_state"].sample_times()
-    sc = logs["spacecraft_state"].data()
-    tab = logs["table_motion"].data()
-    f_act = logs["f_act_n"].data()[0]
-    f_mea = logs["f_mea_n"].data()[0]
-    f_comp = logs["f_comp_n"].data()[0]
+    log = loop.logger.FindLog(context)
+    t = log.sample_times()
+    data = log.data()
     if params.sample_rate_hz is not None:
         # Logged before each tick's update: the spacecraft state after tick k
         # is the one logged at tick k + 1.
         n = len(t) - 1
-        t, tab, f_act, f_mea, f_comp = t[:n], tab[:, :n], f_act[:n], f_mea[:n], f_comp[:n]
-        sc = sc[:, 1:]
+        t = t[:n]
+        data = np.vstack([data[:2, 1:], data[2:, :n]])
     else:
         # Drop repeated samples at discrete-event times (kept: the last).
         keep = np.append(np.diff(t) > 0, True)
-        t, sc, tab = t[keep], sc[:, keep], tab[:, keep]
-        f_act, f_mea, f_comp = f_act[keep], f_mea[keep], f_comp[keep]
-    metrics = contact_metrics(t, sc[1], f_act, f_comp, params.spacecraft_mass_kg)
+        t, data = t[keep], data[:, keep]
+    rows = dict(zip(LOG_ROWS, data, strict=True))
+    metrics = contact_metrics(
+        t, rows["v_des_m_per_s"], rows["f_act_n"], rows["f_comp_n"], params.spacecraft_mass_kg
+    )
     return SimulationResult(
         params=params,
-        time_s=np.asarray(t),
-        p_des_m=sc[0].copy(),
-        v_des_m_per_s=sc[1].copy(),
-        p_act_m=tab[0].copy(),
-        v_act_m_per_s=tab[1].copy(),
-        f_act_n=np.asarray(f_act).copy(),
-        f_mea_n=np.asarray(f_mea).copy(),
-        f_comp_n=np.asarray(f_comp).copy(),
+        time_s=np.array(t),
+        **{name: np.array(rows[name]) for name in LOG_ROWS if name != "a_act_m_per_s2"},
         metrics=metrics,
         steps=steps,
     )

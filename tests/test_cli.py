@@ -80,6 +80,7 @@ def test_reproduce_json_shape_and_tables(tmp_path):
     for row in data["table2"]:
         assert keys <= set(row)
         assert row["cor_sdmdc"] == pytest.approx(row["paper"], abs=0.01)
+        assert abs(row["cor_sdmdc_half_step"] - row["cor_sdmdc"]) < 5e-4
     # The paper's order: delays 1, 3, 5 ms come first.
     assert [r["sensor_delay_ms"] for r in data["table2"][:3]] == [1, 3, 5]
     names = sorted(p.name for p in figs.glob("*.png"))

@@ -55,7 +55,7 @@ def table1():
         p = table1_params(c)
         runs[c] = (
             simulate(p).metrics.cor,
-            simulate(p.with_(time_step_s=p.time_step_s / 2)).metrics.cor,
+            simulate(p.with_(time_step_s=p.step_s / 2)).metrics.cor,
         )
     return paper, runs
 

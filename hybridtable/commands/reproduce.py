@@ -23,7 +23,12 @@ def register(sub) -> None:
     p.add_argument(
         "--tables", metavar="FILE", help="the paper's tables.json (default: shipped copy)"
     )
-    p.add_argument("--time-step-s", type=parse_float, default=1e-4)
+    p.add_argument(
+        "--time-step-s",
+        type=parse_float,
+        default=None,
+        help="continuous-loop step (default: min(2e-4, 1/(5000 f_con)))",
+    )
     p.add_argument("--contact-gate", choices=CONTACT_GATES, default="measured_force")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)

@@ -42,7 +42,12 @@ def add_loop_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="sampled rig computer (default: continuous)",
     )
-    g.add_argument("--time-step-s", type=parse_float, default=1e-4, help="continuous mode step")
+    g.add_argument(
+        "--time-step-s",
+        type=parse_float,
+        default=None,
+        help="continuous-mode step (default: min(2e-4, 1/(5000 f_con)))",
+    )
 
 
 def params_from_args(args: argparse.Namespace):
