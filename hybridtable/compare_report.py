@@ -14,6 +14,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from hybridtable.comparison import PHASES, Correlation, RunComparison  # noqa: E402
+from hybridtable.measurement import RUN_COLUMNS  # noqa: E402
 
 __all__ = ["REPORT_MARKER", "format_table", "write_report", "figure_stem"]
 
@@ -255,7 +256,7 @@ def write_report(comparisons: Sequence[RunComparison], folder: str | Path) -> li
             )
         for ch, e in c.closed_loop_errors.items():
             md.append(
-                f"| closed loop {ch} | {_md_num(e.rms_error, '.4g')} | | | "
+                f"| closed loop {ch} | {_md_num(e.rms_error, '.4g')} {RUN_COLUMNS[ch]} | | | "
                 f"{_md_num(e.nrmse, '.4f')} | {_md_num(e.fit_percent, '.2f')} |"
             )
         md += [
