@@ -19,10 +19,14 @@ from __future__ import annotations
 
 from hybridtable.compensator import register_compensator
 from hybridtable.plugins.online import make_online_sdmdc
+from hybridtable.plugins.polynomial import make_polynomial
+from hybridtable.plugins.smith import make_smith
 
 __all__ = ["PLUGIN_COMPENSATORS"]
 
 #: Compensators this package registers.
-PLUGIN_COMPENSATORS: tuple[str, ...] = ("sdmdc-online",)
+PLUGIN_COMPENSATORS: tuple[str, ...] = ("sdmdc-online", "polynomial", "smith")
 
 register_compensator("sdmdc-online", make_online_sdmdc)
+register_compensator("polynomial", make_polynomial)
+register_compensator("smith", make_smith)
