@@ -422,6 +422,15 @@ def read_run(
     return Run(info=info, csv_path=csv_path, json_path=json_path, **cols)
 
 
+def _looks_like_run(path: Path) -> bool:
+    """True if ``path`` is a JSON object with the format's ``format`` value."""
+    try:
+        raw = json.loads(path.read_text(encoding="utf-8-sig"))
+    except (OSError, ValueError):
+        return False
+    return isinstance(raw, dict) and raw.get("format") == FORMAT
+
+
 def find_run_files(paths: Sequence[str | Path]) -> list[tuple[Path, Path]]:
     """The ``(csv, json)`` pairs named by ``paths``: a CSV or JSON file names its
     pair, a folder every pair in it (sorted by name, not recursive).
@@ -430,7 +439,8 @@ def find_run_files(paths: Sequence[str | Path]) -> list[tuple[Path, Path]]:
     ------
     MeasurementError
         For a missing path, a file of another kind, a folder without runs, a
-        CSV or JSON file in a folder without its partner.
+        CSV or run JSON file in a folder without its partner (other JSON files
+        in a folder, e.g. results of ``compare --json``, are ignored).
     """
     pairs: list[tuple[Path, Path]] = []
     if not paths:
@@ -441,13 +451,18 @@ def find_run_files(paths: Sequence[str | Path]) -> list[tuple[Path, Path]]:
             stems = sorted({q.stem for q in p.iterdir() if q.suffix in (".csv", ".json")})
             if not stems:
                 raise MeasurementError(f"{p}: folder holds no runs (no .csv/.json pairs)")
+            found = len(pairs)
             for stem in stems:
                 c, j = p / f"{stem}.csv", p / f"{stem}.json"
                 if not c.is_file():
+                    if not _looks_like_run(j):
+                        continue  # another JSON file (e.g. results of compare)
                     raise MeasurementError(f"{j}: no {c.name} beside it")
                 if not j.is_file():
                     raise MeasurementError(f"{c}: no {j.name} beside it")
                 pairs.append((c, j))
+            if len(pairs) == found:
+                raise MeasurementError(f"{p}: folder holds no runs (no .csv/.json pairs)")
         elif p.is_file() or p.suffix in (".csv", ".json"):
             if p.suffix not in (".csv", ".json"):
                 raise MeasurementError(f"{p}: not a run file (expected .csv or .json)")

@@ -350,3 +350,12 @@ def test_reads_the_example_folder():
     assert r.p_des_m[0] == pytest.approx(-r.info.initial_gap_m + 1e-3 * r.v_des_m_per_s[0])
     # Naming the same run twice (CSV and JSON) reads it once.
     assert len(read_runs([EXAMPLES / "run2.csv", EXAMPLES / "run2.json"])) == 1
+
+
+def test_folder_ignores_other_json_but_not_a_lone_run_json(tmp_path):
+    c, j = _pair(tmp_path)
+    (c.parent / "results.json").write_text('{"runs": []}\n')
+    assert [r.run_id for r in read_runs([c.parent])] == ["nominal-run1"]
+    shutil.copyfile(j, c.parent / "b.json")
+    with pytest.raises(MeasurementError, match=r"b\.json: no b\.csv beside it"):
+        read_runs([c.parent])
