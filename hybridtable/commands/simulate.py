@@ -6,17 +6,16 @@ import argparse
 import math
 import time
 
-from hybridtable.compensator import COMPENSATORS
-
 __all__ = ["register", "add_loop_arguments", "params_from_args", "run"]
 
 
 def add_loop_arguments(parser: argparse.ArgumentParser) -> None:
     """Options shared by the commands that set up one loop (defaults: Table 1)."""
     from hybridtable.cli import parse_float
+    from hybridtable.compensator import compensator_names
 
     g = parser.add_argument_group("loop parameters (defaults: the paper's Table 1 point)")
-    g.add_argument("--compensator", default="none", help=f"one of {', '.join(COMPENSATORS)}")
+    g.add_argument("--compensator", default="none", help=f"one of {', '.join(compensator_names())}")
     g.add_argument("--sensor-delay-s", type=parse_float, default=0.005)
     g.add_argument("--table-response-hz", type=parse_float, default=25.0, help="inf: ideal table")
     g.add_argument("--table-damping-ratio", type=parse_float, default=0.8)
@@ -32,7 +31,13 @@ def add_loop_arguments(parser: argparse.ArgumentParser) -> None:
         "--compensator-stiffness-n-per-m",
         type=parse_float,
         default=None,
-        help="stiffness the MDC believes (default: the true one)",
+        help="stiffness the compensator believes (MDC, SDMDC, smith) or starts from "
+        "(sdmdc-online's prior); default: the true one",
+    )
+    g.add_argument(
+        "--passivity",
+        action="store_true",
+        help="guard the compensator with the time-domain passivity observer/controller",
     )
     g.add_argument("--force-deadband-n", type=parse_float, default=0.0)
     g.add_argument("--clamp-nonnegative", action="store_true", help="clamp f_comp at zero")
@@ -70,6 +75,7 @@ def params_from_args(args: argparse.Namespace):
         clamp_nonnegative=args.clamp_nonnegative,
         sample_rate_hz=args.sample_rate_hz,
         time_step_s=args.time_step_s,
+        passivity=getattr(args, "passivity", False),
     )
 
 
