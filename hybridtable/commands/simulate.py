@@ -89,6 +89,16 @@ def register(sub) -> None:
     add_loop_arguments(p)
     p.add_argument("--json", metavar="FILE", help="write the results as JSON (- for stdout)")
     p.add_argument("--plot", metavar="FILE.png", help="plot positions, velocity and forces")
+    p.add_argument(
+        "--table",
+        choices=("second-order", "stewart"),
+        default="second-order",
+        help="table back-end: the second-order model, or the Stewart platform "
+        "(MultibodyPlant, tuned to --table-response-hz; sampled loop, default 1000 Hz)",
+    )
+    p.add_argument(
+        "--html", metavar="FILE.html", help="record a Meshcat animation (--table stewart)"
+    )
     p.set_defaults(func=run)
 
 
@@ -98,7 +108,18 @@ def run(args: argparse.Namespace) -> int:
 
     params = params_from_args(args)
     t0 = time.perf_counter()
-    result = simulate(params)
+    extra = {}
+    if args.table == "stewart":
+        from hybridtable.stewart.simulation import simulate_stewart
+
+        run_ = simulate_stewart(params, html=args.html)
+        result, params, extra = run_.result, run_.params, run_.summary()
+    elif args.html:
+        from hybridtable.cli import CommandError
+
+        raise CommandError("--html needs --table stewart")
+    else:
+        result = simulate(params)
     wall = time.perf_counter() - t0
     m = result.metrics
     out = {
@@ -116,6 +137,7 @@ def run(args: argparse.Namespace) -> int:
             math.pi**2 * params.contact_frequency_hz * params.effective_delay_s
         ),
         "wall_time_s": wall,
+        **extra,
     }
     if args.json != "-":
         print(

@@ -100,8 +100,10 @@ def drive_table(
 
     Returns
     -------
-    array (n, 3)
+    motion : array (n, 3)
         ``[p, v, a]`` at the ticks (before each tick's update).
+    force : array (n,)
+        The sensed contact force at the ticks (N, compression positive).
     """
     h = params.time_step_s
     u = np.asarray(command_m, dtype=float)
@@ -117,14 +119,16 @@ def drive_table(
     builder.Connect(source.get_output_port(), computer.get_input_port())
     builder.Connect(computer.get_output_port(), table.GetInputPort("commanded_state"))
     log = LogVectorOutput(table.GetOutputPort("motion"), builder, h)
+    force_log = LogVectorOutput(table.GetOutputPort("sensed_force"), builder, h)
     diagram = builder.Build()
     simulator = Simulator(diagram)
     context = simulator.get_mutable_context()
     table.set_initial_state(table.GetMyMutableContextFromRoot(context), initial_offset_m, 0.0)
     computer.GetMyMutableContextFromRoot(context).SetDiscreteState([u[0], 0.0])
     simulator.AdvanceTo((n - 1) * h + 0.5 * h)
-    data = log.FindLog(context).data().T
-    return data[:n]
+    motion = log.FindLog(context).data().T[:n]
+    force = force_log.FindLog(context).data()[0, :n]
+    return motion, force
 
 
 def _discrete_model(frequency_hz: float, damping_ratio: float, h: float):
@@ -210,7 +214,7 @@ def identify_step(
     start = -2.0 * a
     u = np.full(n, start)
     u[n0:] -= a
-    motion = drive_table(params, u, start)
+    motion, _ = drive_table(params, u, start)
     p = motion[:, 0]
     base = p[n0]
     return fit_second_order(u[n0:] - start, p[n0:] - base, h, initial_guess, "step")
@@ -243,7 +247,7 @@ def identify_chirp(
     phase = 2.0 * math.pi * f0 * (np.exp(rate * t) - 1.0) / rate
     center = -3.0 * a
     u = np.concatenate([np.full(n0, center), center + a * np.sin(phase)])
-    motion = drive_table(params, u, center)
+    motion, _ = drive_table(params, u, center)
     p = motion[:, 0]
     return fit_second_order(u[n0:] - center, p[n0:] - p[n0], h, initial_guess, "chirp")
 

@@ -336,17 +336,13 @@ class StewartPlant:
     plate_velocity_start: int = 0
     #: Leg forces that hold the platform at home against gravity (N).
     gravity_feedforward_n: np.ndarray = field(default_factory=lambda: np.zeros(6))
+    #: Orientation (in the world) of each universal joint's fixed frame; its
+    #: z axis is the leg's home direction.
+    base_joint_rotations: list[np.ndarray] = field(default_factory=list)
 
     @property
     def geometry(self) -> StewartGeometry:
         return self.params.geometry
-
-    def penetration_at(self, offset_m: float) -> float:
-        """Penetration of the devices when the plate is at ``offset_m`` along z
-        from home without tilt (= ``offset_m`` by construction)."""
-        g = self.geometry
-        tip_top = g.home_height_m + offset_m + g.device_tip_center_m[2] + g.device_tip_radius_m
-        return tip_top - self.contact_face_height_m
 
     def set_axis_state(self, plant_context, offset_m: float, velocity_m_per_s: float) -> None:
         """Put the platform at ``offset_m`` from home along the docking axis
@@ -390,11 +386,9 @@ class StewartPlant:
         for i in range(6):
             # Leg direction in the universal joint's fixed frame F; the child's
             # z axis is Rx(q0) Ry(q1) z = [sin q1, -sin q0 cos q1, cos q0 cos q1].
-            d = self._base_frames[i].T @ (legs[i] / lengths[i])
+            d = self.base_joint_rotations[i].T @ (legs[i] / lengths[i])
             angles[i] = [math.atan2(-d[1], d[2]), math.asin(max(-1.0, min(1.0, d[0])))]
         return lengths, angles
-
-    _base_frames: list[np.ndarray] = field(default_factory=list)
 
 
 def add_stewart_plant(
@@ -484,11 +478,19 @@ def add_stewart_plant(
     plant.RegisterCollisionGeometry(device, X_tip, tip, "tip", contact_props())
     plant.RegisterVisualGeometry(device, X_tip, tip, "tip", blue)
     face_z = g.home_height_m + g.device_length_m
-    frame = Box(0.3, 0.3, 0.05)
-    X_frame = RigidTransform([0.0, 0.0, face_z + 0.025])
+    # A block large enough that its contact face stays the nearest face of
+    # the tip's centre over the whole workspace (point contact takes the
+    # nearest face): penetration = tip top - face for any reachable pose.
+    depth = 2.0 * (g.leg_max_length_m + g.device_length_m)
+    frame = Box(depth, depth, depth)
+    X_frame = RigidTransform([0.0, 0.0, face_z + depth / 2])
     plant.RegisterCollisionGeometry(world, X_frame, frame, "passive_device", contact_props())
     plant.RegisterVisualGeometry(
-        world, X_frame, frame, "passive_device", np.array([0.8, 0.5, 0.2, 0.8])
+        world,
+        RigidTransform([0.0, 0.0, face_z + 0.05]),
+        Box(0.4, 0.4, 0.1),
+        "passive_device",
+        np.array([0.8, 0.5, 0.2, 0.8]),
     )
 
     # Legs: universal joint at the base, actuated prismatic joint, ball
@@ -559,8 +561,8 @@ def add_stewart_plant(
         leg_velocity_indices=np.array([j.velocity_start() for j in pjoints]),
         plate_position_start=plate.floating_positions_start(),
         plate_velocity_start=plate.floating_velocities_start_in_v(),
+        base_joint_rotations=base_frames,
     )
-    handles._base_frames = base_frames
     handles.gravity_feedforward_n = _static_leg_forces(handles)
     return handles
 
