@@ -72,8 +72,9 @@ class LoopMargins:
     growth_rate_per_s : float
         Largest real part of all closed-loop poles (s-plane equivalent).
     stable : bool
-        Every closed-loop pole strictly in the left half plane (inside the
-        unit circle when sampled).
+        Every closed-loop pole in the left half plane by more than
+        ``1e-9 w_con`` (inside the unit circle when sampled): a marginal loop,
+        e.g. an undamped contact with a perfect rig, is not stable.
     phase_margin_deg : float
         Phase margin at the contact crossover (NaN if no crossover).
     crossover_rad_per_s : float
@@ -232,7 +233,12 @@ def crossover_phase_margin(
     def f(x: float) -> float:
         return math.log(abs(response(np.array([x]))[0]))
 
-    wgc = brentq(f, w[i], w[i + 1], xtol=1e-13 * w0, rtol=1e-13)
+    a, b = float(w[i]), float(w[i + 1])
+    fa, fb = f(a), f(b)
+    if fa * fb < 0.0:
+        wgc = brentq(f, a, b, xtol=1e-13 * w0, rtol=1e-13)
+    else:  # a crossing at a grid point (|ln|L|| at round-off level)
+        wgc = a if abs(fa) <= abs(fb) else b
     phase = math.degrees(np.angle(response(np.array([wgc]))[0]))
     pm = (phase + 180.0) % 360.0
     pm = pm - 360.0 if pm > 180.0 else pm
@@ -261,7 +267,7 @@ def loop_margins(loop: LinearLoop, pm_method: str = "python-control") -> LoopMar
         predicted_cor=cor,
         energy_growth_per_contact=cor * cor - 1.0,
         growth_rate_per_s=sigma,
-        stable=bool(sigma < 0.0),
+        stable=bool(sigma < -_tolerance(loop.params)),
         phase_margin_deg=pm,
         crossover_rad_per_s=wgc,
         effective_delay_s=effective_delay(loop.params, pm, wgc),

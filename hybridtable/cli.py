@@ -30,6 +30,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "hybridtable.commands.reproduce",
     "hybridtable.commands.compare",
     "hybridtable.commands.compensators",
+    "hybridtable.commands.margins",
 )
 
 
