@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 from hybridtable.cli import main
@@ -68,6 +69,9 @@ def test_loop_cor_matches_the_1d_loop_with_the_identified_table(tuned, compensat
     # Force = k p in contact, at the same tick (no hidden one-step shift).
     in_contact = result.f_act_n > 50.0
     assert result.f_act_n[in_contact] == pytest.approx(1e5 * result.p_act_m[in_contact], rel=1e-6)
+    # Apart, the sensor reads an exact zero (no round-off opening the
+    # compensator's contact gate).
+    assert np.all(result.f_act_n[result.p_act_m < -1e-4] == 0.0)
     # Acceptance (paper's Table 1): delay pumps energy; SDMDC removes it.
     if compensator == "none":
         assert result.metrics.cor > 1.05

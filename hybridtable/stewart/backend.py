@@ -168,7 +168,8 @@ class DeviceSensor(LeafSystem):
         Over the coming step: the contact force along the docking axis,
         compression positive, from the weld's reaction force corrected for the
         device's weight and inertia (what a rig's F/T sensor with payload
-        compensation reports), and the tip's acceleration along the axis.
+        compensation reports, rounded to ``sensor_resolution_n``), and the
+        tip's acceleration along the axis.
     Output ``wrench`` (6: N m, N)
         Raw reaction wrench ``[torque; force]`` of the plate on the device,
         at the sensor (the device frame origin), in the device frame, over the
@@ -189,6 +190,7 @@ class DeviceSensor(LeafSystem):
         self._com = handles.device.default_com()
         self._gravity = np.array([0.0, 0.0, -handles.params.gravity_m_per_s2])
         self._weld = int(handles.sensor_weld.index())
+        self._resolution = handles.params.sensor_resolution_n
         self._state = self.DeclareVectorInputPort("plant_state", plant.num_multibody_states())
         self._accel = self.DeclareVectorInputPort(
             "generalized_acceleration", plant.num_velocities()
@@ -238,6 +240,7 @@ class DeviceSensor(LeafSystem):
         # Device: m a_com = f_weld + f_contact + m g  ->  compression = -f_contact.z
         a_com = self._z_kinematics(R, w, dw, dv, self._com)[2]
         compression = f_weld_z - self._mass * (a_com - self._gravity[2])
+        compression = self._resolution * round(compression / self._resolution)
         output.SetFromVector([compression, self._z_kinematics(R, w, dw, dv, self._tip)[2]])
 
     def _calc_wrench(self, context, output) -> None:

@@ -109,6 +109,10 @@ class StewartParams:
         reading is compensated for the device's weight and inertia.
     friction_coefficient : float
         Coulomb friction of the contact pair, >= 0.
+    sensor_resolution_n : float
+        Resolution of the F/T sensor's force reading, > 0: the reading is
+        rounded to a multiple of it, so the round-off of the reaction wrench
+        (~1e-14 N) reads as an exact zero when the devices are apart.
     reference_response_hz : float or None
         Natural frequency of the reference model, > 0 and below the Nyquist
         rate, or ``None`` for none.
@@ -124,6 +128,7 @@ class StewartParams:
     time_step_s: float = 1e-3
     gravity_m_per_s2: float = 9.81
     friction_coefficient: float = 0.3
+    sensor_resolution_n: float = 1e-6
     reference_response_hz: float | None = 25.0
     reference_damping_ratio: float = 0.8
 
@@ -131,7 +136,7 @@ class StewartParams:
         s = object.__setattr__
         if not isinstance(self.geometry, StewartGeometry):
             raise ParameterError(f"geometry must be a StewartGeometry (got {self.geometry!r})")
-        for name in ("servo_bandwidth_hz", "time_step_s"):
+        for name in ("servo_bandwidth_hz", "time_step_s", "sensor_resolution_n"):
             s(self, name, check_positive(name, getattr(self, name)))
         for name in (
             "servo_damping_ratio",
