@@ -137,6 +137,7 @@ def _base_params(args: argparse.Namespace):
     from hybridtable.paper import paper_params
 
     base = paper_params(
+        sensor_delay_s=0.0,  # the grid sets it
         table_damping_ratio=args.table_damping_ratio,
         contact_frequency_hz=args.contact_frequency_hz,
         contact_stiffness_n_per_m=args.contact_stiffness_n_per_m,
