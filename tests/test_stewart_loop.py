@@ -7,6 +7,7 @@ import json
 import numpy as np
 import pytest
 
+from hybridtable._validation import ParameterError
 from hybridtable.cli import main
 from hybridtable.paper import paper_params, table1_params
 from hybridtable.simulation import run_loop, simulate
@@ -44,6 +45,16 @@ def test_leg_gains_alone_can_be_tuned_to_the_response():
     # 2e6 N/m for the default platform, far below the stiff servo's.
     kp, _ = params.servo_gains()
     assert kp < 0.2 * StewartParams().servo_gains()[0]
+
+
+def test_unreachable_response_is_a_clear_error():
+    # 100 Hz at a 1 ms step: the explicit servo would need w h ~ 0.6 or more.
+    with pytest.raises(ParameterError, match="unstable"):
+        tune_leg_gains(StewartParams(), 100.0, TARGET_ZETA)
+    with pytest.raises(ParameterError, match="Nyquist"):
+        tune_table(StewartParams(), 100.0, TARGET_ZETA)
+    with pytest.raises(ParameterError, match="finite"):
+        tune_table(StewartParams(), float("inf"), TARGET_ZETA)
 
 
 def test_backend_ports_match_the_loop_contract(tuned):

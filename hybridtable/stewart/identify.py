@@ -125,9 +125,19 @@ def drive_table(
     context = simulator.get_mutable_context()
     table.set_initial_state(table.GetMyMutableContextFromRoot(context), initial_offset_m, 0.0)
     computer.GetMyMutableContextFromRoot(context).SetDiscreteState([u[0], 0.0])
-    simulator.AdvanceTo((n - 1) * h + 0.5 * h)
+    unstable = (
+        "the table does not follow its command: the leg servo is unstable with gains "
+        f"{params.servo_gains()} N/m, N s/m at time step {h:g} s"
+    )
+    try:
+        simulator.AdvanceTo((n - 1) * h + 0.5 * h)
+    except (RuntimeError, SystemExit) as err:  # the SAP solver gives up on divergence
+        raise ParameterError(f"{unstable} ({err})") from None
     motion = log.FindLog(context).data().T[:n]
     force = force_log.FindLog(context).data()[0, :n]
+    span = np.ptp(np.append(u, initial_offset_m))
+    if not np.all(np.isfinite(motion)) or np.max(np.abs(motion[:, 0] - u)) > 10.0 * span + 1e-3:
+        raise ParameterError(unstable)
     return motion, force
 
 
@@ -253,28 +263,49 @@ def identify_chirp(
 
 
 def _tune(
-    params: StewartParams,
+    start: StewartParams,
     response_hz: float,
     damping_ratio: float,
     tolerance: float,
     max_iterations: int,
-    update,
+    knobs,
+    make,
+    jacobian0: np.ndarray,
 ) -> tuple[StewartParams, TableResponse]:
+    """Broyden's method on ``x = log(knobs)`` for the residual
+    ``[log(f / f_t), zeta - zeta_t]`` of the identified step response; one
+    identification per iteration, ``jacobian0`` the first Jacobian guess."""
     f_t = check_positive("response_hz", response_hz)
     z_t = check_nonnegative("damping_ratio", damping_ratio)
-    if f_t * params.time_step_s > 0.1:
+    if f_t * start.time_step_s > 0.1:
         raise ParameterError(
-            f"response_hz {f_t:g} is too fast for time step {params.time_step_s:g} s "
+            f"response_hz {f_t:g} is too fast for time step {start.time_step_s:g} s "
             "(need response_hz * time_step_s <= 0.1)"
         )
-    current = params
+    current = start
+    x = np.log(np.asarray(knobs(current), dtype=float))
+    J = np.array(jacobian0, dtype=float)
+    previous = None
     response = None
     for _ in range(max_iterations):
         response = identify_step(current, initial_guess=(f_t, max(z_t, 0.05)))
         f, z = response.response_frequency_hz, response.damping_ratio
+        r = np.array([math.log(f / f_t), z - z_t])
         if abs(f / f_t - 1.0) < tolerance and abs(z - z_t) < tolerance * max(z_t, 1.0):
             return current, response
-        current = update(current, f_t / f, max(z_t, 1e-3) / max(z, 1e-3))
+        if previous is not None:
+            dx, dr = x - previous[0], r - previous[1]
+            J = J + np.outer(dr - J @ dx, dx) / float(dx @ dx)
+        try:
+            step = -np.linalg.solve(J, r)
+        except np.linalg.LinAlgError:
+            break
+        largest = float(np.max(np.abs(step)))
+        if largest > 0.5:  # at most a factor e^0.5 per iteration
+            step *= 0.5 / largest
+        previous = (x, r)
+        x = x + step
+        current = make(current, np.exp(x))
     raise ParameterError(
         f"could not tune the table to {f_t:g} Hz, damping ratio {z_t:g} (last identified "
         f"{response.response_frequency_hz:.3f} Hz, {response.damping_ratio:.4f}): the leg servo "
@@ -288,15 +319,15 @@ def tune_leg_gains(
     response_hz: float,
     damping_ratio: float,
     tolerance: float = 1e-3,
-    max_iterations: int = 15,
+    max_iterations: int = 20,
 ) -> tuple[StewartParams, TableResponse]:
     """Leg servo gains whose identified step response (without a reference
     model) has ``response_hz`` and ``damping_ratio`` (relative tolerance
-    ``tolerance`` on both).
+    ``tolerance`` on the frequency, absolute ``tolerance`` on the damping).
 
     Starts from the rigid-heave gains (:func:`~hybridtable.stewart.plant.heave_servo_gains`)
-    and rescales ``Kp`` by ``(f_target / f)^2`` and ``Kd`` by
-    ``(zeta_target f_target) / (zeta f)``.
+    and solves for ``(Kp, Kd)`` by Broyden's method (first guess: ``f ~ Kp^1/2``,
+    ``zeta ~ Kd / Kp^1/2``).
 
     Returns
     -------
@@ -311,12 +342,17 @@ def tune_leg_gains(
     """
     kp, kd = heave_servo_gains(params.geometry, response_hz, max(damping_ratio, 0.05))
     start = params.with_reference(None, params.reference_damping_ratio).with_gains(kp, kd)
-
-    def update(current: StewartParams, f_ratio: float, z_ratio: float) -> StewartParams:
-        kp, kd = current.servo_gains()
-        return current.with_gains(kp * f_ratio**2, kd * f_ratio * z_ratio)
-
-    return _tune(start, response_hz, damping_ratio, tolerance, max_iterations, update)
+    z = max(damping_ratio, 0.05)
+    return _tune(
+        start,
+        response_hz,
+        damping_ratio,
+        tolerance,
+        max_iterations,
+        lambda p: p.servo_gains(),
+        lambda p, g: p.with_gains(float(g[0]), float(g[1])),
+        np.array([[0.5, 0.0], [-0.5 * z, z]]),
+    )
 
 
 @lru_cache(maxsize=32)
@@ -325,32 +361,42 @@ def tune_reference(
     response_hz: float,
     damping_ratio: float,
     tolerance: float = 1e-3,
-    max_iterations: int = 15,
+    max_iterations: int = 20,
 ) -> tuple[StewartParams, TableResponse]:
     """Reference model whose table (reference model + stiff leg servo) has an
     identified step response with ``response_hz`` and ``damping_ratio``.
 
-    Starts from the target and rescales the reference frequency by
-    ``f_target / f`` and its damping ratio by ``zeta_target / zeta``.
+    Starts from the target and solves for the reference's frequency and
+    damping ratio by Broyden's method.
 
     Returns
     -------
     (StewartParams, TableResponse)
         ``params`` with the tuned reference model, and its identification.
     """
-    start = params.with_reference(response_hz, damping_ratio)
+    start = params.with_reference(response_hz, max(damping_ratio, 1e-3))
+    nyquist = 0.5 / params.time_step_s
 
-    def update(current: StewartParams, f_ratio: float, z_ratio: float) -> StewartParams:
-        f_r = current.reference_response_hz * f_ratio
-        if f_r * current.time_step_s >= 0.5:
+    def make(current: StewartParams, knobs: np.ndarray) -> StewartParams:
+        if knobs[0] >= 0.9 * nyquist:
             raise ParameterError(
                 f"could not tune the table to {response_hz:g} Hz: the reference model would "
-                "pass the Nyquist rate (the leg servo is too slow; raise servo_bandwidth_hz "
+                "approach the Nyquist rate (the leg servo is too slow; raise servo_bandwidth_hz "
                 "or shorten the time step)"
             )
-        return current.with_reference(f_r, current.reference_damping_ratio * z_ratio)
+        return current.with_reference(float(knobs[0]), float(knobs[1]))
 
-    return _tune(start, response_hz, damping_ratio, tolerance, max_iterations, update)
+    z = max(damping_ratio, 0.05)
+    return _tune(
+        start,
+        response_hz,
+        damping_ratio,
+        tolerance,
+        max_iterations,
+        lambda p: (p.reference_response_hz, p.reference_damping_ratio),
+        make,
+        np.array([[1.0, 0.0], [0.0, z]]),
+    )
 
 
 def tune_table(
