@@ -5,20 +5,22 @@ in real time from several past sampled contact force and position data
 points"; with damping, Eq. 6 also needs the damping c_con. This module fits the
 Kelvin-Voigt model
 
-    f = k delta + c delta_dot
+    f = k delta + c delta_dot = phi' theta,   phi = [delta, delta_dot]
 
-to past (deflection, deflection rate, force) samples with recursive least
-squares with exponential forgetting, written as a Kalman filter whose
-parameters follow a random walk (the forgetting inflates the covariance):
+to past (deflection, deflection rate, force) samples by recursive least
+squares with exponential forgetting, in information form (numerically robust
+when the data are far more informative than the prior):
 
-    P-  = P / lambda,            lambda = exp(-h / forgetting_time_s)
-    S   = phi' P- phi + sigma_f^2,   phi = [delta, delta_dot]
-    K   = P- phi / S
-    theta <- theta + K (f - phi' theta)
-    P   = P- - K K' S
+    Y <- lambda Y + (1 - lambda) Y0 + phi phi' / sigma_f^2
+    y <- lambda y + (1 - lambda) Y0 theta0 + phi f / sigma_f^2
+    theta = Y^-1 y,                  lambda = exp(-h / forgetting_time_s)
 
-starting from the prior ``theta = [k_prior, c_prior]`` with covariance
-``diag(stiffness_std^2, damping_std^2)``.
+``theta0 = [k_prior, c_prior]`` is the prior and
+``Y0 = diag(1 / stiffness_std^2, 1 / damping_std^2)`` its information; the
+estimate minimizes the prior-regularized, exponentially weighted squared
+force error. The ``(1 - lambda) Y0`` terms ("stabilized forgetting") keep
+``Y >= Y0``, so the covariance ``Y^-1`` never exceeds the prior's: no
+wind-up, whatever the excitation.
 
 Well-defined at every instant:
 
@@ -28,14 +30,13 @@ Well-defined at every instant:
   (:class:`ContactIdentifier`'s ``motion_delay``), so the pairs are exact;
 - *contact onset and separation*: a sample is used only while both the
   measured force exceeds ``force_threshold_n`` and the aligned deflection is
-  positive; outside contact the estimate and its covariance are frozen (no
-  covariance wind-up in free flight) and before the first contact sample the
-  estimate is the prior. A unilateral contact's force is clamped at zero when
-  ``k delta + c delta_dot < 0`` (end of a damped contact); those samples read
-  zero force and are skipped by the threshold;
+  positive; outside contact the state is frozen, and before the first contact
+  sample the estimate is the prior. A unilateral contact's force is clamped
+  at zero when ``k delta + c delta_dot < 0`` (end of a damped contact); those
+  samples read zero force and are skipped by the threshold;
 - *noise*: ``force_noise_std_n`` weighs the data against the prior; the
-  covariance is capped at its prior value and the estimates are projected onto
-  ``k >= 0``, ``c >= 0``.
+  estimate is reported projected onto ``k >= 0``, ``c >= 0`` (the internal
+  state is not clipped).
 
 ``damping_std_n_s_per_m = 0`` identifies the stiffness only (``c`` stays at its
 prior).
@@ -63,6 +64,8 @@ __all__ = [
     "IdentifierParams",
     "RecursiveContactIdentifier",
     "rls_step",
+    "estimate",
+    "covariance",
     "in_contact",
     "forgetting_factor",
     "ContactIdentifierLeaf",
@@ -131,16 +134,17 @@ class IdentifierParams:
         """True when the damping is identified too."""
         return self.damping_std_n_s_per_m > 0.0
 
+    def prior_information(self) -> tuple[float, float]:
+        """Diagonal of ``Y0``: ``1 / stiffness_std^2`` and ``1 / damping_std^2``
+        (0 when the damping is not identified: its row is unused)."""
+        i_c = 1.0 / self.damping_std_n_s_per_m**2 if self.estimates_damping else 0.0
+        return 1.0 / self.stiffness_std_n_per_m**2, i_c
+
     def initial_state(self) -> np.ndarray:
-        """``[k, c, P_kk, P_kc, P_cc]`` before any sample."""
+        """``[Y_kk, Y_kc, Y_cc, y_k, y_c]`` before any sample (the prior)."""
+        i_k, i_c = self.prior_information()
         return np.array(
-            [
-                self.prior_stiffness_n_per_m,
-                self.prior_damping_n_s_per_m,
-                self.stiffness_std_n_per_m**2,
-                0.0,
-                self.damping_std_n_s_per_m**2,
-            ]
+            [i_k, 0.0, i_c, i_k * self.prior_stiffness_n_per_m, i_c * self.prior_damping_n_s_per_m]
         )
 
 
@@ -157,40 +161,58 @@ def in_contact(force, deflection, params: IdentifierParams) -> bool:
 
 
 def rls_step(state, force, deflection, deflection_rate, lam: float, params: IdentifierParams):
-    """One identifier step: the new ``[k, c, P_kk, P_kc, P_cc]`` as a list.
+    """One identifier step: the new information state
+    ``[Y_kk, Y_kc, Y_cc, y_k, y_c]`` as a list.
 
     Works for any scalar type (float, AutoDiffXd) element-wise; returns
     ``state`` unchanged when the sample is outside contact
     (:func:`in_contact`).
     """
-    k, c, pkk, pkc, pcc = state
+    ykk, ykc, ycc, yk, yc = state
     if not in_contact(force, deflection, params):
-        return [k, c, pkk, pkc, pcc]
+        return [ykk, ykc, ycc, yk, yc]
     x, xd = deflection, deflection_rate
-    pkk, pkc, pcc = pkk / lam, pkc / lam, pcc / lam
-    a = pkk * x + pkc * xd  # P- phi
-    b = pkc * x + pcc * xd
-    s = x * a + xd * b + params.force_noise_std_n**2
-    gk, gc = a / s, b / s
-    e = force - (k * x + c * xd)
-    k, c = k + gk * e, c + gc * e
-    pkk, pkc, pcc = pkk - gk * gk * s, pkc - gk * gc * s, pcc - gc * gc * s
-    # Projection on the physical set, and the covariance capped at its prior
-    # value by a congruence D P D (keeps P positive semidefinite).
+    w = 1.0 / params.force_noise_std_n**2
+    i_k, i_c = params.prior_information()
+    k0, c0 = params.prior_stiffness_n_per_m, params.prior_damping_n_s_per_m
+    if not params.estimates_damping:
+        # Known damping: fit k to the force minus the damping force.
+        force = force - c0 * xd
+        xd = 0.0 * xd
+    g = 1.0 - lam
+    return [
+        lam * ykk + g * i_k + w * x * x,
+        lam * ykc + w * x * xd,
+        lam * ycc + g * i_c + w * xd * xd,
+        lam * yk + g * i_k * k0 + w * x * force,
+        lam * yc + g * i_c * c0 + w * xd * force,
+    ]
+
+
+def estimate(state, params: IdentifierParams):
+    """``(k, c)`` of an information state, projected onto ``k, c >= 0``."""
+    ykk, ykc, ycc, yk, yc = state
+    if params.estimates_damping:
+        det = ykk * ycc - ykc * ykc
+        k = (ycc * yk - ykc * yc) / det
+        c = (ykk * yc - ykc * yk) / det
+    else:
+        k = yk / ykk
+        c = 0.0 * k + params.prior_damping_n_s_per_m
     if k < 0.0:
         k = 0.0 * k
     if c < 0.0:
         c = 0.0 * c
-    dk = _shrink(pkk, params.stiffness_std_n_per_m**2)
-    dc = _shrink(pcc, params.damping_std_n_s_per_m**2)
-    if dk != 1.0 or dc != 1.0:
-        pkk, pkc, pcc = pkk * dk * dk, pkc * dk * dc, pcc * dc * dc
-    return [k, c, pkk, pkc, pcc]
+    return k, c
 
 
-def _shrink(variance, cap: float) -> float:
-    v = variance.value() if hasattr(variance, "value") else float(variance)
-    return math.sqrt(cap / v) if v > cap else 1.0
+def covariance(state, params: IdentifierParams) -> np.ndarray:
+    """The 2x2 covariance ``Y^-1`` of a float state (zero damping row and
+    column when the damping is not identified)."""
+    ykk, ykc, ycc = (float(v) for v in state[:3])
+    if not params.estimates_damping:
+        return np.array([[1.0 / ykk, 0.0], [0.0, 0.0]])
+    return np.linalg.inv(np.array([[ykk, ykc], [ykc, ycc]]))
 
 
 class RecursiveContactIdentifier:
@@ -217,11 +239,16 @@ class RecursiveContactIdentifier:
 
     @property
     def stiffness_n_per_m(self) -> float:
-        return float(self.state[0])
+        return float(estimate(self.state, self.params)[0])
 
     @property
     def damping_n_s_per_m(self) -> float:
-        return float(self.state[1])
+        return float(estimate(self.state, self.params)[1])
+
+    @property
+    def covariance(self) -> np.ndarray:
+        """Covariance of the estimate ``[k, c]`` (never above the prior's)."""
+        return covariance(self.state, self.params)
 
     def update(
         self, force: float, deflection: float, deflection_rate: float
@@ -264,7 +291,7 @@ def ContactIdentifierLeaf_(T):
             The estimate ``[k, c]`` (the prior before the first contact
             sample).
 
-        Discrete state ``[k, c, P_kk, P_kc, P_cc]``.
+        Discrete state: the information ``[Y_kk, Y_kc, Y_cc, y_k, y_c]``.
         """
 
         def _construct(self, params: IdentifierParams, period_s: float, converter=None):
@@ -295,7 +322,7 @@ def ContactIdentifierLeaf_(T):
 
         def _output(self, context, output):
             x = context.get_discrete_state(self._state).value()
-            output.SetFromVector(x[:2])
+            output.SetFromVector(np.array(estimate(list(x), self.params)))
 
     return Impl
 

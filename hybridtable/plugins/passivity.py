@@ -111,7 +111,8 @@ def _damping(energy, f0, v, params: PassivityParams):
     ``energy`` is the observed energy now above its floor (the tolerance), ``f0`` the compensator's force and
     ``v`` the model's velocity. Sampled: the energy after the tick,
     ``E + h f v - h^2 f^2 / (2 m)`` with ``f = f0 + alpha v`` (exact for the
-    model's semi-implicit Euler step), must be at least the margin.
+    model's semi-implicit Euler step), must not be negative (when it would
+    be, the damper restores it to the margin).
     Continuous: ``dE/dt = f v >= -E / tau`` while ``E >= 0``, and
     ``>= (margin - E) / tau`` once ``E < 0``.
     """
@@ -120,7 +121,7 @@ def _damping(energy, f0, v, params: PassivityParams):
     h, m = params.period_s, params.mass_kg
     margin = ENERGY_MARGIN * 0.5 * m * v * v
     if params.sampled:
-        if energy + h * f0 * v - h * h * f0 * f0 / (2.0 * m) >= margin:
+        if energy + h * f0 * v - h * h * f0 * f0 / (2.0 * m) >= 0.0:
             return 0.0 * v
         disc = v * v + 2.0 * (energy - margin) / m
         # The smaller-force root of E + h v f - h^2 f^2 / 2m = margin; none if

@@ -31,10 +31,19 @@ from pydrake.autodiffutils import AutoDiffXd
 from pydrake.systems.framework import BasicVector_, Diagram, DiagramBuilder, LeafSystem_
 from pydrake.systems.scalar_conversion import TemplateSystem
 
-from hybridtable._validation import check_nonnegative
+from hybridtable._validation import ParameterError, check_nonnegative
+from hybridtable.identification import ContactIdentifier, IdentifierParams
 from hybridtable.plugins._wiring import export_compensator_ports, sensor_like_delay
 
-__all__ = ["SmithParams", "SmithPredictor", "SmithPredictor_", "smith_params", "make_smith"]
+__all__ = [
+    "SmithParams",
+    "SmithPredictor",
+    "SmithPredictor_",
+    "smith_params",
+    "unilateral_force",
+    "make_smith",
+    "make_smith_online",
+]
 
 
 @dataclass(frozen=True)
@@ -62,8 +71,13 @@ class SmithParams:
 
     def contact_force(self, p, v):
         """The model ``F(p, v)``: unilateral spring-damper."""
-        f = self.stiffness_n_per_m * p + self.damping_n_s_per_m * v
-        return f if (p > 0.0 and f > 0.0) else 0.0 * f
+        return unilateral_force(self.stiffness_n_per_m, self.damping_n_s_per_m, p, v)
+
+
+def unilateral_force(k, c, p, v):
+    """``max(k p + c v, 0)`` while ``p > 0``, else 0 (any scalar type)."""
+    f = k * p + c * v
+    return f if (p > 0.0 and f > 0.0) else 0.0 * f
 
 
 @TemplateSystem.define("SmithPredictor_", T_list=[float, AutoDiffXd])
@@ -76,23 +90,30 @@ def SmithPredictor_(T):
 
         Input ``delayed_table_motion`` (size 3: m, m/s, m/s^2)
             The table motion delayed like the measured force.
+        Input ``contact_parameters`` (size 2: N/m, N s/m), when ``adaptive``
+            The model ``[k, c]`` (e.g. an online identifier's estimate);
+            ``params.stiffness_n_per_m`` and ``damping_n_s_per_m`` are then
+            not used.
 
         Output ``compensated_force`` (size 1, N)
             ``f_mea + F(p_des, v_des) - F(p_act(t - T), v_act(t - T))``.
         """
 
-        def _construct(self, params: SmithParams, converter=None):
+        def _construct(self, params: SmithParams, adaptive: bool = False, converter=None):
             LeafSystem_[T].__init__(self, converter)
             self.params = params
+            self.adaptive = bool(adaptive)
             self._f = self.DeclareVectorInputPort("measured_force", 1)
             self.DeclareVectorInputPort("measured_force_rate", 1)
             self.DeclareVectorInputPort("table_motion", 3)
             self._cmd = self.DeclareVectorInputPort("commanded_state", 2)
             self._delayed = self.DeclareVectorInputPort("delayed_table_motion", 3)
+            if self.adaptive:
+                self._kc = self.DeclareVectorInputPort("contact_parameters", 2)
             self.DeclareVectorOutputPort("compensated_force", BasicVector_[T](1), self._calc)
 
         def _construct_copy(self, other, converter=None):
-            Impl._construct(self, other.params, converter=converter)
+            Impl._construct(self, other.params, other.adaptive, converter=converter)
 
         def _calc(self, context, output):
             p = self.params
@@ -102,10 +123,14 @@ def SmithPredictor_(T):
                 f_mea = 0.0 * f_mea
             p_des, v_des = self._cmd.Eval(context)
             p_old, v_old, _ = self._delayed.Eval(context)
-            predicted = p.contact_force(p_old, v_old)
+            if self.adaptive:
+                k, c = self._kc.Eval(context)
+            else:
+                k, c = p.stiffness_n_per_m, p.damping_n_s_per_m
+            predicted = unilateral_force(k, c, p_old, v_old)
             if not predicted > deadband:
                 predicted = 0.0 * predicted
-            f = f_mea + p.contact_force(p_des, v_des) - predicted
+            f = f_mea + unilateral_force(k, c, p_des, v_des) - predicted
             if p.clamp_nonnegative and f < 0.0:
                 f = 0.0 * f
             output.SetAtIndex(0, f)
@@ -152,4 +177,50 @@ def make_smith(params, derivative_period_s: float | None = None) -> Diagram:
     )
     diagram = builder.Build()
     diagram.set_name("smith")
+    return diagram
+
+
+def make_smith_online(
+    params, derivative_period_s: float, identifier: IdentifierParams | None = None
+) -> Diagram:
+    """The ``smith-online`` compensator (registry factory): the Smith
+    predictor whose contact model ``[k, c]`` comes from the online identifier
+    (:mod:`hybridtable.identification`), started at the compensator's prior.
+
+    One delay line, built like the force sensor, feeds both the predictor's
+    delayed model and the identifier (the motion paired with each force
+    sample). Extra output ``contact_parameters``: the estimate.
+    """
+    from hybridtable.plugins.online import online_identifier_params
+
+    if derivative_period_s is None:
+        raise ParameterError("smith-online needs a discrete period (derivative_period_s)")
+    identifier = identifier or online_identifier_params(params)
+    builder = DiagramBuilder()
+    delay = builder.AddNamedSystem("motion_delay", sensor_like_delay(params, 3))
+    ident = builder.AddNamedSystem(
+        "identifier", ContactIdentifier(identifier, derivative_period_s, None)
+    )
+    smith = builder.AddNamedSystem("smith", SmithPredictor(smith_params(params), True))
+    builder.Connect(delay.get_output_port(0), smith.GetInputPort("delayed_table_motion"))
+    builder.Connect(delay.get_output_port(0), ident.GetInputPort("table_motion"))
+    builder.Connect(
+        ident.GetOutputPort("contact_parameters"), smith.GetInputPort("contact_parameters")
+    )
+    export_compensator_ports(
+        builder,
+        {
+            "measured_force": [
+                smith.GetInputPort("measured_force"),
+                ident.GetInputPort("measured_force"),
+            ],
+            "measured_force_rate": [smith.GetInputPort("measured_force_rate")],
+            "table_motion": [smith.GetInputPort("table_motion"), delay.get_input_port(0)],
+            "commanded_state": [smith.GetInputPort("commanded_state")],
+        },
+        smith.GetOutputPort("compensated_force"),
+        {"contact_parameters": ident.GetOutputPort("contact_parameters")},
+    )
+    diagram = builder.Build()
+    diagram.set_name("smith_online")
     return diagram
