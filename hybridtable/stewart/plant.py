@@ -97,10 +97,12 @@ class StewartParams:
         PD gains Kp (> 0) and Kd (>= 0) of each leg's servo; ``None``: from
         ``servo_bandwidth_hz`` and ``servo_damping_ratio`` for the plate's
         heave mass (:func:`heave_servo_gains`).
-    servo_bandwidth_hz, servo_damping_ratio : float
-        Heave natural frequency and damping ratio of the servo loop that set
-        default gains. The explicit servo is stable for
-        ``servo_bandwidth_hz * time_step_s <= 0.1``.
+    servo_bandwidth_hz : float or None
+        Heave natural frequency of the servo loop that sets default gains;
+        ``None``: ``0.08 / time_step_s`` (80 Hz at 1 ms). The explicit servo
+        is stable up to about ``servo_bandwidth_hz * time_step_s = 0.1``.
+    servo_damping_ratio : float
+        Damping ratio of that servo loop.
     time_step_s : float
         Time step of the discrete plant and the servo's sample period, > 0.
     gravity_m_per_s2 : float
@@ -123,7 +125,7 @@ class StewartParams:
     geometry: StewartGeometry = field(default_factory=StewartGeometry)
     leg_stiffness_n_per_m: float | None = None
     leg_damping_n_s_per_m: float | None = None
-    servo_bandwidth_hz: float = 80.0
+    servo_bandwidth_hz: float | None = None
     servo_damping_ratio: float = 0.7
     time_step_s: float = 1e-3
     gravity_m_per_s2: float = 9.81
@@ -136,7 +138,7 @@ class StewartParams:
         s = object.__setattr__
         if not isinstance(self.geometry, StewartGeometry):
             raise ParameterError(f"geometry must be a StewartGeometry (got {self.geometry!r})")
-        for name in ("servo_bandwidth_hz", "time_step_s", "sensor_resolution_n"):
+        for name in ("time_step_s", "sensor_resolution_n"):
             s(self, name, check_positive(name, getattr(self, name)))
         for name in (
             "servo_damping_ratio",
@@ -157,11 +159,14 @@ class StewartParams:
                 "leg_damping_n_s_per_m",
                 check_nonnegative("leg_damping_n_s_per_m", self.leg_damping_n_s_per_m),
             )
-        if self.leg_stiffness_n_per_m is None and self.servo_bandwidth_hz * self.time_step_s > 0.1:
-            raise ParameterError(
-                f"servo_bandwidth_hz {self.servo_bandwidth_hz:g} is too fast for time_step_s "
-                f"{self.time_step_s:g} (need servo_bandwidth_hz * time_step_s <= 0.1)"
-            )
+        if self.servo_bandwidth_hz is not None:
+            f_s = check_positive("servo_bandwidth_hz", self.servo_bandwidth_hz)
+            s(self, "servo_bandwidth_hz", f_s)
+            if self.leg_stiffness_n_per_m is None and f_s * self.time_step_s > 0.1:
+                raise ParameterError(
+                    f"servo_bandwidth_hz {f_s:g} is too fast for time_step_s "
+                    f"{self.time_step_s:g} (need servo_bandwidth_hz * time_step_s <= 0.1)"
+                )
         if self.reference_response_hz is not None:
             f = check_positive("reference_response_hz", self.reference_response_hz)
             if f * self.time_step_s >= 0.5:
@@ -171,9 +176,18 @@ class StewartParams:
                 )
             s(self, "reference_response_hz", f)
 
+    @property
+    def effective_servo_bandwidth_hz(self) -> float:
+        """``servo_bandwidth_hz``, or its default ``0.08 / time_step_s``."""
+        if self.servo_bandwidth_hz is None:
+            return 0.08 / self.time_step_s
+        return self.servo_bandwidth_hz
+
     def servo_gains(self) -> tuple[float, float]:
         """The legs' (Kp, Kd): the given ones, or from the servo bandwidth."""
-        kp, kd = heave_servo_gains(self.geometry, self.servo_bandwidth_hz, self.servo_damping_ratio)
+        kp, kd = heave_servo_gains(
+            self.geometry, self.effective_servo_bandwidth_hz, self.servo_damping_ratio
+        )
         if self.leg_stiffness_n_per_m is not None:
             kp = self.leg_stiffness_n_per_m
         if self.leg_damping_n_s_per_m is not None:
