@@ -525,6 +525,8 @@ def write_summary(result: SweepResult, table1: OperatingPoint | None, path: str 
         if exact:
             perr = max(abs(v.cor_linear - v.cor_exact_delay) for v in exact)
             L += [f"Largest Pade - exact-delay CoR difference at these points: {perr:.1e}.", ""]
+    for note in result.notes:
+        L += [f"Note: {note}.", ""]
     L += [
         "Not in the linear model: the compensator's gating (f_mea <= dead band => 0) and "
         "clamp, the unilateral contact (contact onset and separation), the force dead band.",

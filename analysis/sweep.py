@@ -97,6 +97,7 @@ class SweepResult:
     verification_error: float | None = None
     wall_time_s: float = 0.0
     validation: list[ValidationPoint] = field(default_factory=list)  # see analysis.validation
+    notes: list[str] = field(default_factory=list)
 
     @property
     def sampled(self) -> bool:
@@ -129,6 +130,7 @@ class SweepResult:
             "compensators": {name: cs.to_dict() for name, cs in self.compensators.items()},
             "validation": [v.to_dict() for v in self.validation],
             "max_validation_abs_error": self.max_validation_error(),
+            "notes": list(self.notes),
             "wall_time_s": self.wall_time_s,
         }
 
@@ -193,6 +195,8 @@ def sweep_margins(
     if delays.ndim != 1 or tables.ndim != 1 or delays.size == 0 or tables.size == 0:
         raise ParameterError("the grid needs at least one delay and one table frequency")
     model, lin = model_function(base, pade_order)
+    sampled_lin = SampledLoopLinearizer(lin) if base.sample_rate_hz is not None else None
+    notes: set[str] = set()
     growth = growth_of(model)
     nd, nt = delays.size, tables.size
     verification = None
@@ -209,7 +213,9 @@ def sweep_margins(
         for i, T in enumerate(delays):
             for j, f in enumerate(tables):
                 p = cbase.with_(sensor_delay_s=float(T), table_response_hz=float(f))
-                m = loop_margins(model(p), pm_method="fast")
+                lm = model(p)
+                notes.update(lm.notes)
+                m = loop_margins(lm, pm_method="fast")
                 arrays["predicted_cor"][i, j] = m.predicted_cor
                 arrays["phase_margin_deg"][i, j] = m.phase_margin_deg
                 arrays["damping_ratio"][i, j] = m.damping_ratio
@@ -220,10 +226,10 @@ def sweep_margins(
                 stable[i, j] = m.stable
             if bar is not None:
                 bar.update(nt)
-        if verify and not cbase.sample_rate_hz:
+        if verify:
             for i, j in {(0, 0), (nd // 2, nt // 2)}:
                 p = cbase.with_(sensor_delay_s=float(delays[i]), table_response_hz=float(tables[j]))
-                err = lin.verify(p)
+                err = lin.verify(p) if sampled_lin is None else sampled_lin.verify(p)
                 verification = err if verification is None else max(verification, err)
         crit_d = np.full(nt, np.nan)
         crit_f = np.full(nd, np.nan)
@@ -248,4 +254,5 @@ def sweep_margins(
         compensators=out,
         verification_error=verification,
         wall_time_s=time.perf_counter() - t0,
+        notes=sorted(notes),
     )

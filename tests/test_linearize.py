@@ -216,3 +216,19 @@ def test_interconnection_of_two_integrators_is_a_double_integrator():
     m = wiring.assemble(integ)
     s = np.array([1j, 2 + 1j])
     np.testing.assert_allclose(m.transfer(s)[:, 0, 0], 1 / s**2, rtol=1e-14)
+
+
+def test_expm_small_is_the_matrix_exponential():
+    from scipy.linalg import expm
+
+    from analysis.sampled import expm_small
+
+    rng = np.random.default_rng(3)
+    w = 2 * math.pi * 200.0  # a stiff table over a 1 ms period, as in the ZOH
+    stiff = (
+        np.array([[0, 1, 0, 0], [-w * w, -1.6 * w, w * w, 0], [0, 0, 0, 0], [0, 0, 0, 0]]) * 1e-3
+    )
+    for M in (stiff, rng.standard_normal((5, 5)), 1e-4 * rng.standard_normal((3, 3))):
+        ref = expm(M)
+        np.testing.assert_allclose(expm_small(M), ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+    assert expm_small(np.zeros((0, 0))).shape == (0, 0)
