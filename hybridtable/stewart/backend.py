@@ -54,9 +54,8 @@ __all__ = [
     "add_stewart_loop",
     "build_stewart_loop",
     "stewart_params_for_loop",
+    "write_meshcat_html",
 ]
-
-_Z = np.array([0.0, 0.0, 1.0])
 
 
 def _quaternion_matrix(q: np.ndarray) -> np.ndarray:
@@ -250,6 +249,10 @@ class DeviceSensor(LeafSystem):
 
 class StewartTable(Diagram):
     """The Stewart platform table back-end (plant, leg servo, F/T sensor).
+
+    Inside: the command -> (reference model, if any) -> :class:`LegServo` ->
+    plant -> :class:`DeviceSensor` -> one-tick hold of the step readings
+    (force, acceleration) -> ``motion`` / ``sensed_force``.
 
     Ports
     -----

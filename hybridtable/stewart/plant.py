@@ -17,7 +17,8 @@ Model (see ``docs/stewart.md``):
 
 The legs are driven by a digital PD servo (see :mod:`hybridtable.stewart.backend`)
 through the plant's actuation input, not by the plant's implicit PD
-controllers: the servo then has the response of a sampled PD loop, which
+controllers (with the ball constraints, SAP failed to converge with them in
+drake 1.51); the servo then is a sampled PD loop, whose response
 :mod:`hybridtable.stewart.identify` measures.
 """
 
