@@ -293,9 +293,10 @@ class SampledLoopLinearizer:
         return err
 
     # -- model -------------------------------------------------------------------
-    def open_loop(self, params: HybridLoopParams) -> LinearLoop:
-        """The sampled open loop ``G`` (force on the spacecraft at tick ``k``
-        -> compensated force at tick ``k``) at ``params``.
+    def blocks(self, params: HybridLoopParams) -> list[StateSpaceBlock]:
+        """The discrete blocks at ``params`` in :data:`SAMPLED_LOOP_BLOCKS`
+        order (the order of the model's states); the plant's states are the
+        table's then the held command.
 
         Raises
         ------
@@ -306,11 +307,24 @@ class SampledLoopLinearizer:
         h = params.sample_period_s
         if h is None:
             raise ParameterError("a sampled model needs sample_rate_hz")
-        blocks = [
+        return [
             self.spacecraft_block(params.spacecraft_mass_kg, h),
             zoh_plant(self.continuous_plant(params), h),
             self.sensor_block(params.sensor_delay_s, h),
             self.compensator_block(params.compensator_params(), h),
         ]
-        m = self._loop_wiring.assemble(blocks, "sampled_open_loop")
-        return LinearLoop(m.A, m.B, m.C, m.D, h, params, None, ())
+
+    def state_slices(self, params: HybridLoopParams) -> dict[str, slice]:
+        """Where each block's states sit in the state of :meth:`open_loop`."""
+        out, i = {}, 0
+        for b in self.blocks(params):
+            out[b.name] = slice(i, i + b.num_states)
+            i += b.num_states
+        return out
+
+    def open_loop(self, params: HybridLoopParams) -> LinearLoop:
+        """The sampled open loop ``G`` (force on the spacecraft at tick ``k``
+        -> compensated force at tick ``k``) at ``params`` (see :meth:`blocks`
+        for the errors)."""
+        m = self._loop_wiring.assemble(self.blocks(params), "sampled_open_loop")
+        return LinearLoop(m.A, m.B, m.C, m.D, params.sample_period_s, params, None, ())

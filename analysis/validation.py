@@ -29,6 +29,7 @@ from scipy.linalg import expm
 
 from analysis.exact_delay import exact_margins
 from analysis.linearize import ContactLoopLinearizer
+from analysis.sampled import SampledLoopLinearizer
 from analysis.sweep import SweepResult
 from hybridtable.loop import HybridLoopParams
 
@@ -37,6 +38,7 @@ __all__ = [
     "ValidationPoint",
     "onset_state",
     "linear_contact_cor",
+    "linear_contact_cor_sampled",
     "validation_indices",
     "validate_point",
     "validate_sweep",
@@ -66,7 +68,7 @@ class ValidationPoint:
         Predicted CoR with the exact delay (continuous models).
     cor_linear_transient : float or None
         Linear loop from the simulated onset state over the table's contact
-        (computed when ``abs_error`` exceeds the threshold; continuous only).
+        (computed when ``abs_error`` exceeds the threshold).
     cause : str or None
         ``"transient"`` or ``"gating and separation"``, the larger part of the
         error (see the module doc), when explained.
@@ -170,6 +172,72 @@ def linear_contact_cor(
     return math.nan
 
 
+def linear_contact_cor_sampled(
+    linearizer: SampledLoopLinearizer,
+    params: HybridLoopParams,
+    time_s,
+    p_des_m,
+    v_des_m_per_s,
+    p_act_m,
+    v_act_m_per_s,
+) -> float:
+    """CoR of the sampled linear loop from the first tick at which the table
+    penetrates, measured when ``p_act`` returns to zero (interpolated between
+    ticks).
+
+    The arrays are a sampled run in the ``hybridtable-run/1`` row semantics
+    (row ``k``: ``p_act`` read at tick ``k``, spacecraft state after the
+    tick's update). At the first tick ``k`` with ``p_act > 0`` the model
+    starts from the spacecraft state before the update (row ``k - 1``), the
+    table state of row ``k``, the command held since tick ``k - 1``, an empty
+    delay line and lead memory (no force was measured before).
+
+    Raises
+    ------
+    ValueError
+        If the table never penetrates, or does at the first tick.
+    """
+    p_act = np.asarray(p_act_m, dtype=float)
+    pos = np.flatnonzero(p_act > 0.0)
+    if pos.size == 0 or pos[0] == 0:
+        raise ValueError("no contact onset after the first tick")
+    k = int(pos[0])
+    model = linearizer.open_loop(params)
+    blocks = {b.name: b for b in linearizer.blocks(params)}
+    sl = linearizer.state_slices(params)
+    sc, plant = blocks["spacecraft"], blocks["plant"]
+    cmd = np.array([p_des_m[k - 1], v_des_m_per_s[k - 1]], dtype=float)
+    x = np.zeros(model.A.shape[0])
+    x[sl["spacecraft"]] = np.linalg.solve(sc.C[:2], cmd)
+    n_tab = plant.num_states - 2
+    xp = np.zeros(plant.num_states)
+    xp[n_tab:] = cmd  # command held over the previous interval
+    if n_tab:
+        # Table state: solve the plant's p, v outputs for the table part.
+        rhs = np.array([p_act[k], v_act_m_per_s[k]], dtype=float) - plant.C[:2, n_tab:] @ cmd
+        xp[:n_tab] = np.linalg.solve(plant.C[:2, :n_tab], rhs)
+    x[sl["plant"]] = xp
+    A = model.closed_loop_matrix()
+
+    def p_act_of(x: np.ndarray) -> float:
+        return float(plant.C[0] @ x[sl["plant"]])
+
+    def v_des_of(x: np.ndarray) -> float:
+        return float(sc.C[1] @ x[sl["spacecraft"]])
+
+    v_in = v_des_of(x)
+    prev, p_prev = x, p_act_of(x)
+    n_max = 4 * int(math.ceil(0.5 / params.contact_frequency_hz / params.sample_period_s)) + 10
+    for _ in range(n_max):
+        nxt = A @ prev
+        p = p_act_of(nxt)
+        if p <= 0.0:
+            a = p_prev / (p_prev - p)
+            return abs(v_des_of(prev) + a * (v_des_of(nxt) - v_des_of(prev))) / abs(v_in)
+        prev, p_prev = nxt, p
+    return math.nan
+
+
 def validation_indices(nd: int, nt: int, n: int) -> list[tuple[int, int]]:
     """``n`` distinct indices spread over an ``nd x nt`` grid: the four
     corners, then a Halton sequence (bases 2 and 3)."""
@@ -237,12 +305,13 @@ def validate_point(
     cor_sim = float(sim.metrics.cor)
     err = abs(cor_linear - cor_sim)
     transient = cause = None
-    if err > explain_above and not sampled:
+    if err > explain_above:
+        runs = (sim.time_s, sim.p_des_m, sim.v_des_m_per_s, sim.p_act_m, sim.v_act_m_per_s)
         try:
-            onset = onset_state(
-                sim.time_s, sim.p_des_m, sim.v_des_m_per_s, sim.p_act_m, sim.v_act_m_per_s
-            )
-            transient = linear_contact_cor(lin, params, onset)
+            if sampled:
+                transient = linear_contact_cor_sampled(SampledLoopLinearizer(lin), params, *runs)
+            else:
+                transient = linear_contact_cor(lin, params, onset_state(*runs))
         except ValueError:
             transient = None
         if transient is not None and math.isfinite(transient):
