@@ -435,3 +435,58 @@ def test_plugins_convert_to_autodiff():
     for name in PLUGINS:
         assert make_compensator(p.with_(compensator=name), 1e-3).ToAutoDiffXd() is not None
     assert make_compensator(p.with_(passivity=True), 1e-3).ToAutoDiffXd() is not None
+
+
+# -- command line ------------------------------------------------------------------
+
+
+def test_simulate_command_takes_a_plugin_the_prior_stiffness_and_passivity(tmp_path, capsys):
+    import json
+
+    from hybridtable.cli import main
+
+    out = tmp_path / "run.json"
+    argv = ["simulate", "--compensator", "smith", "--compensator-stiffness-n-per-m", "5e4"]
+    assert main([*argv, "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["cor"] > 1.05  # the model stiffness is half the true one
+    assert main([*argv, "--passivity", "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["cor"] <= 1.0 + 1e-6
+    assert main(["simulate", "--compensator", "nonesuch"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "sdmdc-online" in err[0]
+
+
+def test_compensators_command_quick(tmp_path, capsys):
+    import json
+
+    from hybridtable.cli import main
+
+    out, report = tmp_path / "sweep.json", tmp_path / "report"
+    argv = [
+        "compensators",
+        "--quick",
+        "--compensators",
+        "SDMDC,sdmdc-online",
+        "--scenarios",
+        "mismatch",
+        "--prior-ratios",
+        "0.5,1",
+        "--jobs",
+        "1",
+        "--no-progress",
+        "--report",
+        str(report),
+    ]
+    assert main([*argv, "--json", str(out)]) == 0
+    data = json.loads(out.read_text())
+    assert len(data["runs"]) == 8 and all(r["error"] is None for r in data["runs"])
+    acc = data["acceptance"]
+    assert acc["sdmdc_online"]["passed"] and acc["passivity"]["passed"]
+    assert acc["fixed_k_sdmdc_at_half_k"][0]["cor_error"] > 0.04
+    assert (report / "report.md").is_file()
+    assert (report / "cor_error_vs_prior_stiffness.png").is_file()
+    assert "sdmdc-online" in capsys.readouterr().out
+    # Never overwrite a report; bad options are one-line errors with exit 2.
+    assert main([*argv, "--json", str(out)]) == 2
+    assert main(["compensators", "--compensators", "nonesuch", "--no-progress"]) == 2
+    assert main(["compensators", "--scenarios", "nonesuch", "--no-progress"]) == 2

@@ -531,10 +531,13 @@ def _label(point: dict[str, float]) -> str:
     )
 
 
-def write_report(result: SweepResult, out_dir: str | Path) -> list[str]:
+def write_report(result: SweepResult, out_dir: str | Path, traces: bool = True) -> list[str]:
     """Figures and a Markdown report of a sweep in ``out_dir``; returns paths.
 
-    Refuses (ParameterError) to overwrite an existing ``report.md``.
+    ``traces``: also run the first grid point with the believed stiffness 50 %
+    low and plot the velocity, the compensated force and the online estimate
+    of fixed-k SDMDC, ``sdmdc-online`` and ``smith-online`` against the ideal
+    loop. Refuses (ParameterError) to overwrite an existing ``report.md``.
     """
     import matplotlib
 
@@ -551,8 +554,9 @@ def write_report(result: SweepResult, out_dir: str | Path) -> list[str]:
     comps = list(result.settings.compensators)
 
     # 1. CoR against the believed stiffness, worst over the grid.
-    fig, ax = plt.subplots(figsize=(7, 4.5))
-    for comp in comps:
+    fig, ax = plt.subplots(figsize=(8, 5))
+    colors = plt.get_cmap("tab10")
+    for ci, comp in enumerate(comps):
         for guard, style in ((False, "-o"), (True, "--x")):
             rs = [
                 r
@@ -571,14 +575,15 @@ def write_report(result: SweepResult, out_dir: str | Path) -> list[str]:
                 ratios = list(result.settings.prior_ratios)
                 worst = worst * len(ratios)
             label = comp + (" +passivity" if guard else "")
-            ax.plot(ratios, worst, style, label=label, ms=4)
+            ax.plot(ratios, worst, style, label=label, ms=4, color=colors(ci % 10))
     ax.axhspan(-ONLINE_COR_TOLERANCE, ONLINE_COR_TOLERANCE, color="0.9")
     ax.axhline(0.0, color="0.5", lw=0.8)
     ax.set_xscale("log")
+    ax.set_yscale("symlog", linthresh=ONLINE_COR_TOLERANCE)
     ax.set_xlabel("believed / true contact stiffness")
-    ax.set_ylabel("worst CoR error over the grid")
-    ax.set_title("Stiffness mismatch (undamped contact)")
-    ax.legend(fontsize=7, ncol=2)
+    ax.set_ylabel("worst CoR error over the grid (symlog)")
+    ax.set_title("Stiffness mismatch (undamped contact); dashed: with the passivity guard")
+    ax.legend(fontsize=6, ncol=2, loc="best")
     ax.grid(True, alpha=0.3)
     fig.tight_layout()
     p = out / "cor_error_vs_prior_stiffness.png"
@@ -599,6 +604,7 @@ def write_report(result: SweepResult, out_dir: str | Path) -> list[str]:
         ax.bar(x + j * width, vals, width, label=s)
     ax.axhline(ONLINE_COR_TOLERANCE, color="k", lw=0.8, ls=":")
     ax.set_yscale("log")
+    ax.set_ylim(bottom=1e-5)
     ax.set_xticks(x + width * (len(scen) - 1) / 2, keys, rotation=45, ha="right", fontsize=7)
     ax.set_ylabel("worst |CoR error|")
     ax.set_title("Worst CoR error over the grid, per scenario")
@@ -643,6 +649,9 @@ def write_report(result: SweepResult, out_dir: str | Path) -> list[str]:
     plt.close(fig)
     paths.append(str(p))
 
+    if traces:
+        paths.append(str(_plot_half_stiffness(result, out / "table1_prior_k_half.png")))
+
     lines = ["# Compensators over the Table 2 grid", "", "```", format_summary(result), "```", ""]
     lines += ["Grid points (index: delay / table / contact f / k / v0):", ""]
     lines += [f"- {i}: {_label(q)}" for i, q in enumerate(result.points)]
@@ -651,6 +660,76 @@ def write_report(result: SweepResult, out_dir: str | Path) -> list[str]:
     paths.append(str(report))
     result.figures = paths
     return paths
+
+
+def _simulate_logged(params, t_end: float):
+    """Run a loop to ``t_end`` with run_loop's integrator settings; return the
+    loop's log and, for a compensator with a ``contact_parameters`` output,
+    the log of the estimate."""
+    from pydrake.systems.analysis import ResetIntegratorFromFlags, Simulator
+    from pydrake.systems.framework import DiagramBuilder
+    from pydrake.systems.primitives import LogVectorOutput
+
+    from hybridtable.loop import add_hybrid_loop
+
+    builder = DiagramBuilder()
+    loop = add_hybrid_loop(builder, params)
+    sink = None
+    if loop.compensator.HasOutputPort("contact_parameters"):
+        sink = LogVectorOutput(loop.compensator.GetOutputPort("contact_parameters"), builder)
+    loop.diagram = builder.Build()
+    simulator = Simulator(loop.diagram)
+    ctx = simulator.get_mutable_context()
+    loop.set_initial_conditions(ctx)
+    ResetIntegratorFromFlags(simulator, "runge_kutta3", loop.computer_period_s)
+    simulator.get_mutable_integrator().set_target_accuracy(1e-8)
+    simulator.AdvanceTo(t_end)
+    log = loop.logger.FindLog(ctx)
+    est = sink.FindLog(ctx) if sink is not None else None
+    return (log.sample_times(), log.data()), (
+        None if est is None else (est.sample_times(), est.data())
+    )
+
+
+def _plot_half_stiffness(result: SweepResult, path: Path) -> Path:
+    import matplotlib.pyplot as plt
+
+    from hybridtable.compensator import compensator_names
+    from hybridtable.loop import LOG_ROWS
+    from hybridtable.simulation import simulate
+
+    row = tuple(sorted(result.points[0].items()))
+    settings = result.settings
+    ideal, _ = case_params(SweepCase(0, row, "mismatch", "ideal", 1.0, False), settings)
+    t_end = simulate(ideal).time_s[-1] + 0.1
+    runs = [("ideal loop", ideal)]
+    for name in ("SDMDC", "sdmdc-online", "smith-online"):
+        if name in compensator_names():
+            params, _ = case_params(SweepCase(0, row, "mismatch", name, 0.5, False), settings)
+            runs.append((f"{name}, k believed 50 % low", params))
+    v_row, f_row = LOG_ROWS.index("v_des_m_per_s"), LOG_ROWS.index("f_comp_n")
+    k_true = ideal.contact_stiffness_n_per_m
+    fig, axes = plt.subplots(3, 1, figsize=(7, 8.5), sharex=True)
+    for label, params in runs:
+        (t, data), est = _simulate_logged(params, t_end)
+        v = data[v_row]
+        cor = abs(v[-1]) / abs(v[0])
+        axes[0].plot(t, v, label=f"{label}: CoR {cor:.4f}")
+        axes[1].plot(t, data[f_row], label=label)
+        if est is not None:
+            axes[2].plot(est[0], est[1][0] / k_true, label=f"{label}: k estimate / true k")
+    axes[0].set_ylabel("spacecraft velocity [m/s]")
+    axes[1].set_ylabel("compensated force [N]")
+    axes[2].set_ylabel("k estimate / true k")
+    axes[2].set_xlabel("time [s]")
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+    axes[0].set_title(f"Grid point 0 ({_label(result.points[0])})")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
 
 
 def default_jobs() -> int:
