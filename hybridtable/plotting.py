@@ -27,28 +27,48 @@ def _contact_window(results: Sequence[SimulationResult], margin_s: float = 0.1):
     return min(starts) - margin_s, max(ends) + margin_s
 
 
-def plot_velocities(
-    results: Sequence[SimulationResult], labels: Sequence[str], path: str | Path, title: str
-) -> Path:
-    """Spacecraft velocity of several runs, overlaid (the paper's Figs. 3-6)."""
-    fig, ax = plt.subplots(figsize=(7, 4))
-    for r, label in zip(results, labels, strict=True):
-        ax.plot(r.time_s, r.v_des_m_per_s, label=f"{label} (CoR {r.metrics.cor:.4f})")
-    window = _contact_window(results)
-    if window:
-        ax.set_xlim(*window)
-    ax.axhline(0.0, color="0.6", lw=0.8)
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("spacecraft velocity v_des [m/s]")
-    ax.set_title(title)
-    ax.legend(loc="best", fontsize=8)
-    ax.grid(True, alpha=0.3)
+def _save(fig, path: str | Path) -> Path:
     fig.tight_layout()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
+
+
+def _overlay(
+    results: Sequence[SimulationResult],
+    series: Sequence[tuple[str, object]],
+    path: str | Path,
+    title: str,
+    ylabel: str,
+    margin_s: float,
+) -> Path:
+    """Curves ``(label, (t, y))`` of several runs on one axis, zoomed on the contact."""
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for label, (t, y), *style in series:
+        ax.plot(t, y, *style, label=label)
+    window = _contact_window(results, margin_s)
+    if window:
+        ax.set_xlim(*window)
+    ax.axhline(0.0, color="0.6", lw=0.8)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.legend(loc="best", fontsize=8)
+    ax.grid(True, alpha=0.3)
+    return _save(fig, path)
+
+
+def plot_velocities(
+    results: Sequence[SimulationResult], labels: Sequence[str], path: str | Path, title: str
+) -> Path:
+    """Spacecraft velocity of several runs, overlaid (the paper's Figs. 3-6)."""
+    series = [
+        (f"{label} (CoR {r.metrics.cor:.4f})", (r.time_s, r.v_des_m_per_s))
+        for r, label in zip(results, labels, strict=True)
+    ]
+    return _overlay(results, series, path, title, "spacecraft velocity v_des [m/s]", 0.1)
 
 
 def plot_forces(
@@ -56,25 +76,14 @@ def plot_forces(
 ) -> Path:
     """Compensated force of several runs with the actual force of the first
     (the paper's Fig. 7)."""
-    fig, ax = plt.subplots(figsize=(7, 4))
+    series = [
+        (f"{label}: f_comp", (r.time_s, r.f_comp_n))
+        for r, label in zip(results, labels, strict=True)
+    ]
     if results:
-        ax.plot(results[0].time_s, results[0].f_act_n, "k--", lw=1, label="actual force f_act")
-    for r, label in zip(results, labels, strict=True):
-        ax.plot(r.time_s, r.f_comp_n, label=f"{label}: f_comp")
-    window = _contact_window(results, 0.05)
-    if window:
-        ax.set_xlim(*window)
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("force [N]")
-    ax.set_title(title)
-    ax.legend(loc="best", fontsize=8)
-    ax.grid(True, alpha=0.3)
-    fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+        first = f"actual force f_act ({labels[0]} run)"
+        series.append((first, (results[0].time_s, results[0].f_act_n), "k--"))
+    return _overlay(results, series, path, title, "force [N]", 0.05)
 
 
 def plot_run(result: SimulationResult, path: str | Path) -> Path:
@@ -101,9 +110,4 @@ def plot_run(result: SimulationResult, path: str | Path) -> Path:
         f"{p.compensator}, T_fms {p.sensor_delay_s * 1e3:g} ms, table {p.table_response_hz:g} Hz: "
         f"CoR {m.cor:.4f}"
     )
-    fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return _save(fig, path)
