@@ -51,8 +51,8 @@ def format_table(comparisons: Sequence[RunComparison]) -> str:
         worst_ratio = ph[worst]["rms_error"] / f_noise if f_noise > 0 else math.nan
         lines.append(
             f"{c.run_id[:16]:<16} {c.run.info.compensator:<6} "
-            f"{_fmt(f_err, '.3g'):>6}/{_fmt(f_noise, '.3g'):<6} x{_fmt(c.error_to_noise('f_mea_n'), '.2f'):<5} "
-            f"{_fmt(p_err, '.3g'):>7}/{_fmt(p_noise, '.3g'):<6} x{_fmt(c.error_to_noise('p_act_m'), '.2f'):<5} "
+            f"{_fmt(f_err, '#.3g'):>6}/{_fmt(f_noise, '#.3g'):<6} x{_fmt(c.error_to_noise('f_mea_n'), '.2f'):<5} "
+            f"{_fmt(p_err, '#.3g'):>7}/{_fmt(p_noise, '#.3g'):<6} x{_fmt(c.error_to_noise('p_act_m'), '.2f'):<5} "
             f"{_fmt(c.cor_measured, '.5f'):>9} {_fmt(c.cor_model, '.5f'):>9} "
             f"{_fmt(c.cor_model - c.cor_measured, '+.5f'):>8}  {worst} "
             f"x{_fmt(worst_ratio, '.2f')} ({_fmt(ph[worst]['share'], '.0%')} of the error)"
