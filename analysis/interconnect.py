@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["StateSpaceBlock", "Interconnection", "InterconnectionError"]
+__all__ = ["StateSpaceBlock", "Interconnection", "InterconnectionError", "state_slices"]
 
 
 class InterconnectionError(ValueError):
@@ -88,6 +88,16 @@ class StateSpaceBlock:
         M = s[..., None, None] * eye - self.A
         X = np.linalg.solve(M, np.broadcast_to(self.B, s.shape + self.B.shape))
         return self.C @ X + self.D
+
+
+def state_slices(blocks: Sequence[StateSpaceBlock]) -> dict[str, slice]:
+    """Where each block's states sit in the stacked state of ``blocks``
+    (the state order of an :class:`Interconnection` of them)."""
+    out, i = {}, 0
+    for b in blocks:
+        out[b.name] = slice(i, i + b.num_states)
+        i += b.num_states
+    return out
 
 
 def _block_diag(mats: Sequence[np.ndarray]) -> np.ndarray:

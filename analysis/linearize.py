@@ -42,7 +42,7 @@ import numpy as np
 from pydrake.systems.framework import Diagram, DiagramBuilder, System
 from pydrake.systems.primitives import Demultiplexer, Linearize, Multiplexer
 
-from analysis.interconnect import Interconnection, StateSpaceBlock
+from analysis.interconnect import Interconnection, StateSpaceBlock, state_slices
 from hybridtable._validation import ParameterError
 from hybridtable.compensator import Compensator, CompensatorParams
 from hybridtable.contact import ContactParams, UnilateralSpringContact
@@ -518,11 +518,7 @@ class ContactLoopLinearizer:
 
     def state_slices(self, params: HybridLoopParams) -> dict[str, slice]:
         """Where each block's states sit in the state of :meth:`open_loop`."""
-        out, i = {}, 0
-        for b in self.blocks(params):
-            out[b.name] = slice(i, i + b.num_states)
-            i += b.num_states
-        return out
+        return state_slices(self.blocks(params))
 
     def delay_cut(self, params: HybridLoopParams) -> StateSpaceBlock:
         """The loop without the sensor delay: inputs ``[u, f_mea, df_mea/dt]``,

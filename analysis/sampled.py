@@ -42,7 +42,7 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import Multiplexer
 from scipy.linalg import matrix_balance
 
-from analysis.interconnect import Interconnection, StateSpaceBlock
+from analysis.interconnect import Interconnection, StateSpaceBlock, state_slices
 from analysis.linearize import (
     ContactLoopLinearizer,
     LinearizationError,
@@ -316,11 +316,7 @@ class SampledLoopLinearizer:
 
     def state_slices(self, params: HybridLoopParams) -> dict[str, slice]:
         """Where each block's states sit in the state of :meth:`open_loop`."""
-        out, i = {}, 0
-        for b in self.blocks(params):
-            out[b.name] = slice(i, i + b.num_states)
-            i += b.num_states
-        return out
+        return state_slices(self.blocks(params))
 
     def open_loop(self, params: HybridLoopParams) -> LinearLoop:
         """The sampled open loop ``G`` (force on the spacecraft at tick ``k``
