@@ -36,8 +36,10 @@ from pydrake.systems.primitives import (
     MatrixGain,
     Multiplexer,
     PassThrough,
+    TrajectorySource,
 )
 from pydrake.systems.scalar_conversion import TemplateSystem
+from pydrake.trajectories import PiecewisePolynomial
 
 from hybridtable._validation import (
     ParameterError,
@@ -60,6 +62,7 @@ __all__ = [
     "resonant_table_matrices",
     "ChainedOutput",
     "chain_output",
+    "RecordedOffset",
 ]
 
 
@@ -483,3 +486,35 @@ def chain_output(inner: System, stage: System, port_name: str) -> ChainedOutput:
     """``inner`` with its output ``port_name`` passed through ``stage``
     (:class:`ChainedOutput`)."""
     return ChainedOutput(inner, stage, port_name)
+
+
+class RecordedOffset(Diagram):
+    """Adds a recorded series to a signal: ``y(t) = u(t) + r[k]`` for ``t``
+    within half a tick of tick ``k`` (constant pieces centred on the ticks,
+    so a reader at tick ``k`` gets ``r[k]`` whatever the rounding of the
+    event time); ``r`` is held after its last tick.
+
+    Ports
+    -----
+    Input ``u`` (size 1), output ``y`` (size 1), same unit.
+    """
+
+    def __init__(self, sample_period_s: float, values: np.ndarray) -> None:
+        Diagram.__init__(self)
+        h = check_positive("sample_period_s", sample_period_s)
+        r = np.asarray(values, dtype=float).ravel()
+        if r.size < 1 or not np.isfinite(r).all():
+            raise ParameterError("RecordedOffset: values must be finite and not empty")
+        breaks = h * (np.arange(r.size + 1) - 0.5)
+        builder = DiagramBuilder()
+        source = builder.AddNamedSystem(
+            "recorded",
+            TrajectorySource(
+                PiecewisePolynomial.ZeroOrderHold(breaks, np.append(r, r[-1])[None, :])
+            ),
+        )
+        adder = builder.AddNamedSystem("add", Adder(2, 1))
+        builder.Connect(source.get_output_port(), adder.get_input_port(1))
+        builder.ExportInput(adder.get_input_port(0), "u")
+        builder.ExportOutput(adder.get_output_port(), "y")
+        builder.BuildInto(self)
