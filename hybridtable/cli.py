@@ -29,6 +29,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "hybridtable.commands.simulate",
     "hybridtable.commands.reproduce",
     "hybridtable.commands.compare",
+    "hybridtable.commands.diagnose",
     "hybridtable.commands.compensators",
     "hybridtable.commands.margins",
 )

@@ -42,6 +42,12 @@ def register(sub) -> None:
         default=None,
         help="longest lag of the whiteness tests (default: 50 ticks)",
     )
+    p.add_argument(
+        "--add",
+        metavar="EFFECT[:param=value,...]",
+        help="also compare a model with this effect added (hybridtable diagnose's "
+        "effects) and show the error fall; parameters not given are fitted to the runs",
+    )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
@@ -114,6 +120,10 @@ def run(args: argparse.Namespace) -> int:
     for r in runs:  # every defect before any work
         check_comparable(r)
     check_outputs(args.json, args.report, _inputs(runs))
+    if args.add:  # a malformed --add before any work
+        from hybridtable.effects import parse_effect_spec
+
+        parse_effect_spec(args.add)
     quiet = args.json == "-"
     iterator = runs
     if len(runs) > 1 and not args.no_progress and not quiet:
@@ -121,10 +131,20 @@ def run(args: argparse.Namespace) -> int:
 
         iterator = tqdm(runs, desc="compare", unit="run", file=sys.stderr, leave=False)
     comparisons = [compare_run(r, max_lag_s=args.max_lag_s) for r in iterator]
-    if not quiet:
+    document = {"runs": [c.to_json() for c in comparisons]}
+    if args.add:
+        from hybridtable.commands.diagnose import compare_with_effect
+
+        comparisons, added = compare_with_effect(runs, comparisons, args.add, args.max_lag_s, quiet)
+        document = {
+            "runs": [c.to_json() for c in comparisons],
+            "nominal_runs": document["runs"],
+            "added_effect": added,
+        }
+    elif not quiet:
         print(format_table(comparisons))
     if args.json:
-        _write_json_atomic(args.json, {"runs": [c.to_json() for c in comparisons]})
+        _write_json_atomic(args.json, document)
     if args.report:
         files = write_report(comparisons, args.report)
         if not quiet:
