@@ -66,8 +66,9 @@ def run_loop(
     """Simulate a built loop until the spacecraft has separated, and collect.
 
     The run stops once a contact has happened and no force (actual, measured
-    or compensated) has acted for a settling window (the sensor delay plus
-    five table time constants and five computer periods). With
+    or compensated) has acted for a settling window (the sensor delay, five
+    table time constants but at most 20 table periods, and five computer
+    periods). With
     ``stop_at_separation=False`` it runs to ``t_max_s`` (e.g. the length of a
     recorded run) and raises only on divergence or when no contact happened.
 
@@ -96,7 +97,12 @@ def run_loop(
     table = params.table()
     settle = params.sensor_delay_s + 5.0 * loop.computer_period_s
     if not table.is_ideal:
-        settle += 5.0 / max(table.damping_ratio * table.omega_rad_per_s, 1e-9)
+        # Five time constants of the table's decay, at most 20 of its periods
+        # (a lightly damped table rings long after the devices have parted).
+        settle += min(
+            5.0 / max(table.damping_ratio * table.omega_rad_per_s, 1e-9),
+            20.0 / table.response_frequency_hz,
+        )
     f_scale = (
         params.contact_stiffness_n_per_m
         * params.initial_velocity_m_per_s

@@ -107,6 +107,13 @@ def test_large_delay_throws_the_spacecraft_back():
     assert r.metrics.energy_gain_j > 0
 
 
+def test_undamped_table_run_ends_and_lags_only_by_the_sensor_delay():
+    # zeta = 0: no ramp lag, so tau_eff = T_fms; the table rings after the contact.
+    p = paper_params(table_response_hz=20.0, table_damping_ratio=0.0)
+    r = simulate(p)
+    assert r.metrics.cor == pytest.approx(cor_estimate(p), abs=0.005)
+
+
 def test_contact_that_does_not_end_is_an_error():
     from hybridtable import SimulationError
 
