@@ -79,6 +79,7 @@ __all__ = [
     "CHANNELS",
     "NoiseModel",
     "estimate_noise",
+    "ar1_from_segments",
     "whiten",
     "RunData",
     "prepare_runs",
@@ -131,18 +132,55 @@ class NoiseModel:
         return self.sigma * math.sqrt(1.0 - self.phi * self.phi)
 
 
-def _pooled_ar1(segments: Sequence[np.ndarray]) -> tuple[float, float, float, int]:
-    """Pooled variance, lag-1 covariance and lag-0 sum of demeaned segments."""
+def _ar1_apply(x: np.ndarray, phi: float) -> np.ndarray:
+    """``R x`` for the AR(1) correlation matrix ``R_ij = phi^|i-j|`` (O(n))."""
+    fwd = np.empty_like(x)
+    bwd = np.empty_like(x)
+    acc = np.zeros(x.shape[1:])
+    for i in range(len(x)):
+        acc = x[i] + phi * acc
+        fwd[i] = acc
+    acc = np.zeros(x.shape[1:])
+    for i in range(len(x) - 1, -1, -1):
+        acc = x[i] + phi * acc
+        bwd[i] = acc
+    return fwd + bwd - x
+
+
+def ar1_from_segments(segments: Sequence[np.ndarray], degree: int) -> NoiseModel | None:
+    """AR(1) noise of segments that hold noise plus a polynomial of ``degree``.
+
+    Each segment's polynomial trend is removed; the pooled lag-1
+    autocorrelation is corrected for the bias of short detrended segments
+    (``E[phi_hat] ~ phi - (q + (q + 2) phi) / n``, ``q = degree + 1``), and
+    the variance for the noise the trend removes:
+    ``E[sum x^2] = sigma^2 sum_s (n_s - trace(Q_s' R(phi) Q_s))`` with ``Q_s``
+    an orthonormal basis of the trend and ``R`` the AR(1) correlation.
+    Returns None with fewer than 20 degrees of freedom.
+    """
+    q = degree + 1
     s0 = s1 = 0.0
-    dof = 0
+    kept = []
     for seg in segments:
-        if len(seg) < 3:
+        seg = np.asarray(seg, dtype=float)
+        if len(seg) < q + 4:
             continue
-        x = seg - seg.mean()
+        t = np.linspace(-1.0, 1.0, len(seg))
+        basis, _ = np.linalg.qr(np.vander(t, q, increasing=True))
+        x = seg - basis @ (basis.T @ seg)
         s0 += float(x @ x)
         s1 += float(x[1:] @ x[:-1])
-        dof += len(seg) - 1
-    return s0, s1, dof, sum(len(s) for s in segments)
+        kept.append(basis)
+    total = sum(len(b) for b in kept)
+    if total - q * len(kept) < 20 or not s0 > 0.0:
+        return None
+    k = len(kept)
+    phi_hat = s1 / s0
+    phi = (phi_hat + k * q / total) / (1.0 - k * (q + 2) / total)
+    phi = float(np.clip(phi, -0.95, 0.98))
+    dof = sum(len(b) - float(np.trace(b.T @ _ar1_apply(b, phi))) for b in kept)
+    dof = max(dof, 0.25 * total)
+    return NoiseModel(math.sqrt(s0 / dof), phi, total)
 
 
 def estimate_noise(run: Run, delay_ticks: int, settle_ticks: int) -> dict[str, NoiseModel]:
@@ -151,11 +189,10 @@ def estimate_noise(run: Run, delay_ticks: int, settle_ticks: int) -> dict[str, N
     ``f_mea``: the true force is zero away from contact (2 ticks of guard,
     the readings shifted by the sensor delay), so the readings about each
     segment's mean are noise (an offset is model error, not noise).
-    ``p_act``: the table moves there, so the first differences are used,
-    about each segment's mean (the table's constant velocity and its
-    once-per-tick ripple drop out), skipping ``settle_ticks`` after the start
-    and after each contact; for AR(1) noise ``corr(d e[k], d e[k-1]) =
-    -(1 - phi) / 2`` and ``var(d e) = 2 sigma^2 (1 - phi)``.
+    ``p_act``: away from contact, after ``settle_ticks`` (the start and the
+    end of each contact), the table tracks the command's ramp with a
+    constant lag, sampled once per tick: the residuals of a straight line
+    fitted to each segment are the noise (:func:`ar1_from_segments`).
     """
     on = contact_mask(run.p_act_m)
     guard = 2
@@ -163,20 +200,14 @@ def estimate_noise(run: Run, delay_ticks: int, settle_ticks: int) -> dict[str, N
     quiet_f = delayed_labels(quiet.astype(int), delay_ticks).astype(bool)
     quiet_f[: min(delay_ticks, len(quiet_f))] = True
     out: dict[str, NoiseModel] = {}
-    segs = [run.f_mea_n[a : b + 1] for a, b in _runs(quiet_f)]
-    s0, s1, dof, n = _pooled_ar1(segs)
-    if dof >= 20:
-        phi = float(np.clip(s1 / s0, -0.95, 0.98)) if s0 > 0 else 0.0
-        out["f_mea_n"] = NoiseModel(math.sqrt(s0 / dof), phi, n)
+    f_noise = ar1_from_segments([run.f_mea_n[a : b + 1] for a, b in _runs(quiet_f)], 0)
+    if f_noise is not None:
+        out["f_mea_n"] = f_noise
     quiet_p = ~_dilate(on, guard, settle_ticks)
     quiet_p[: min(settle_ticks, len(quiet_p))] = False
-    segs = [np.diff(run.p_act_m[a : b + 1]) for a, b in _runs(quiet_p) if b - a >= 3]
-    s0, s1, dof, n = _pooled_ar1(segs)
-    if dof >= 20 and s0 > 0:
-        r1 = s1 / s0
-        phi = float(np.clip(1.0 + 2.0 * r1, -0.95, 0.98))
-        var = s0 / dof / (2.0 * (1.0 - phi))
-        out["p_act_m"] = NoiseModel(math.sqrt(var), phi, n)
+    p_noise = ar1_from_segments([run.p_act_m[a : b + 1] for a, b in _runs(quiet_p)], 1)
+    if p_noise is not None:
+        out["p_act_m"] = p_noise
     return out
 
 
@@ -913,8 +944,9 @@ def separating_run(
     loop gives its command, which both models replay. The difference of the
     predictions in noise units, ``sqrt(sum (dy / sigma)^2)`` over ``f_mea``
     and ``p_act``, is compared with the same distance on the recorded runs.
-    Returns the best design (label, changes, distances) or None if no
-    design could be simulated.
+    Returns the best design (label, changes, distances, and ``separates``:
+    the squared distance of one such run exceeds :data:`BIC_THRESHOLD`), or
+    None if no design could be simulated.
     """
     runs = [d.run for d in ev.data]
     sig = {c: float(np.mean([d.noise[c].sigma for d in ev.data])) for c in CHANNELS}
@@ -958,6 +990,8 @@ def separating_run(
                 "changes": changes,
                 "distance": dist,
                 "recorded_distance": recorded,
+                # One such run would tell them apart at the BIC threshold.
+                "separates": dist * dist > BIC_THRESHOLD,
             }
     return best
 

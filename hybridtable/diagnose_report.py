@@ -22,7 +22,13 @@ from hybridtable.comparison import PHASES, contact_mask, loop_energy  # noqa: E4
 from hybridtable.diagnose import Candidate, Diagnosis, RunData  # noqa: E402
 from hybridtable.effects import get_effect  # noqa: E402
 
-__all__ = ["REPORT_MARKER", "format_ranking", "format_parameters", "write_report"]
+__all__ = [
+    "REPORT_MARKER",
+    "format_ranking",
+    "format_parameters",
+    "separation_text",
+    "write_report",
+]
 
 #: File that marks a folder as written by ``hybridtable diagnose --report``.
 REPORT_MARKER = ".hybridtable-diagnose-report"
@@ -87,14 +93,23 @@ def format_ranking(d: Diagnosis) -> str:
         )
     for c in d.ranking:
         if c.separation and c.significant and c.effect == d.verdict:
-            s = c.separation
-            lines += [
-                "",
-                f"{c.effect} and {', '.join(c.indistinguishable_from)} are indistinguishable on "
-                f"these runs (predictions {s['recorded_distance']:.3g} noise units apart); "
-                f"a run with {s['run']} would put them {s['distance']:.3g} apart.",
-            ]
+            lines += ["", separation_text(c)]
     return "\n".join(lines)
+
+
+def separation_text(c: Candidate) -> str:
+    """What run would tell ``c`` from its look-alikes, in words."""
+    s = c.separation
+    head = (
+        f"{c.effect} and {', '.join(c.indistinguishable_from)} are indistinguishable on "
+        f"these runs (predictions {s['recorded_distance']:.3g} noise units apart)"
+    )
+    if s.get("separates"):
+        return f"{head}; a run with {s['run']} would put them {s['distance']:.3g} apart."
+    return (
+        f"{head}; none of the runs tried separates them (at most {s['distance']:.3g} "
+        f"apart, with {s['run']}): {s.get('hint') or 'another kind of measurement'}."
+    )
 
 
 # -- figures -------------------------------------------------------------------
@@ -253,6 +268,7 @@ def write_report(d: Diagnosis, folder: str | Path) -> list[Path]:
             f"| {', '.join(c.indistinguishable_from) or '-'} "
             f"| {format_parameters(c.effect, c.parameters)} |"
         )
+    md += ["", *[separation_text(c) for c in d.ranking if c.separation and c.effect in d.selected]]
     md += [
         "",
         "Errors of replay effects: RMS residual / noise RMS over the runs and both channels "
