@@ -11,8 +11,10 @@ compliance), a fractional sensor delay is read from the force history at the
 substep resolution, and the readings carry white or AR(1) noise of a given
 marginal standard deviation.
 
-``HIDDEN`` lists each effect with a default size; :func:`make_runs` writes a
-set of runs (two or three approach velocities) with one effect hidden.
+``HIDDEN`` lists each effect with a default size (``sensor_gain`` stands for
+an effect a user registers); ``"a+b"`` hides two effects at once (at most one
+changing the elastic law); :func:`make_runs` writes a set of runs (two or
+three approach velocities).
 """
 
 from __future__ import annotations
@@ -39,25 +41,22 @@ HIDDEN: dict[str, dict[str, float]] = {
     "table_resonance": {"f": 70.0, "zeta": 0.04},
     "force_bias": {"b": -4.0},
     "mass_error": {"ratio": 1.05},
+    "sensor_gain": {"g": 1.06},
 }
 
 
-def _contact_law(info: dict, effect: str, size: dict[str, float]):
+def _contact_law(info: dict, effects: set[str], size: dict[str, float]):
     k = info["contact_stiffness_n_per_m"]
 
     def law(p: float, v: float) -> float:
         if p <= 0.0:
             return 0.0
-        if effect == "contact_damping":
-            f = k * p + size["c"] * v
-        elif effect == "hunt_crossley":
-            f = k * p * (1.0 + size["alpha"] * v)
-        elif effect == "nonlinear_stiffness":
+        if "nonlinear_stiffness" in effects:
             kk = size["k_at_ref"] * size["d_ref"] ** (1.0 - size["n"])
             f = kk * p ** size["n"]
-        elif effect == "stiffness_error":
+        elif "stiffness_error" in effects:
             f = size["k"] * p
-        elif effect == "series_compliance":
+        elif "series_compliance" in effects:
             # f = k (p - s f) by bisection (not the closed form)
             lo, hi = 0.0, k * p
             for _ in range(80):
@@ -67,10 +66,14 @@ def _contact_law(info: dict, effect: str, size: dict[str, float]):
                 else:
                     lo = mid
             f = 0.5 * (lo + hi)
-        elif effect == "coulomb_friction":
-            f = k * p + size["F"] * (1.0 if v > 0.0 else -1.0 if v < 0.0 else 0.0)
         else:
             f = k * p
+        if "hunt_crossley" in effects:
+            f *= 1.0 + size["alpha"] * v
+        if "contact_damping" in effects:
+            f += size["c"] * v
+        if "coulomb_friction" in effects:
+            f += size["F"] * (1.0 if v > 0.0 else -1.0 if v < 0.0 else 0.0)
         return max(f, 0.0)
 
     return law
@@ -100,28 +103,33 @@ def simulate_hidden(
 ) -> dict[str, np.ndarray]:
     """Columns of one run of a rig with nominal parameters ``info`` whose
     physics holds ``effect`` of ``size`` (default: ``HIDDEN[effect]``)."""
-    if effect not in HIDDEN:
+    effects = set(effect.split("+"))
+    if not effects <= set(HIDDEN):
         raise ValueError(f"unknown hidden effect {effect!r}")
-    size = dict(HIDDEN[effect], **(size or {}))
+    merged: dict[str, float] = {}
+    for e in effects:
+        merged.update(HIDDEN[e])
+    size = dict(merged, **(size or {}))
     rng = np.random.default_rng(seed)
     h = 1.0 / info["sample_rate_hz"]
     n = int(round(duration_s / h)) + 1
     noise_f = _noise(rng, n, noise_f_n, noise_phi)
     noise_p = _noise(rng, n, noise_p_m, noise_phi)
     m_json = info["spacecraft_mass_kg"]
-    m = m_json * (size["ratio"] if effect == "mass_error" else 1.0)
+    m = m_json * (size["ratio"] if "mass_error" in effects else 1.0)
     k_nom = info["contact_stiffness_n_per_m"]
-    delay = info["sensor_delay_s"] + (size["d"] if effect == "extra_delay" else 0.0)
+    delay = info["sensor_delay_s"] + (size["d"] if "extra_delay" in effects else 0.0)
     w = 2.0 * math.pi * info["table_natural_frequency_hz"]
     z = info["table_damping_ratio"]
-    mode = effect == "table_resonance"
+    mode = "table_resonance" in effects
     wr = 2.0 * math.pi * size.get("f", 1.0)
     zr = size.get("zeta", 0.0)
-    tau = size["tau"] if effect == "sensor_filter" else 0.0
-    bias = size["b"] if effect == "force_bias" else 0.0
+    tau = size["tau"] if "sensor_filter" in effects else 0.0
+    bias = size["b"] if "force_bias" in effects else 0.0
+    gain = size["g"] if "sensor_gain" in effects else 1.0
     lead = info["lead_time_s"] if info["compensator"] in ("SDC", "SDMDC") else 0.0
     mdc = info["compensator"] in ("MDC", "SDMDC")
-    law = _contact_law(info, effect, size)
+    law = _contact_law(info, effects, size)
 
     x, v = -info["initial_gap_m"], info["initial_velocity_m_per_s"]
     # state: servo p, v; mode p, v (= servo without a mode); filter y
@@ -169,7 +177,7 @@ def simulate_hidden(
             f1 = hist_f[min(j0 + 1, len(hist_f) - 1)]
             f_sensed = f0 + (f1 - f0) * (frac if frac > 1e-9 else 0.0)
         p_read = p + noise_p[i]
-        f_read = f_sensed + bias + noise_f[i]
+        f_read = gain * f_sensed + bias + noise_f[i]
         if f_read <= info["force_deadband_n"]:
             f_comp = 0.0
         else:
