@@ -1232,8 +1232,8 @@ def diagnose(
     # Look-alikes of the verdict: what run would separate them.
     first = rounds[0] if rounds else []
     if separate:
-        for c in first[:1] + loop_cands[:1]:
-            if c.significant and c.indistinguishable_from:
+        for c in first + loop_cands:
+            if c.effect == verdict and c.indistinguishable_from:
                 spec_a = _model_spec([c.effect], {c.effect: c.parameters}, scale)
                 for other in c.indistinguishable_from:
                     o = next(x for x in first + loop_cands if x.effect == other)

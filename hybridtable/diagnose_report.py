@@ -100,8 +100,9 @@ def format_ranking(d: Diagnosis) -> str:
 def separation_text(c: Candidate) -> str:
     """What run would tell ``c`` from its look-alikes, in words."""
     s = c.separation
+    pair = s.get("effects") or [c.effect, *c.indistinguishable_from]
     head = (
-        f"{c.effect} and {', '.join(c.indistinguishable_from)} are indistinguishable on "
+        f"{pair[0]} and {', '.join(pair[1:])} are indistinguishable on "
         f"these runs (predictions {s['recorded_distance']:.3g} noise units apart)"
     )
     if s.get("separates"):
@@ -121,21 +122,23 @@ def _save(fig, path: Path) -> Path:
 
 
 def plot_staircase(d: Diagnosis, path: Path) -> Path:
-    """Error (in-sample and held-out, noise units) against the effects added."""
+    """Error (fitted runs and held-out, noise units) against the effects added."""
     steps = d.staircase
     labels = ["nominal"] + [f"+ {s['effects'][-1]}" for s in steps[1:]]
     x = np.arange(len(steps))
     fig, ax = plt.subplots(figsize=(7, 4))
-    ax.step(x, [s["error"] for s in steps], where="mid", lw=2, label="error (fitted runs)")
+    ax.bar(x - 0.18, [s["error"] for s in steps], 0.36, label="error (fitted runs)")
     held = [s["heldout_error"] for s in steps]
-    ax.plot(x, held, "o--", label="held-out error (leave one run out)")
+    ax.bar(x + 0.18, held, 0.36, label="held-out error (leave one run out)")
+    for xi, e in zip(x, [s["error"] for s in steps], strict=True):
+        ax.annotate(f"{e:.3g}", (xi - 0.18, e), ha="center", va="bottom", fontsize=8)
     ax.axhline(1.0, color="k", ls=":", lw=1, label="noise floor")
-    ax.set_xticks(x, labels, rotation=15, fontsize=8)
+    ax.set_xticks(x, labels, fontsize=8)
     ax.set_ylabel("RMS error / noise RMS")
-    ax.set_yscale("log")
-    ax.grid(True, alpha=0.3, which="both")
+    ax.set_ylim(0, max(1.2, 1.12 * max(s["error"] for s in steps)))
+    ax.grid(True, alpha=0.3, axis="y")
     ax.legend(fontsize=8)
-    ax.set_title(f"verdict: {d.verdict}", fontsize=9)
+    ax.set_title(f"staircase: error against effects added (verdict: {d.verdict})", fontsize=9)
     return _save(fig, path)
 
 
@@ -218,20 +221,25 @@ def _loop(rd: RunData, p: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.nda
 
 
 def plot_force_deflection(d: Diagnosis, i: int, path: Path) -> Path:
-    """Force against penetration: measured (reading M ticks later), nominal and diagnosed."""
+    """Reading (``M`` ticks later, ``M`` the nominal delay) against penetration:
+    measured, and predicted by the nominal and the diagnosed models."""
     rd = d.data[i]
     r, m = rd.run, rd.delay_ticks
-    f_aligned = np.concatenate([r.f_mea_n[m:], np.full(m, np.nan)])
-    valid = np.isfinite(f_aligned)
+
+    def aligned(f):
+        return np.concatenate([np.asarray(f)[m:], np.full(m, np.nan)])
+
+    valid = np.isfinite(aligned(r.f_mea_n))
     fig, ax = plt.subplots(figsize=(6, 5))
-    p, f, e = _loop(rd, r.p_act_m[valid], f_aligned[valid])
+    p, f, e = _loop(rd, r.p_act_m[valid], aligned(r.f_mea_n)[valid])
     ax.plot(p * 1e3, f, ".-", ms=2, lw=0.5, color="0.4", label=f"measured ({e:+.3g} J)")
     for name, ev in (("nominal", d.nominal[i]), ("diagnosed", d.final[i])):
-        p, f, e = _loop(rd, ev.prediction["p_act_m"], ev.prediction["f_act_n"])
+        pred = ev.prediction
+        p, f, e = _loop(rd, pred["p_act_m"][valid], aligned(pred["f_mea_n"])[valid])
         ax.plot(p * 1e3, f, lw=1.4, label=f"{name} model ({e:+.3g} J)")
     ax.set_xlabel("penetration p_act [mm]")
-    ax.set_ylabel("contact force [N]")
-    ax.set_title(f"{rd.run_id}: force-deflection loops (loop energy)", fontsize=9)
+    ax.set_ylabel(f"force reading {m} ticks later [N]")
+    ax.set_title(f"{rd.run_id}: force-deflection loops (enclosed energy)", fontsize=9)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=7)
     return _save(fig, path)
