@@ -107,6 +107,9 @@ CHANNELS: dict[str, str] = {"f_mea_n": "N", "p_act_m": "m"}
 #: Integrator accuracy of the fits (RK3; 1e-3 N and 2e-8 m of error on the
 #: examples, far under the noise).
 FIT_ACCURACY = 1e-5
+#: Noise floor of a noise-free record, relative to the largest reading (force)
+#: or the range (position): the fits' numerical resolution.
+NUMERICAL_FLOOR = 1e-5
 #: Smallest force error (in units of the force noise) the closed loop's
 #: velocity residual is credited with: below it, errors are numerical.
 CLOSED_LOOP_FLOOR = 1e-3
@@ -172,8 +175,10 @@ def ar1_from_segments(segments: Sequence[np.ndarray], degree: int) -> NoiseModel
         s1 += float(x[1:] @ x[:-1])
         kept.append(basis)
     total = sum(len(b) for b in kept)
-    if total - q * len(kept) < 20 or not s0 > 0.0:
+    if total - q * len(kept) < 20:
         return None
+    if not s0 > 0.0:  # a noise-free record
+        return NoiseModel(0.0, 0.0, total)
     k = len(kept)
     phi_hat = s1 / s0
     phi = (phi_hat + k * q / total) / (1.0 - k * (q + 2) / total)
@@ -233,6 +238,8 @@ class RunData:
     f_labels: np.ndarray
     noise: dict[str, NoiseModel]
     notes: list[str] = field(default_factory=list)
+    #: Numerical resolution of each channel (:data:`NUMERICAL_FLOOR`).
+    floors: dict[str, float] = field(default_factory=dict)
 
     @property
     def run_id(self) -> str:
@@ -267,11 +274,8 @@ def prepare_runs(runs: Sequence[Run]) -> list[RunData]:
         m = delay_samples(params.sensor_delay_s, run.sample_period_s)
         table = params.table()
         h = run.sample_period_s
-        settle = (
-            2
-            if table.is_ideal
-            else max(2, math.ceil(5.0 / (table.damping_ratio * table.omega_rad_per_s) / h))
-        )
+        zeta_w = 0.0 if table.is_ideal else table.damping_ratio * table.omega_rad_per_s
+        settle = max(2, math.ceil(5.0 / zeta_w / h)) if zeta_w > 0.0 else 2
         noise = estimate_noise(run, m, settle)
         notes = []
         if "f_mea_n" not in noise:
@@ -280,13 +284,22 @@ def prepare_runs(runs: Sequence[Run]) -> list[RunData]:
                 "cannot estimate the force noise"
             )
         if "p_act_m" not in noise:
-            notes.append("p_act noise from the force noise's correlation (few quiet ticks)")
+            noise["p_act_m"] = estimate_noise(run, m, 2).get("p_act_m")
+            notes.append("p_act noise from stretches where the table may not have settled")
+        if noise["p_act_m"] is None:
             noise["p_act_m"] = NoiseModel(
-                float(np.std(np.diff(run.p_act_m, 3))) / math.sqrt(20.0),
-                noise["f_mea_n"].phi,
-                0,
+                float(np.std(np.diff(run.p_act_m, 3))) / math.sqrt(20.0), 0.0, 0
             )
-        out.append(RunData(run, m, labels, delayed_labels(labels, m), noise, notes))
+            notes.append("p_act noise from third differences of the whole record")
+        floors = {
+            "f_mea_n": NUMERICAL_FLOOR * max(float(np.abs(run.f_mea_n).max()), 1.0),
+            "p_act_m": NUMERICAL_FLOOR * max(float(np.ptp(run.p_act_m)), 1e-6),
+        }
+        for c, floor in floors.items():
+            if not noise[c].sigma > floor:
+                noise[c] = NoiseModel(floor, 0.0, noise[c].samples)
+                notes.append(f"{c}: no noise found; its floor is set to {floor:.3g}")
+        out.append(RunData(run, m, labels, delayed_labels(labels, m), noise, notes, floors))
     return out
 
 
@@ -301,7 +314,7 @@ class Evaluation:
     whitened: dict[str, np.ndarray]
     failed: bool = False
     #: Smallest variance of a channel's whitened residual credited to a
-    #: model (none for the replay channels; the closed loop's numerical floor).
+    #: model: the numerical resolution (negligible against any real noise).
     floor: dict[str, float] = field(default_factory=dict)
 
     def rss(self) -> dict[str, float]:
@@ -351,7 +364,8 @@ class Evaluator:
                 return self._failed(i, stage)
             res = {c: getattr(run, c) - pred[c] for c in CHANNELS}
             white = {c: whiten(res[c], d.noise[c]) for c in CHANNELS}
-            return Evaluation(pred, res, white)
+            floor = {c: (d.floors.get(c, 0.0) / d.noise[c].innovation_sigma) ** 2 for c in CHANNELS}
+            return Evaluation(pred, res, white, floor=floor)
         noise = self.injected_noise[i]
         if noise is not None:
             h = run.sample_period_s

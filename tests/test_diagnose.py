@@ -310,3 +310,16 @@ def test_runs_without_contact_are_refused(tmp_path):
     )
     with pytest.raises(MeasurementError, match="no contact"):
         prepare_runs([flat])
+
+
+def test_noise_free_and_single_runs(tmp_path):
+    """A noise-free record gets a numerical noise floor (no spurious effect
+    below it); one run is diagnosed by the BIC alone."""
+    kw = {"noise_f_n": 0.0, "noise_p_m": 0.0}
+    none = diagnose(_runs(tmp_path, "none", **kw), effects=["contact_damping", "force_bias"])
+    assert none.verdict == "none"
+    assert any("no noise found" in n for n in none.data[0].notes)
+    (run,) = _runs(tmp_path / "one", "contact_damping", seed=3)[:1]
+    d = diagnose([run], effects=["contact_damping", "force_bias"])
+    assert d.verdict == "contact_damping"
+    assert math.isnan(d.ranking[0].heldout_z) and d.notes
