@@ -1045,6 +1045,11 @@ def _run_round(ev, base_fit, base_error, names, always_heldout, stage, workers, 
     # Expensive effects first, so two workers finish together.
     jobs.sort(key=lambda j: -len(get_effect(j[0]).parameters))
     if workers > 1 and len(jobs) > 1:
+        if progress:
+            print(
+                f"fitting {len(jobs)} effect(s) ({stage}) in {workers} processes...",
+                file=sys.stderr,
+            )
         out = _pool_map(_candidate_job, jobs, workers)
         ev.simulations += sum(s for _, s in out)
         cands = [c for c, _ in out]
@@ -1058,9 +1063,33 @@ def _run_round(ev, base_fit, base_error, names, always_heldout, stage, workers, 
         for job in iterator:
             cands.append(_candidate_job(job)[0])
     _STATE.clear()
-    cands.sort(key=lambda c: -c.delta_bic)
+    _rank(cands)
     _mark_lookalikes(cands)
     return cands
+
+
+#: ``delta_bic`` differences below this are ties (a likelihood ratio of 1.3).
+TIE_BIC = 0.5
+
+
+def _rank(cands: list[Candidate]) -> None:
+    """Sort by ``delta_bic``, ties (:data:`TIE_BIC`) broken by fewer
+    parameters, then registration order (a tie between, e.g., a stiffness
+    error and a series compliance, which predict the same, is numerical)."""
+    order = {n: i for i, n in enumerate(EFFECTS)}
+    cands.sort(key=lambda c: -c.delta_bic)
+    for _ in range(len(cands)):
+        swapped = False
+        for i in range(len(cands) - 1):
+            a, b = cands[i], cands[i + 1]
+            if a.delta_bic - b.delta_bic < TIE_BIC and (
+                len(b.parameters),
+                order.get(b.effect, len(order)),
+            ) < (len(a.parameters), order.get(a.effect, len(order))):
+                cands[i], cands[i + 1] = b, a
+                swapped = True
+        if not swapped:
+            break
 
 
 def diagnose(
@@ -1219,7 +1248,7 @@ def diagnose(
                     fit=fit,
                 )
             )
-        loop_cands.sort(key=lambda c: -c.delta_bic)
+        _rank(loop_cands)
         _mark_lookalikes(loop_cands)
         for c in loop_cands:
             if c.significant and len(selected) < max_effects:
