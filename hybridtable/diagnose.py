@@ -958,9 +958,10 @@ def separating_run(
     loop gives its command, which both models replay. The difference of the
     predictions in noise units, ``sqrt(sum (dy / sigma)^2)`` over ``f_mea``
     and ``p_act``, is compared with the same distance on the recorded runs.
-    Returns the best design (label, changes, distances, and ``separates``:
-    the squared distance of one such run exceeds :data:`BIC_THRESHOLD`), or
-    None if no design could be simulated.
+    Returns the best design (label, changes, distances, ``separates``: the
+    squared distance of one such run exceeds :data:`BIC_THRESHOLD`, and
+    ``runs_needed``: how many such runs would), or None if no design could
+    be simulated.
     """
     runs = [d.run for d in ev.data]
     sig = {c: float(np.mean([d.noise[c].sigma for d in ev.data])) for c in CHANNELS}
@@ -1006,6 +1007,8 @@ def separating_run(
                 "recorded_distance": recorded,
                 # One such run would tell them apart at the BIC threshold.
                 "separates": dist * dist > BIC_THRESHOLD,
+                # Independent runs add their squared distances.
+                "runs_needed": (math.ceil(BIC_THRESHOLD / (dist * dist)) if dist > 0.0 else None),
             }
     return best
 

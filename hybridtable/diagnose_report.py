@@ -97,6 +97,10 @@ def format_ranking(d: Diagnosis) -> str:
     return "\n".join(lines)
 
 
+#: Most runs of one kind a separation message suggests.
+MAX_RUNS_SUGGESTED = 5
+
+
 def separation_text(c: Candidate) -> str:
     """What run would tell ``c`` from its look-alikes, in words."""
     s = c.separation
@@ -107,6 +111,12 @@ def separation_text(c: Candidate) -> str:
     )
     if s.get("separates"):
         return f"{head}; a run with {s['run']} would put them {s['distance']:.3g} apart."
+    needed = s.get("runs_needed")
+    if needed is not None and needed <= MAX_RUNS_SUGGESTED:
+        return (
+            f"{head}; {needed} runs with {s['run']} would separate them "
+            f"({s['distance']:.3g} noise units apart each)."
+        )
     return (
         f"{head}; none of the runs tried separates them (at most {s['distance']:.3g} "
         f"apart, with {s['run']}): {s.get('hint') or 'another kind of measurement'}."
