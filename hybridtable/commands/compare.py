@@ -56,18 +56,29 @@ def _inputs(runs) -> list[Path]:
     return [p.resolve() for r in runs for p in (r.csv_path, r.json_path) if p is not None]
 
 
-def check_outputs(json_path: str | None, report_dir: str | None, inputs: list[Path]) -> None:
+def check_outputs(
+    json_path: str | None,
+    report_dir: str | None,
+    inputs: list[Path],
+    command: str = "compare",
+    report_marker: str | None = None,
+) -> None:
     """Refuse outputs that would write over an input or a user's folder.
+
+    ``report_marker`` is the file by which ``command``'s reports mark their
+    folders (default: the compare report's).
 
     Raises
     ------
     CommandError
         If ``json_path`` is an input file or a folder, or ``report_dir`` is a
         file, holds an input, or is a non-empty folder not written by an
-        earlier ``compare --report``.
+        earlier ``command --report``.
     """
     from hybridtable.cli import CommandError
     from hybridtable.compare_report import REPORT_MARKER
+
+    marker = report_marker or REPORT_MARKER
 
     if json_path and json_path != "-":
         target = Path(json_path).resolve()
@@ -81,9 +92,9 @@ def check_outputs(json_path: str | None, report_dir: str | None, inputs: list[Pa
             raise CommandError(f"--report {report_dir} is a file, not a folder")
         if any(d == p.parent or d in p.parents for p in inputs):
             raise CommandError(f"--report {report_dir} holds input runs; choose another folder")
-        if d.is_dir() and any(d.iterdir()) and not (d / REPORT_MARKER).is_file():
+        if d.is_dir() and any(d.iterdir()) and not (d / marker).is_file():
             raise CommandError(
-                f"--report {report_dir} is not empty and not an earlier compare report; "
+                f"--report {report_dir} is not empty and not an earlier {command} report; "
                 "choose a new or empty folder"
             )
 

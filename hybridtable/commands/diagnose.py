@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 
 __all__ = ["register", "run", "diagnosis_json", "compare_with_effect", "format_error_fall"]
 
@@ -58,29 +57,11 @@ def diagnosis_json(d) -> dict:
     return out
 
 
-def _check_report_dir(report_dir: str | None, inputs: list[Path]) -> None:
-    from hybridtable.cli import CommandError
-    from hybridtable.diagnose_report import REPORT_MARKER
-
-    if not report_dir:
-        return
-    d = Path(report_dir).resolve()
-    if d.exists() and not d.is_dir():
-        raise CommandError(f"--report {report_dir} is a file, not a folder")
-    if any(d == p.parent or d in p.parents for p in inputs):
-        raise CommandError(f"--report {report_dir} holds input runs; choose another folder")
-    if d.is_dir() and any(d.iterdir()) and not (d / REPORT_MARKER).is_file():
-        raise CommandError(
-            f"--report {report_dir} is not empty and not an earlier diagnose report; "
-            "choose a new or empty folder"
-        )
-
-
 def run(args: argparse.Namespace) -> int:
     from hybridtable.cli import CommandError
     from hybridtable.commands.compare import _inputs, _write_json_atomic, check_outputs
     from hybridtable.diagnose import diagnose
-    from hybridtable.diagnose_report import format_ranking, write_report
+    from hybridtable.diagnose_report import REPORT_MARKER, format_ranking, write_report
     from hybridtable.effects import get_effect
     from hybridtable.measurement import parse_column_map, read_runs
 
@@ -97,8 +78,7 @@ def run(args: argparse.Namespace) -> int:
         raise CommandError(f"--workers must be >= 1 (got {args.workers})")
     runs = read_runs(args.runs, parse_column_map(args.column_map))
     inputs = _inputs(runs)
-    check_outputs(args.json, None, inputs)
-    _check_report_dir(args.report, inputs)
+    check_outputs(args.json, args.report, inputs, "diagnose", REPORT_MARKER)
     quiet = args.json == "-"
     if not quiet and not args.no_progress:
         print(f"diagnosing {len(runs)} run(s)...", file=sys.stderr)
