@@ -500,6 +500,19 @@ def build_spec(
 
 
 # -- the library ---------------------------------------------------------------
+def _stiffness_parameter(name: str, description: str) -> EffectParameter:
+    """A stiffness parameter from 0.2 to 5 times the nominal, null at the nominal."""
+    return EffectParameter(
+        name,
+        "N/m",
+        description,
+        lower=lambda s: 0.2 * s.stiffness_n_per_m,
+        upper=lambda s: 5.0 * s.stiffness_n_per_m,
+        scale=lambda s: 0.01 * s.stiffness_n_per_m,
+        null=lambda s: s.stiffness_n_per_m,
+    )
+
+
 def _resonance_starts(
     scale: RigScale, residuals: Sequence[Mapping[str, np.ndarray]]
 ) -> list[dict[str, float]]:
@@ -618,14 +631,8 @@ def _library() -> list[Effect]:
                     scale=0.02,
                     null=1.0,
                 ),
-                EffectParameter(
-                    "reference_stiffness_n_per_m",
-                    "N/m",
-                    "secant stiffness f / d at d_ref",
-                    lower=lambda s: 0.2 * s.stiffness_n_per_m,
-                    upper=lambda s: 5.0 * s.stiffness_n_per_m,
-                    scale=lambda s: 0.01 * s.stiffness_n_per_m,
-                    null=lambda s: s.stiffness_n_per_m,
+                _stiffness_parameter(
+                    "reference_stiffness_n_per_m", "secant stiffness f / d at d_ref"
                 ),
             ),
             signature=Signature(
@@ -647,15 +654,7 @@ def _library() -> list[Effect]:
             name="stiffness_error",
             description="the contact stiffness differs from the nominal one",
             parameters=(
-                EffectParameter(
-                    "contact_stiffness_n_per_m",
-                    "N/m",
-                    "true contact stiffness k",
-                    lower=lambda s: 0.2 * s.stiffness_n_per_m,
-                    upper=lambda s: 5.0 * s.stiffness_n_per_m,
-                    scale=lambda s: 0.01 * s.stiffness_n_per_m,
-                    null=lambda s: s.stiffness_n_per_m,
-                ),
+                _stiffness_parameter("contact_stiffness_n_per_m", "true contact stiffness k"),
             ),
             signature=Signature(
                 (F_MEA,),
