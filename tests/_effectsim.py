@@ -23,7 +23,7 @@ import math
 from pathlib import Path
 
 import numpy as np
-from _rigsim import NOMINAL, write_run
+from _rigsim import NOMINAL, compensate, write_run
 
 from hybridtable.measurement import read_run
 
@@ -117,7 +117,6 @@ def simulate_hidden(
     noise_p = _noise(rng, n, noise_p_m, noise_phi)
     m_json = info["spacecraft_mass_kg"]
     m = m_json * (size["ratio"] if "mass_error" in effects else 1.0)
-    k_nom = info["contact_stiffness_n_per_m"]
     delay = info["sensor_delay_s"] + (size["d"] if "extra_delay" in effects else 0.0)
     w = 2.0 * math.pi * info["table_natural_frequency_hz"]
     z = info["table_damping_ratio"]
@@ -127,8 +126,6 @@ def simulate_hidden(
     tau = size["tau"] if "sensor_filter" in effects else 0.0
     bias = size["b"] if "force_bias" in effects else 0.0
     gain = size["g"] if "sensor_gain" in effects else 1.0
-    lead = info["lead_time_s"] if info["compensator"] in ("SDC", "SDMDC") else 0.0
-    mdc = info["compensator"] in ("MDC", "SDMDC")
     law = _contact_law(info, effects, size)
 
     x, v = -info["initial_gap_m"], info["initial_velocity_m_per_s"]
@@ -178,13 +175,7 @@ def simulate_hidden(
             f_sensed = f0 + (f1 - f0) * (frac if frac > 1e-9 else 0.0)
         p_read = p + noise_p[i]
         f_read = gain * f_sensed + bias + noise_f[i]
-        if f_read <= info["force_deadband_n"]:
-            f_comp = 0.0
-        else:
-            f_comp = f_read + lead * (f_read - f_prev) / h
-            if mdc:
-                f_comp += k_nom * (cmd_prev - p_read)
-            f_comp = max(f_comp, 0.0)
+        f_comp = compensate(info, f_read, f_prev, p_read, cmd_prev)
         v -= f_comp / m * h
         x += v * h
         rows[i] = (t, x, p_read, f_read, f_comp, v)

@@ -35,6 +35,21 @@ NOMINAL = {
 }
 
 
+def compensate(info: dict, f_read: float, f_prev: float, p_read: float, cmd_prev: float) -> float:
+    """The rig computer's compensated force at one tick, as
+    ``measurement-format.md`` defines it (written out independently of the
+    package's Compensator)."""
+    if f_read <= info["force_deadband_n"]:
+        return 0.0
+    h = 1.0 / info["sample_rate_hz"]
+    f_comp = f_read
+    if info["compensator"] in ("SDC", "SDMDC"):
+        f_comp += info["lead_time_s"] * (f_read - f_prev) / h
+    if info["compensator"] in ("MDC", "SDMDC"):
+        f_comp += info["contact_stiffness_n_per_m"] * (cmd_prev - p_read)
+    return max(f_comp, 0.0)
+
+
 def spring(k: float) -> Callable[[float, float], float]:
     """The nominal unilateral spring."""
     return lambda p, v: k * p if p > 0.0 else 0.0
@@ -67,8 +82,6 @@ def simulate_record(
     delay = round(info["sensor_delay_s"] / h)
     w = 2.0 * math.pi * info["table_natural_frequency_hz"]
     z = info["table_damping_ratio"]
-    lead = info["lead_time_s"] if info["compensator"] in ("SDC", "SDMDC") else 0.0
-    mdc = info["compensator"] in ("MDC", "SDMDC")
     contact = contact or spring(k_nom)
 
     x, v = -info["initial_gap_m"], info["initial_velocity_m_per_s"]
@@ -86,13 +99,7 @@ def simulate_record(
         f_true[i] = contact(p, pv)
         p_read = p + noise_p_m * rng.standard_normal()
         f_read = (f_true[i - delay] if i >= delay else 0.0) + noise_f_n * rng.standard_normal()
-        if f_read <= info["force_deadband_n"]:
-            f_comp = 0.0
-        else:
-            f_comp = f_read + lead * (f_read - f_prev) / h
-            if mdc:
-                f_comp += k_nom * (cmd_prev - p_read)
-            f_comp = max(f_comp, 0.0)
+        f_comp = compensate(info, f_read, f_prev, p_read, cmd_prev)
         v -= f_comp / m * h
         x += v * h
         rows[i] = (i * h, x, p_read, f_read, f_comp, v)
