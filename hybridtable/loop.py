@@ -285,7 +285,8 @@ class HybridLoop:
         ic = self.params.initial_conditions()
         sc = self.diagram.GetMutableSubsystemContext(self.spacecraft, root_context)
         self.spacecraft.set_initial_state(sc, ic["p_des_m"], ic["v_des_m_per_s"])
-        if isinstance(self.table, SecondOrderTable):
+        # Any table back-end with a set_initial_state(context, p, v) method.
+        if hasattr(self.table, "set_initial_state"):
             tc = self.diagram.GetMutableSubsystemContext(self.table, root_context)
             self.table.set_initial_state(tc, ic["p_act_m"], ic["v_act_m_per_s"])
 

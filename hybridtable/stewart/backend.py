@@ -19,7 +19,7 @@ The loop's back-end ports (see :mod:`hybridtable.loop`) are kept exactly:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields, replace
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -50,7 +50,6 @@ __all__ = [
     "DeviceSensor",
     "StewartTable",
     "StewartContactReadout",
-    "StewartHybridLoop",
     "add_stewart_loop",
     "build_stewart_loop",
     "stewart_params_for_loop",
@@ -400,18 +399,6 @@ class StewartContactReadout(Diagram):
         builder.BuildInto(self)
 
 
-@dataclass
-class StewartHybridLoop(HybridLoop):
-    """A :class:`~hybridtable.loop.HybridLoop` whose table is a :class:`StewartTable`:
-    the initial conditions also put the platform in its initial state."""
-
-    def set_initial_conditions(self, root_context) -> None:
-        super().set_initial_conditions(root_context)
-        ic = self.params.initial_conditions()
-        context = self.diagram.GetMutableSubsystemContext(self.table, root_context)
-        self.table.set_initial_state(context, ic["p_act_m"], ic["v_act_m_per_s"])
-
-
 def stewart_params_for_loop(params: HybridLoopParams, stewart: StewartParams) -> StewartParams:
     """``stewart`` with its time step set to the loop's sample period (a
     sampled loop) so that every discrete part shares one period."""
@@ -447,7 +434,7 @@ def add_stewart_loop(
     contact = StewartContactReadout()
     loop = add_hybrid_loop(builder, params, table=table, contact=contact, **kwargs)
     builder.Connect(table.GetOutputPort("sensed_force"), contact.GetInputPort("sensed_force"))
-    return StewartHybridLoop(**{f.name: getattr(loop, f.name) for f in fields(loop)})
+    return loop
 
 
 def build_stewart_loop(
