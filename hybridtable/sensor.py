@@ -17,7 +17,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import control
 import numpy as np
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import DiscreteTimeDelay, LinearSystem, PassThrough
@@ -76,6 +75,8 @@ def pade_state_space(
     delay_s: float, order: int
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """State-space (A, B, C, D) of the order-``order`` Pade approximant of e^{-sT}."""
+    import control  # only analysis needs it; keeps it out of the CLI's start-up
+
     if order < 1:
         raise ParameterError(f"pade_order must be >= 1 (got {order})")
     num, den = control.pade(delay_s, order)
