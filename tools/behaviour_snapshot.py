@@ -1,0 +1,160 @@
+"""Save the JSON and Markdown outputs of every command, and diff two saved sets.
+
+A restructuring must not change a single number. Save a snapshot before it,
+another after, and diff them::
+
+    python tools/behaviour_snapshot.py save /tmp/before --runs ../shared/examples/nominal
+    ...  # move code
+    python tools/behaviour_snapshot.py save /tmp/after --runs ../shared/examples/nominal
+    python tools/behaviour_snapshot.py diff /tmp/before /tmp/after
+
+The commands run as a user runs them (``python -m hybridtable.cli``):
+``reproduce``, ``simulate`` with every registered compensator (continuous, a
+1 kHz rig computer, the passivity guard, the Stewart back-end), ``margins``
+(continuous and sampled, with validation runs), ``compensators --quick``, and
+``compare`` / ``diagnose`` on the recorded runs. Wall times are the only fields
+left out of the diff (keys containing ``wall``); every other number must be
+equal to the last bit. ``diff`` exits 1 on any difference.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+COMPENSATORS = (
+    "none",
+    "SDC",
+    "MDC",
+    "SDMDC",
+    "sdmdc-online",
+    "polynomial",
+    "smith",
+    "smith-online",
+)
+
+
+def _cases(runs: str | None) -> list[tuple[str, list[str]]]:
+    cases: list[tuple[str, list[str]]] = [("reproduce", ["reproduce", "--no-progress"])]
+    for c in COMPENSATORS:
+        cases.append((f"simulate-{c}", ["simulate", "--compensator", c]))
+        cases.append(
+            (f"simulate-{c}-1khz", ["simulate", "--compensator", c, "--sample-rate-hz", "1000"])
+        )
+    cases += [
+        ("simulate-SDMDC-passivity", ["simulate", "--compensator", "SDMDC", "--passivity"]),
+        ("simulate-MDC-damped-clamped", ["simulate", "--compensator", "MDC",
+                                         "--contact-damping-n-s-per-m", "500",
+                                         "--clamp-nonnegative"]),
+        ("simulate-SDMDC-stewart", ["simulate", "--compensator", "SDMDC", "--table", "stewart"]),
+        ("margins", ["margins", "--sensor-delay-s", "0:0.02:6", "--table-response-hz", "5:100:5",
+                     "--validate", "2", "--no-progress"]),
+        ("margins-1khz", ["margins", "--sample-rate-hz", "1000", "--sensor-delay-s", "0.005,0.01",
+                          "--table-response-hz", "10,25", "--no-progress"]),
+        ("compensators-quick", ["compensators", "--quick", "--jobs", "1", "--no-progress",
+                                "--prior-ratios", "0.5,1"]),
+    ]  # fmt: skip
+    if runs:
+        cases += [
+            ("compare", ["compare", runs, "--no-progress", "--report", "{out}/compare-report"]),
+            ("compare-add", ["compare", runs, "--no-progress", "--add", "contact_damping"]),
+            ("diagnose", ["diagnose", runs, "--no-progress", "--report", "{out}/diagnose-report"]),
+        ]
+    return cases
+
+
+def save(out: Path, runs: str | None) -> int:
+    out.mkdir(parents=True, exist_ok=True)
+    failed = 0
+    for name, argv in _cases(runs):
+        argv = [a.replace("{out}", str(out)) for a in argv]
+        cmd = [sys.executable, "-m", "hybridtable.cli", *argv, "--json", str(out / f"{name}.json")]
+        proc = subprocess.run(cmd, capture_output=True, text=True)
+        (out / f"{name}.stdout").write_text(proc.stdout)
+        status = "ok" if proc.returncode == 0 else f"exit {proc.returncode}"
+        failed += proc.returncode != 0
+        print(f"{name:32s} {status}", flush=True)
+        if proc.returncode:
+            print(proc.stderr.strip().splitlines()[-1] if proc.stderr.strip() else "", flush=True)
+    return 1 if failed else 0
+
+
+def _strip(obj):
+    if isinstance(obj, dict):
+        return {k: _strip(v) for k, v in obj.items() if "wall" not in k}
+    if isinstance(obj, list):
+        return [_strip(v) for v in obj]
+    return obj
+
+
+def _differences(a, b, path: str = "") -> list[str]:
+    if isinstance(a, dict) and isinstance(b, dict):
+        out = [f"{path}.{k}: only in one" for k in sorted(set(a) ^ set(b))]
+        for k in sorted(set(a) & set(b)):
+            out += _differences(a[k], b[k], f"{path}.{k}")
+        return out
+    if isinstance(a, list) and isinstance(b, list):
+        if len(a) != len(b):
+            return [f"{path}: length {len(a)} != {len(b)}"]
+        out = []
+        for i, (x, y) in enumerate(zip(a, b, strict=True)):
+            out += _differences(x, y, f"{path}[{i}]")
+        return out
+    return [] if a == b else [f"{path}: {a!r} != {b!r}"]
+
+
+_TIMING = re.compile(r"\d+(\.\d+)? ?s\b|wall|seconds|\(\d+ model runs")
+
+
+def _text_lines(path: Path) -> list[str]:
+    return [ln for ln in path.read_text().splitlines() if not _TIMING.search(ln)]
+
+
+def diff(a: Path, b: Path) -> int:
+    names = sorted(
+        str(p.relative_to(a)) for p in a.rglob("*") if p.suffix in (".json", ".md", ".stdout")
+    )
+    bad = 0
+    for name in names:
+        pa, pb = a / name, b / name
+        if not pb.exists():
+            print(f"{name}: missing in {b}")
+            bad += 1
+            continue
+        if pa.suffix == ".json":
+            found = _differences(
+                _strip(json.loads(pa.read_text())), _strip(json.loads(pb.read_text()))
+            )
+        else:
+            la, lb = _text_lines(pa), _text_lines(pb)
+            found = [f"line: {x!r} != {y!r}" for x, y in zip(la, lb, strict=False) if x != y]
+            if len(la) != len(lb):
+                found.append(f"{len(la)} lines != {len(lb)} lines")
+        if found:
+            bad += 1
+            print(f"{name}: {len(found)} differences, e.g. " + "; ".join(found[:3]))
+    print(f"{len(names)} outputs compared, {bad} differ")
+    return 1 if bad else 0
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="verb", required=True)
+    p = sub.add_parser("save", help="run every command and save its outputs in DIR")
+    p.add_argument("dir", type=Path)
+    p.add_argument("--runs", help="folder of recorded runs for compare and diagnose")
+    d = sub.add_parser("diff", help="compare two saved sets; exit 1 on any difference")
+    d.add_argument("a", type=Path)
+    d.add_argument("b", type=Path)
+    args = parser.parse_args()
+    if args.verb == "save":
+        return save(args.dir, args.runs)
+    return diff(args.a, args.b)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
