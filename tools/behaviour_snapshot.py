@@ -12,8 +12,8 @@ The commands run as a user runs them (``python -m hybridtable.cli``):
 ``reproduce``, ``simulate`` with every registered compensator (continuous, a
 1 kHz rig computer, the passivity guard, the Stewart back-end), ``margins``
 (continuous and sampled, with validation runs), ``compensators --quick``, and
-``compare`` / ``diagnose`` on the recorded runs. Wall times are the only fields
-left out of the diff (keys containing ``wall``); every other number must be
+``compare`` / ``diagnose`` on the recorded runs. Clock readings are the only fields
+left out of the diff (keys containing ``wall`` or ``real_time``, text lines with a time); every other number must be
 equal to the last bit. ``diff`` exits 1 on any difference.
 """
 
@@ -83,9 +83,13 @@ def save(out: Path, runs: str | None) -> int:
     return 1 if failed else 0
 
 
+#: Keys of figures measured by the clock, not computed: left out of the diff.
+_CLOCKS = ("wall", "real_time")
+
+
 def _strip(obj):
     if isinstance(obj, dict):
-        return {k: _strip(v) for k, v in obj.items() if "wall" not in k}
+        return {k: _strip(v) for k, v in obj.items() if not any(w in k for w in _CLOCKS)}
     if isinstance(obj, list):
         return [_strip(v) for v in obj]
     return obj
@@ -110,8 +114,9 @@ def _differences(a, b, path: str = "") -> list[str]:
 _TIMING = re.compile(r"\d+(\.\d+)? ?s\b|wall|seconds|\(\d+ model runs")
 
 
-def _text_lines(path: Path) -> list[str]:
-    return [ln for ln in path.read_text().splitlines() if not _TIMING.search(ln)]
+def _text_lines(path: Path, root: Path) -> list[str]:
+    text = path.read_text().replace(str(root), "<out>")
+    return [ln for ln in text.splitlines() if not _TIMING.search(ln)]
 
 
 def diff(a: Path, b: Path) -> int:
@@ -130,7 +135,7 @@ def diff(a: Path, b: Path) -> int:
                 _strip(json.loads(pa.read_text())), _strip(json.loads(pb.read_text()))
             )
         else:
-            la, lb = _text_lines(pa), _text_lines(pb)
+            la, lb = _text_lines(pa, a), _text_lines(pb, b)
             found = [f"line: {x!r} != {y!r}" for x, y in zip(la, lb, strict=False) if x != y]
             if len(la) != len(lb):
                 found.append(f"{len(la)} lines != {len(lb)} lines")
