@@ -20,11 +20,11 @@ import argparse
 import json
 import time
 
-from hybridtable.compensator import compensator_names, make_compensator
-from hybridtable.loop import build_hybrid_loop
-from hybridtable.paper import table1_params, table2_params, table2_rows
-from hybridtable.plugins.passivity import passivity_guarded
-from hybridtable.simulation import run_loop, simulate
+from hybridtable.compensators.passivity import passivity_guarded
+from hybridtable.compensators.registry import compensator_names, make_compensator
+from hybridtable.loop.builder import build_hybrid_loop
+from hybridtable.loop.simulation import run_loop, simulate
+from hybridtable.studies.paper import table1_params, table2_params, table2_rows
 
 
 def timed(params, **kw):

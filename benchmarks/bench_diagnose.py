@@ -28,8 +28,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 from _effectsim import make_runs  # noqa: E402
 
-from hybridtable.diagnose import diagnose  # noqa: E402
-from hybridtable.measurement import read_runs  # noqa: E402
+from hybridtable.diagnosis.diagnose import diagnose  # noqa: E402
+from hybridtable.measurement.run_format import read_runs  # noqa: E402
 
 
 def main(argv=None) -> int:

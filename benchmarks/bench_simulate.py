@@ -22,8 +22,8 @@ import time
 
 import numpy as np
 
-from hybridtable.paper import table1_params
-from hybridtable.simulation import simulate
+from hybridtable.loop.simulation import simulate
+from hybridtable.studies.paper import table1_params
 
 
 def plain_loop(params, dt: float) -> float:

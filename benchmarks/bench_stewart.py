@@ -24,11 +24,11 @@ import time
 
 import numpy as np
 
-from hybridtable.paper import table1_params
-from hybridtable.simulation import run_loop
+from hybridtable.loop.simulation import run_loop
 from hybridtable.stewart.backend import build_stewart_loop
 from hybridtable.stewart.identify import drive_table, tune_table
 from hybridtable.stewart.plant import StewartParams
+from hybridtable.studies.paper import table1_params
 
 
 def main() -> None:

@@ -31,7 +31,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from _effectsim import make_runs  # noqa: E402
 from tqdm import tqdm  # noqa: E402
 
-from hybridtable.diagnose import diagnose  # noqa: E402
+from hybridtable.diagnosis.diagnose import diagnose  # noqa: E402
 
 #: Sizes of each hidden effect (generator parameters). "tiny" probes the
 #: detection limit (a verdict "none" there is below detection, not a mistake).

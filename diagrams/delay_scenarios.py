@@ -7,7 +7,7 @@ Usage: python diagrams/delay_scenarios.py
 import math
 
 from hybridtable import simulate
-from hybridtable.paper import cor_estimate, paper_params
+from hybridtable.studies.paper import cor_estimate, paper_params
 
 SCENARIOS = {
     "Fig. 3, T_fms 1 ms": dict(sensor_delay_s=0.001, table_response_hz=math.inf),

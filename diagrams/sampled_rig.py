@@ -8,7 +8,7 @@ Usage: python diagrams/sampled_rig.py [RATE_HZ ...]
 import sys
 
 from hybridtable import COMPENSATORS, simulate
-from hybridtable.paper import table1_params
+from hybridtable.studies.paper import table1_params
 
 if __name__ == "__main__":
     rates = [float(a) for a in sys.argv[1:]] or [1000.0, 5000.0]

@@ -6,7 +6,7 @@ Usage: python diagrams/show_diagram.py [OUT.dot]
 import sys
 
 from hybridtable import build_hybrid_loop
-from hybridtable.paper import table1_params
+from hybridtable.studies.paper import table1_params
 
 if __name__ == "__main__":
     out = sys.argv[1] if len(sys.argv) > 1 else "hybrid_loop.dot"

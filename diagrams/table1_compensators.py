@@ -5,7 +5,7 @@ Usage: python diagrams/table1_compensators.py
 """
 
 from hybridtable import COMPENSATORS, simulate
-from hybridtable.paper import load_tables, table1_params
+from hybridtable.studies.paper import load_tables, table1_params
 
 if __name__ == "__main__":
     paper = load_tables()["table1_simulation"]["cor"]

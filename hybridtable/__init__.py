@@ -5,15 +5,16 @@ compensator, table response, contact) as a Drake systems diagram, its metrics,
 and the command-line tool ``hybridtable``.
 """
 
-from hybridtable._validation import ParameterError
-from hybridtable.compensator import COMPENSATORS, Compensator, CompensatorParams
-from hybridtable.contact import ContactParams, UnilateralSpringContact
-from hybridtable.loop import HybridLoop, HybridLoopParams, add_hybrid_loop, build_hybrid_loop
-from hybridtable.metrics import ContactMetrics, contact_metrics
-from hybridtable.sensor import ForceSensorDelay, SensorParams
-from hybridtable.simulation import SimulationError, SimulationResult, run_loop, simulate
-from hybridtable.spacecraft import Spacecraft, SpacecraftParams
-from hybridtable.table import SecondOrderTable, TableParams
+from hybridtable.compensators.paper import COMPENSATORS, Compensator, CompensatorParams
+from hybridtable.errors import ParameterError, SimulationError
+from hybridtable.loop.builder import HybridLoop, add_hybrid_loop, build_hybrid_loop
+from hybridtable.loop.metrics import ContactMetrics, contact_metrics
+from hybridtable.loop.params import HybridLoopParams
+from hybridtable.loop.simulation import SimulationResult, run_loop, simulate
+from hybridtable.systems.contact import ContactParams, UnilateralSpringContact
+from hybridtable.systems.sensor import ForceSensorDelay, SensorParams
+from hybridtable.systems.spacecraft import Spacecraft, SpacecraftParams
+from hybridtable.systems.table import SecondOrderTable, TableParams
 
 __all__ = [
     "COMPENSATORS",

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import math
 
+from hybridtable.errors import ParameterError
+
 __all__ = [
     "ParameterError",
     "check_finite",
@@ -17,10 +19,6 @@ __all__ = [
     "check_positive_or_inf",
     "check_choice",
 ]
-
-
-class ParameterError(ValueError):
-    """A parameter given by the user is out of its physical range."""
 
 
 def check_finite(name: str, value: float) -> float:

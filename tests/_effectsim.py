@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 from _rigsim import NOMINAL, compensate, write_run
 
-from hybridtable.measurement import read_run
+from hybridtable.measurement.run_format import read_run
 
 #: Hidden effects and their default sizes (the generator's own parameters).
 HIDDEN: dict[str, dict[str, float]] = {

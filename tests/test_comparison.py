@@ -12,20 +12,22 @@ import pytest
 from _rigsim import NOMINAL, damped_spring, simulate_record, write_run
 
 from hybridtable.cli import main
-from hybridtable.comparison import (
+from hybridtable.measurement.comparison import compare_run
+from hybridtable.measurement.phases import (
     PHASES,
-    channel_error,
-    compare_run,
     contact_duration,
     cor_from_record,
-    correlation,
     delayed_labels,
-    force_noise_rms,
     loop_energy,
     phase_labels,
+)
+from hybridtable.measurement.run_format import read_run, read_runs
+from hybridtable.measurement.stats import (
+    channel_error,
+    correlation,
+    force_noise_rms,
     position_noise_rms,
 )
-from hybridtable.measurement import read_run, read_runs
 
 EXAMPLES = Path("/work/shared/examples/nominal")
 needs_examples = pytest.mark.skipif(not EXAMPLES.is_dir(), reason="example runs not available")

@@ -8,31 +8,31 @@ import numpy as np
 import pytest
 
 from hybridtable import Compensator, HybridLoopParams, ParameterError
-from hybridtable.compensator import (
-    COMPENSATORS,
-    compensator_factory,
-    compensator_names,
-    make_compensator,
-    register_compensator,
-)
-from hybridtable.loop import build_hybrid_loop
-from hybridtable.paper import table1_params
-from hybridtable.plugins.noise import (
-    MeasurementNoise,
-    MeasurementNoiseParams,
-    noise_sample,
-    with_measurement_noise,
-)
-from hybridtable.plugins.online import AdaptiveSDMDC, make_online_sdmdc
-from hybridtable.plugins.passivity import PassivityGuard, PassivityParams, passivity_guarded
-from hybridtable.plugins.polynomial import (
+from hybridtable.compensators.online import AdaptiveSDMDC, make_online_sdmdc
+from hybridtable.compensators.paper import COMPENSATORS
+from hybridtable.compensators.passivity import PassivityGuard, PassivityParams, passivity_guarded
+from hybridtable.compensators.polynomial import (
     PolynomialExtrapolator,
     PolynomialParams,
     extrapolation_weights,
     make_polynomial,
 )
-from hybridtable.plugins.smith import SmithParams, SmithPredictor, make_smith
-from hybridtable.simulation import run_loop, simulate
+from hybridtable.compensators.registry import (
+    compensator_factory,
+    compensator_names,
+    make_compensator,
+    register_compensator,
+)
+from hybridtable.compensators.smith import SmithParams, SmithPredictor, make_smith
+from hybridtable.loop.builder import build_hybrid_loop
+from hybridtable.loop.simulation import run_loop, simulate
+from hybridtable.studies.paper import table1_params
+from hybridtable.systems.noise import (
+    MeasurementNoise,
+    MeasurementNoiseParams,
+    noise_sample,
+    with_measurement_noise,
+)
 
 PLUGINS = ("sdmdc-online", "polynomial", "smith", "smith-online")
 
@@ -84,7 +84,7 @@ def test_registry_holds_the_paper_compensators_then_the_plugins():
 
 
 def test_a_registered_factory_builds_the_loop_compensator():
-    from hybridtable import compensator as registry
+    from hybridtable.compensators import registry
 
     calls = []
 

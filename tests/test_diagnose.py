@@ -19,23 +19,14 @@ from _rigsim import NOMINAL
 from pydrake.systems.primitives import MatrixGain
 
 from hybridtable.cli import main
-from hybridtable.diagnose import (
-    NoiseModel,
-    diagnose,
-    estimate_noise,
-    fit_effect,
-    prepare_runs,
-    whiten,
-)
-from hybridtable.effect_systems import chain_output
-from hybridtable.effects import (
-    Effect,
-    EffectParameter,
-    Signature,
-    register_effect,
-    unregister_effect,
-)
-from hybridtable.measurement import Run, RunInfo
+from hybridtable.diagnosis.diagnose import diagnose
+from hybridtable.diagnosis.effects import Effect, EffectParameter, Signature
+from hybridtable.diagnosis.evaluate import prepare_runs
+from hybridtable.diagnosis.fit import fit_effect
+from hybridtable.diagnosis.registry import register_effect, unregister_effect
+from hybridtable.measurement.noise import NoiseModel, estimate_noise, whiten
+from hybridtable.measurement.run_format import Run, RunInfo
+from hybridtable.systems.blocks import chain_output
 
 VELOCITIES = (0.06, 0.1)
 COMPENSATORS = ("SDMDC", "none")
@@ -195,7 +186,7 @@ def test_a_registered_user_effect_is_diagnosed(tmp_path):
 def test_examples_of_the_nominal_rig_say_none():
     from pathlib import Path
 
-    from hybridtable.measurement import read_runs
+    from hybridtable.measurement.run_format import read_runs
 
     folder = Path("/work/shared/examples/nominal")
     if not folder.is_dir():
@@ -295,7 +286,7 @@ def test_compare_add_shows_the_error_fall(tmp_path, capsys):
 
 
 def test_runs_without_contact_are_refused(tmp_path):
-    from hybridtable.measurement import MeasurementError
+    from hybridtable.errors import MeasurementError
 
     runs = _runs(tmp_path, "none", seed=1)
     r = runs[0]

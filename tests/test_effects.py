@@ -13,25 +13,9 @@ from _rigsim import NOMINAL, write_run
 from pydrake.autodiffutils import AutoDiffXd, InitializeAutoDiff
 from pydrake.systems.primitives import MatrixGain
 
-from hybridtable._validation import ParameterError
-from hybridtable.contact import ContactParams, UnilateralSpringContact
-from hybridtable.effect_systems import (
-    ContactLaw,
-    ContactLawParams,
-    MeasurementChainParams,
-    StructuralModeParams,
-    chain_output,
-    contact_law_force,
-    first_order_hold_filter,
-    resonant_table_matrices,
-)
-from hybridtable.effects import (
+from hybridtable.diagnosis.effects import Effect, EffectParameter, ModelSpec, RigScale, Signature
+from hybridtable.diagnosis.registry import (
     EFFECTS,
-    Effect,
-    EffectParameter,
-    ModelSpec,
-    RigScale,
-    Signature,
     build_spec,
     effect_names,
     get_effect,
@@ -39,10 +23,16 @@ from hybridtable.effects import (
     register_effect,
     unregister_effect,
 )
-from hybridtable.measurement import read_run
-from hybridtable.replay import replay
-from hybridtable.rig import RigPhysics
-from hybridtable.table import TableParams
+from hybridtable.errors import ParameterError
+from hybridtable.measurement.replay import replay
+from hybridtable.measurement.rig import RigPhysics
+from hybridtable.measurement.run_format import read_run
+from hybridtable.systems.blocks import chain_output
+from hybridtable.systems.contact import ContactParams, UnilateralSpringContact
+from hybridtable.systems.contact_law import ContactLaw, ContactLawParams, contact_law_force
+from hybridtable.systems.measurement_chain import MeasurementChainParams, first_order_hold_filter
+from hybridtable.systems.resonant_table import StructuralModeParams, resonant_table_matrices
+from hybridtable.systems.table import TableParams
 
 K = 60000.0
 
@@ -233,7 +223,7 @@ def test_effect_model_reproduces_a_rig_with_the_effect(tmp_path, effect):
 
 
 def test_mass_error_changes_only_the_closed_loop(tmp_path):
-    from hybridtable.rig import simulate_rig
+    from hybridtable.measurement.rig import simulate_rig
 
     run_info = dict(NOMINAL, run_id="hidden-mass")
     cols = simulate_hidden(run_info, "mass_error", noise_f_n=0.0, noise_p_m=0.0)

@@ -10,7 +10,7 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import LogVectorOutput
 
 from hybridtable import ParameterError
-from hybridtable.identification import (
+from hybridtable.compensators.identification import (
     ContactIdentifier,
     ContactIdentifierLeaf,
     IdentifierParams,
@@ -18,8 +18,8 @@ from hybridtable.identification import (
     forgetting_factor,
     rls_step,
 )
-from hybridtable.loop import add_hybrid_loop
-from hybridtable.paper import table1_params
+from hybridtable.loop.builder import add_hybrid_loop
+from hybridtable.studies.paper import table1_params
 
 K, C, M, V0, H = 2e4, 300.0, 50.0, 0.1, 1e-3
 W = math.sqrt(K / M)

@@ -1,5 +1,5 @@
-"""Linear models of the in-contact loop from Drake's Linearize (analysis.linearize,
-analysis.sampled, analysis.interconnect)."""
+"""Linear models of the in-contact loop from Drake's Linearize (hybridtable.analysis.linearize,
+hybridtable.analysis.sampled, hybridtable.analysis.interconnect)."""
 
 from __future__ import annotations
 
@@ -10,22 +10,22 @@ import numpy as np
 import pytest
 from pydrake.systems.framework import DiagramBuilder
 
-from analysis.interconnect import Interconnection, InterconnectionError, StateSpaceBlock
-from analysis.linearize import (
+from hybridtable.analysis.interconnect import Interconnection, StateSpaceBlock
+from hybridtable.analysis.linearize import (
     ContactLoopLinearizer,
-    LinearizationError,
     linearize_contact_loop,
     linearize_system,
 )
-from analysis.sampled import SampledLoopLinearizer
-from hybridtable.compensator import Compensator
-from hybridtable.contact import UnilateralSpringContact
-from hybridtable.loop import build_hybrid_loop
-from hybridtable.paper import paper_params
-from hybridtable.sensor import ForceSensorDelay, SensorParams
-from hybridtable.simulation import run_loop
-from hybridtable.spacecraft import Spacecraft, SpacecraftParams
-from hybridtable.table import SecondOrderTable, TableParams, table_matrices
+from hybridtable.analysis.sampled import SampledLoopLinearizer
+from hybridtable.compensators.paper import Compensator
+from hybridtable.errors import InterconnectionError, LinearizationError
+from hybridtable.loop.builder import build_hybrid_loop
+from hybridtable.loop.simulation import run_loop
+from hybridtable.studies.paper import paper_params
+from hybridtable.systems.contact import UnilateralSpringContact
+from hybridtable.systems.sensor import ForceSensorDelay, SensorParams
+from hybridtable.systems.spacecraft import Spacecraft, SpacecraftParams
+from hybridtable.systems.table import SecondOrderTable, TableParams, table_matrices
 
 COMPENSATORS = ("none", "SDC", "MDC", "SDMDC")
 
@@ -221,7 +221,7 @@ def test_interconnection_of_two_integrators_is_a_double_integrator():
 def test_expm_small_is_the_matrix_exponential():
     from scipy.linalg import expm
 
-    from analysis.sampled import expm_small
+    from hybridtable.analysis.sampled import expm_small
 
     rng = np.random.default_rng(3)
     w = 2 * math.pi * 200.0  # a stiff table over a 1 ms period, as in the ZOH

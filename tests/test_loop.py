@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from hybridtable import HybridLoopParams, ParameterError, simulate
-from hybridtable.paper import cor_estimate, load_tables, paper_params, table1_params
+from hybridtable.studies.paper import cor_estimate, load_tables, paper_params, table1_params
 
 
 def test_ideal_loop_conserves_energy():

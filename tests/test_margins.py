@@ -1,4 +1,4 @@
-"""Stability figures of the linear loop (analysis.margins, analysis.exact_delay):
+"""Stability figures of the linear loop (hybridtable.analysis.margins, hybridtable.analysis.exact_delay):
 closed forms of the delayed contact, the paper's Table 1, the sampled loop."""
 
 from __future__ import annotations
@@ -8,9 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from analysis.exact_delay import exact_contact_root, exact_growth, exact_margins
-from analysis.linearize import ContactLoopLinearizer
-from analysis.margins import (
+from hybridtable.analysis.exact_delay import exact_contact_root, exact_growth, exact_margins
+from hybridtable.analysis.linearize import ContactLoopLinearizer
+from hybridtable.analysis.margins import (
     critical_sensor_delay,
     critical_table_frequency,
     growth_of,
@@ -18,9 +18,9 @@ from analysis.margins import (
     loop_margins,
     phase_margin_at_contact,
 )
-from analysis.sampled import SampledLoopLinearizer
-from hybridtable.paper import load_tables, paper_params, table1_params
-from hybridtable.simulation import simulate
+from hybridtable.analysis.sampled import SampledLoopLinearizer
+from hybridtable.loop.simulation import simulate
+from hybridtable.studies.paper import load_tables, paper_params, table1_params
 
 COMPENSATORS = ("none", "SDC", "MDC", "SDMDC")
 

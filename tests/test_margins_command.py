@@ -7,8 +7,9 @@ import json
 import numpy as np
 import pytest
 
-from hybridtable.cli import CommandError, main
+from hybridtable.cli import main
 from hybridtable.commands.margins import default_delays, parse_list
+from hybridtable.errors import CommandError
 
 
 def test_parse_list():

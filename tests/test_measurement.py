@@ -11,13 +11,8 @@ import numpy as np
 import pytest
 
 from hybridtable.cli import main
-from hybridtable.measurement import (
-    RUN_COLUMNS,
-    MeasurementError,
-    parse_column_map,
-    read_run,
-    read_runs,
-)
+from hybridtable.errors import MeasurementError
+from hybridtable.measurement.run_format import RUN_COLUMNS, parse_column_map, read_run, read_runs
 
 EXAMPLES = Path("/work/shared/examples/nominal")
 if not EXAMPLES.is_dir():  # the repository's copy of the shared folder

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from hybridtable.metrics import contact_intervals, contact_metrics
+from hybridtable.loop.metrics import contact_intervals, contact_metrics
 
 
 def test_metrics_of_an_analytic_bounce():

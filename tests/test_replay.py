@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 from _rigsim import NOMINAL, damped_spring, simulate_record, write_run
 
-from hybridtable._validation import ParameterError
-from hybridtable.contact import ContactParams, UnilateralSpringContact
-from hybridtable.measurement import RunInfo, read_run
-from hybridtable.replay import replay, replay_command
-from hybridtable.rig import RigPhysics, rig_params, simulate_rig
-from hybridtable.table import TableParams, table_step_response
+from hybridtable.errors import ParameterError
+from hybridtable.measurement.replay import replay, replay_command
+from hybridtable.measurement.rig import RigPhysics, rig_params, simulate_rig
+from hybridtable.measurement.run_format import RunInfo, read_run
+from hybridtable.systems.contact import ContactParams, UnilateralSpringContact
+from hybridtable.systems.table import TableParams, table_step_response
 
 #: A rig unlike the examples: 500 Hz, 3-tick delay, slower and less damped table, MDC.
 OTHER_RIG = dict(

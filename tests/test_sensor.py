@@ -9,7 +9,7 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import LogVectorOutput, Sine, ZeroOrderHold
 
 from hybridtable import ForceSensorDelay, ParameterError, SensorParams
-from hybridtable.sensor import continuous_delay_period, delay_samples, pade_state_space
+from hybridtable.systems.sensor import continuous_delay_period, delay_samples, pade_state_space
 
 W = 2 * math.pi * 3.0  # test signal: sin(W t) starting at t = 0
 

@@ -10,7 +10,7 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource
 
-from hybridtable._validation import ParameterError
+from hybridtable.errors import ParameterError
 from hybridtable.stewart.backend import StewartTable
 from hybridtable.stewart.plant import (
     StewartParams,

@@ -10,14 +10,9 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource
 
-from hybridtable._validation import ParameterError
+from hybridtable.errors import ParameterError, WorkspaceError
 from hybridtable.stewart.backend import StewartTable
-from hybridtable.stewart.geometry import (
-    StewartGeometry,
-    WorkspaceError,
-    rotation_from_rpy,
-    rpy_from_rotation,
-)
+from hybridtable.stewart.geometry import StewartGeometry, rotation_from_rpy, rpy_from_rotation
 from hybridtable.stewart.plant import StewartParams, add_stewart_plant
 
 GEOMETRIES = {

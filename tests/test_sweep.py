@@ -1,5 +1,5 @@
 """Margins over a (delay, table frequency) grid and validation against the
-simulation (analysis.sweep, analysis.validation)."""
+simulation (hybridtable.analysis.sweep, hybridtable.analysis.validation)."""
 
 from __future__ import annotations
 
@@ -8,13 +8,18 @@ import math
 import numpy as np
 import pytest
 
-from analysis.linearize import ContactLoopLinearizer
-from analysis.margins import loop_margins
-from analysis.sweep import sweep_margins
-from analysis.validation import linear_contact_cor, onset_state, validate_point, validation_indices
-from hybridtable._validation import ParameterError
-from hybridtable.paper import paper_params
-from hybridtable.simulation import simulate
+from hybridtable.analysis.linearize import ContactLoopLinearizer
+from hybridtable.analysis.margins import loop_margins
+from hybridtable.analysis.sweep import sweep_margins
+from hybridtable.analysis.validation import (
+    linear_contact_cor,
+    onset_state,
+    validate_point,
+    validation_indices,
+)
+from hybridtable.errors import ParameterError
+from hybridtable.loop.simulation import simulate
+from hybridtable.studies.paper import paper_params
 
 
 def _damped(p, zeta):
@@ -93,8 +98,8 @@ def test_sampled_linear_transient_matches_gate_free_sampled_run():
     # No compensation and no delay: the sampled loop's only nonlinearity is the
     # unilateral contact, which the run from the first penetrating tick to the
     # return of p_act to zero reproduces.
-    from analysis.sampled import SampledLoopLinearizer
-    from analysis.validation import linear_contact_cor_sampled
+    from hybridtable.analysis.sampled import SampledLoopLinearizer
+    from hybridtable.analysis.validation import linear_contact_cor_sampled
 
     for table_hz in (math.inf, 25.0):
         p = paper_params(sensor_delay_s=0.0, table_response_hz=table_hz, sample_rate_hz=1000.0)

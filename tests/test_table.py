@@ -9,7 +9,7 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource, LogVectorOutput
 
 from hybridtable import ParameterError, SecondOrderTable, TableParams
-from hybridtable.table import table_step_response
+from hybridtable.systems.table import table_step_response
 
 
 def _simulate(table, command, t_end, x0=(0.0, 0.0)):

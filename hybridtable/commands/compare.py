@@ -3,16 +3,13 @@
 from __future__ import annotations
 
 import argparse
-import os
 import sys
-import tempfile
-from pathlib import Path
 
-__all__ = ["register", "run", "check_outputs"]
+__all__ = ["register", "run"]
 
 
 def register(sub) -> None:
-    from hybridtable.cli import parse_float
+    from hybridtable.commands._common import parse_float
 
     p = sub.add_parser(
         "compare",
@@ -52,75 +49,11 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def _inputs(runs) -> list[Path]:
-    return [p.resolve() for r in runs for p in (r.csv_path, r.json_path) if p is not None]
-
-
-def check_outputs(
-    json_path: str | None,
-    report_dir: str | None,
-    inputs: list[Path],
-    command: str = "compare",
-    report_marker: str | None = None,
-) -> None:
-    """Refuse outputs that would write over an input or a user's folder.
-
-    ``report_marker`` is the file by which ``command``'s reports mark their
-    folders (default: the compare report's).
-
-    Raises
-    ------
-    CommandError
-        If ``json_path`` is an input file or a folder, or ``report_dir`` is a
-        file, holds an input, or is a non-empty folder not written by an
-        earlier ``command --report``.
-    """
-    from hybridtable.cli import CommandError
-    from hybridtable.compare_report import REPORT_MARKER
-
-    marker = report_marker or REPORT_MARKER
-
-    if json_path and json_path != "-":
-        target = Path(json_path).resolve()
-        if target in inputs:
-            raise CommandError(f"--json {json_path} is one of the input files; not writing over it")
-        if target.is_dir():
-            raise CommandError(f"--json {json_path} is a folder")
-    if report_dir:
-        d = Path(report_dir).resolve()
-        if d.exists() and not d.is_dir():
-            raise CommandError(f"--report {report_dir} is a file, not a folder")
-        if any(d == p.parent or d in p.parents for p in inputs):
-            raise CommandError(f"--report {report_dir} holds input runs; choose another folder")
-        if d.is_dir() and any(d.iterdir()) and not (d / marker).is_file():
-            raise CommandError(
-                f"--report {report_dir} is not empty and not an earlier {command} report; "
-                "choose a new or empty folder"
-            )
-
-
-def _write_json_atomic(path: str, data) -> None:
-    from hybridtable.cli import write_json
-
-    if path == "-":
-        write_json(path, data)
-        return
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent)
-    os.close(fd)
-    try:
-        write_json(tmp, data)
-        os.replace(tmp, target)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-
-
 def run(args: argparse.Namespace) -> int:
-    from hybridtable.compare_report import format_table, write_report
-    from hybridtable.comparison import check_comparable, compare_run
-    from hybridtable.measurement import parse_column_map, read_runs
+    from hybridtable.commands._common import check_outputs, input_paths, write_json_atomic
+    from hybridtable.measurement.comparison import check_comparable, compare_run
+    from hybridtable.measurement.run_format import parse_column_map, read_runs
+    from hybridtable.reports.compare import REPORT_MARKER, format_table, write_report
 
     if args.max_lag_s is not None:
         from hybridtable._validation import check_positive
@@ -130,9 +63,9 @@ def run(args: argparse.Namespace) -> int:
     runs = read_runs(args.runs, column_map)
     for r in runs:  # every defect before any work
         check_comparable(r)
-    check_outputs(args.json, args.report, _inputs(runs))
+    check_outputs(args.json, args.report, input_paths(runs), "compare", REPORT_MARKER)
     if args.add:  # a malformed --add before any work
-        from hybridtable.effects import parse_effect_spec
+        from hybridtable.diagnosis.registry import parse_effect_spec
 
         parse_effect_spec(args.add)
     quiet = args.json == "-"
@@ -144,9 +77,9 @@ def run(args: argparse.Namespace) -> int:
     comparisons = [compare_run(r, max_lag_s=args.max_lag_s) for r in iterator]
     document = {"runs": [c.to_json() for c in comparisons]}
     if args.add:
-        from hybridtable.commands.diagnose import compare_with_effect
-
-        comparisons, added = compare_with_effect(runs, comparisons, args.add, args.max_lag_s, quiet)
+        comparisons, added = _compare_with_effect(
+            runs, comparisons, args.add, args.max_lag_s, quiet
+        )
         document = {
             "runs": [c.to_json() for c in comparisons],
             "nominal_runs": document["runs"],
@@ -155,9 +88,34 @@ def run(args: argparse.Namespace) -> int:
     elif not quiet:
         print(format_table(comparisons))
     if args.json:
-        _write_json_atomic(args.json, document)
+        write_json_atomic(args.json, document)
     if args.report:
         files = write_report(comparisons, args.report)
         if not quiet:
             print(f"wrote {files[0]} and {len(files) - 1} figures")
     return 0
+
+
+def _compare_with_effect(runs, nominal, text: str, max_lag_s, quiet: bool):
+    """``compare --add``: the comparisons with the effect of ``text`` added
+    (parameters not given fitted), printed beside the nominal ones."""
+    from hybridtable.diagnosis.add_effect import compare_with_effect
+    from hybridtable.reports.compare import format_error_fall, format_table
+    from hybridtable.reports.diagnose import format_parameters
+
+    def notify(message: str) -> None:
+        if not quiet:
+            print(message, file=sys.stderr)
+
+    comparisons, added = compare_with_effect(runs, text, max_lag_s, notify)
+    if not quiet:
+        fitted = added["fitted"]
+        label = f"{added['effect']}: {format_parameters(added['effect'], added['parameters'])}"
+        print("nominal model:")
+        print(format_table(nominal))
+        print()
+        print(f"with {label}" + (f" (fitted: {', '.join(fitted)})" if fitted else ""))
+        print(format_table(comparisons))
+        print()
+        print(format_error_fall(nominal, comparisons, added["effect"]))
+    return comparisons, added

@@ -21,9 +21,9 @@ def _ratios(text: str) -> tuple[float, ...]:
 
 
 def register(sub) -> None:
-    from hybridtable.cli import parse_float
-    from hybridtable.compensator import compensator_names
-    from hybridtable.plugins.evaluation import SCENARIOS
+    from hybridtable.commands._common import parse_float
+    from hybridtable.compensators.registry import compensator_names
+    from hybridtable.studies.compensator_sweep import SCENARIOS
 
     p = sub.add_parser(
         "compensators",
@@ -98,15 +98,15 @@ def run(args: argparse.Namespace) -> int:
     import json
     from pathlib import Path
 
-    from hybridtable.cli import CommandError, write_json
-    from hybridtable.plugins.evaluation import (
+    from hybridtable.commands._common import write_json
+    from hybridtable.errors import CommandError
+    from hybridtable.reports.compensators import format_summary, write_report
+    from hybridtable.studies.compensator_sweep import (
         SCENARIOS,
         SweepSettings,
         default_jobs,
-        format_summary,
         run_sweep,
         sweep_points,
-        write_report,
     )
 
     tables = None

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-__all__ = ["register", "run", "diagnosis_json", "compare_with_effect", "format_error_fall"]
+__all__ = ["register", "run", "diagnosis_json"]
 
 
 def register(sub) -> None:
@@ -51,19 +51,19 @@ def register(sub) -> None:
 
 
 def diagnosis_json(d) -> dict:
-    """The ``--json`` document of a :class:`~hybridtable.diagnose.Diagnosis`."""
+    """The ``--json`` document of a :class:`~hybridtable.diagnosis.candidates.Diagnosis`."""
     out = d.to_json()
     out["runs_read"] = [str(x.run.csv_path) if x.run.csv_path else x.run_id for x in d.data]
     return out
 
 
 def run(args: argparse.Namespace) -> int:
-    from hybridtable.cli import CommandError
-    from hybridtable.commands.compare import _inputs, _write_json_atomic, check_outputs
-    from hybridtable.diagnose import diagnose
-    from hybridtable.diagnose_report import REPORT_MARKER, format_ranking, write_report
-    from hybridtable.effects import get_effect
-    from hybridtable.measurement import parse_column_map, read_runs
+    from hybridtable.commands._common import check_outputs, input_paths, write_json_atomic
+    from hybridtable.diagnosis.diagnose import diagnose
+    from hybridtable.diagnosis.registry import get_effect
+    from hybridtable.errors import CommandError
+    from hybridtable.measurement.run_format import parse_column_map, read_runs
+    from hybridtable.reports.diagnose import REPORT_MARKER, format_ranking, write_report
 
     effects = None
     if args.effects:
@@ -77,7 +77,7 @@ def run(args: argparse.Namespace) -> int:
     if args.workers is not None and args.workers < 1:
         raise CommandError(f"--workers must be >= 1 (got {args.workers})")
     runs = read_runs(args.runs, parse_column_map(args.column_map))
-    inputs = _inputs(runs)
+    inputs = input_paths(runs)
     check_outputs(args.json, args.report, inputs, "diagnose", REPORT_MARKER)
     quiet = args.json == "-"
     if not quiet and not args.no_progress:
@@ -93,70 +93,9 @@ def run(args: argparse.Namespace) -> int:
         print(format_ranking(d))
         print(f"({d.simulations} model runs, {d.wall_time_s:.1f} s)")
     if args.json:
-        _write_json_atomic(args.json, diagnosis_json(d))
+        write_json_atomic(args.json, diagnosis_json(d))
     if args.report:
         files = write_report(d, args.report)
         if not quiet:
             print(f"wrote {files[0]} and {len(files) - 1} figures")
     return 0
-
-
-def format_error_fall(nominal, with_effect, label: str) -> str:
-    """Per run: replay errors over the noise and closed-loop errors, nominal
-    model -> model with the effect."""
-    head = (
-        f"{'run':<16} {'f_mea rms/noise':>17} {'p_act rms/noise':>17} "
-        f"{'v_des rms [mm/s]':>19} {'CoR error':>21}"
-    )
-    lines = [f"error fall with {label}:", head, "-" * len(head)]
-    for a, b in zip(nominal, with_effect, strict=True):
-        va = a.closed_loop_errors["v_des_m_per_s"].rms_error * 1e3
-        vb = b.closed_loop_errors["v_des_m_per_s"].rms_error * 1e3
-        lines.append(
-            f"{a.run_id[:16]:<16} {a.error_to_noise('f_mea_n'):7.3f} -> {b.error_to_noise('f_mea_n'):<6.3f} "
-            f"{a.error_to_noise('p_act_m'):7.3f} -> {b.error_to_noise('p_act_m'):<6.3f} "
-            f"{va:8.3g} -> {vb:<8.3g} "
-            f"{a.cor_model - a.cor_measured:+9.5f} -> {b.cor_model - b.cor_measured:<+9.5f}"
-        )
-    return "\n".join(lines)
-
-
-def compare_with_effect(runs, nominal, text: str, max_lag_s, quiet: bool):
-    """Compare ``runs`` with the model plus the effect of ``text``
-    (``EFFECT[:param=value,...]``; parameters not given are fitted).
-
-    Returns the comparisons with the effect and a description of the effect
-    (name, parameters, units, which were fitted).
-    """
-    from hybridtable.compare_report import format_table
-    from hybridtable.comparison import compare_run
-    from hybridtable.diagnose import fit_effect
-    from hybridtable.diagnose_report import format_parameters
-    from hybridtable.effects import RigScale, build_spec, parse_effect_spec
-
-    effect, given = parse_effect_spec(text)
-    scale = RigScale.from_runs(runs)
-    values = effect.check_values(given, scale)
-    fitted = [p for p in effect.parameter_names if p not in given]
-    if fitted:
-        if not quiet:
-            print(f"fitting {', '.join(fitted)} of {effect.name} to the runs...", file=sys.stderr)
-        values = fit_effect(runs, effect.name, given)
-    spec = build_spec([(effect, values)], scale)
-    label = f"{effect.name}: {format_parameters(effect.name, values)}"
-    physics = spec.physics(name=effect.name)
-    comparisons = [compare_run(spec.closed_loop_run(r), physics, max_lag_s=max_lag_s) for r in runs]
-    if not quiet:
-        print("nominal model:")
-        print(format_table(nominal))
-        print()
-        print(f"with {label}" + (f" (fitted: {', '.join(fitted)})" if fitted else ""))
-        print(format_table(comparisons))
-        print()
-        print(format_error_fall(nominal, comparisons, effect.name))
-    return comparisons, {
-        "effect": effect.name,
-        "parameters": dict(values),
-        "units": {p.name: p.unit for p in effect.parameters},
-        "fitted": fitted,
-    }

@@ -24,7 +24,7 @@ def parse_list(text: str, name: str) -> np.ndarray:
     CommandError
         On malformed input (one line, names the option).
     """
-    from hybridtable.cli import CommandError
+    from hybridtable.errors import CommandError
 
     text = text.strip()
     try:
@@ -60,7 +60,7 @@ def default_delays(sample_rate_hz: float | None) -> np.ndarray:
 
 
 def register(sub) -> None:
-    from hybridtable.cli import parse_float
+    from hybridtable.commands._common import parse_float
 
     p = sub.add_parser(
         "margins",
@@ -133,8 +133,8 @@ def register(sub) -> None:
 
 
 def _base_params(args: argparse.Namespace):
-    from hybridtable.cli import CommandError
-    from hybridtable.paper import paper_params
+    from hybridtable.errors import CommandError
+    from hybridtable.studies.paper import paper_params
 
     base = paper_params(
         sensor_delay_s=0.0,  # the grid sets it
@@ -160,12 +160,18 @@ def _base_params(args: argparse.Namespace):
 
 
 def run(args: argparse.Namespace) -> int:
-    from analysis.report import REPORT_FILES, operating_point, table1_point, write_report
-    from analysis.sweep import sweep_margins
-    from analysis.validation import validate_sweep
-    from hybridtable.cli import CommandError, write_json
-    from hybridtable.compensator import COMPENSATORS
-    from hybridtable.sensor import delay_samples
+    from hybridtable.analysis.sweep import sweep_margins
+    from hybridtable.analysis.validation import validate_sweep
+    from hybridtable.commands._common import write_json
+    from hybridtable.compensators.paper import COMPENSATORS
+    from hybridtable.errors import CommandError
+    from hybridtable.reports.margins import (
+        REPORT_FILES,
+        operating_point,
+        table1_point,
+        write_report,
+    )
+    from hybridtable.systems.sensor import delay_samples
 
     comps = [c.strip() for c in args.compensator.split(",") if c.strip()]
     for c in comps:

@@ -9,8 +9,8 @@ __all__ = ["register", "run"]
 
 
 def register(sub) -> None:
-    from hybridtable.cli import parse_float
-    from hybridtable.compensator import CONTACT_GATES
+    from hybridtable.commands._common import parse_float
+    from hybridtable.compensators.paper import CONTACT_GATES
 
     p = sub.add_parser(
         "reproduce",
@@ -35,8 +35,9 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hybridtable.cli import CommandError, write_json
-    from hybridtable.reproduce import format_tables, reproduce
+    from hybridtable.commands._common import write_json
+    from hybridtable.errors import CommandError
+    from hybridtable.reports.reproduce import format_tables, reproduce
 
     if args.tables is not None:
         from pathlib import Path

@@ -11,8 +11,8 @@ __all__ = ["register", "add_loop_arguments", "params_from_args", "run"]
 
 def add_loop_arguments(parser: argparse.ArgumentParser) -> None:
     """Options shared by the commands that set up one loop (defaults: Table 1)."""
-    from hybridtable.cli import parse_float
-    from hybridtable.compensator import compensator_names
+    from hybridtable.commands._common import parse_float
+    from hybridtable.compensators.registry import compensator_names
 
     g = parser.add_argument_group("loop parameters (defaults: the paper's Table 1 point)")
     g.add_argument("--compensator", default="none", help=f"one of {', '.join(compensator_names())}")
@@ -57,7 +57,7 @@ def add_loop_arguments(parser: argparse.ArgumentParser) -> None:
 
 def params_from_args(args: argparse.Namespace):
     """HybridLoopParams from the options of :func:`add_loop_arguments`."""
-    from hybridtable.paper import paper_params
+    from hybridtable.studies.paper import paper_params
 
     return paper_params(
         compensator=args.compensator,
@@ -103,19 +103,19 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hybridtable.cli import write_json
-    from hybridtable.simulation import simulate
+    from hybridtable.commands._common import write_json
+    from hybridtable.loop.simulation import simulate
 
     params = params_from_args(args)
     t0 = time.perf_counter()
     extra = {}
     if args.table == "stewart":
-        from hybridtable.stewart.simulation import simulate_stewart
+        from hybridtable.stewart.run import simulate_stewart
 
         run_ = simulate_stewart(params, html=args.html)
         result, params, extra = run_.result, run_.params, run_.summary()
     elif args.html:
-        from hybridtable.cli import CommandError
+        from hybridtable.errors import CommandError
 
         raise CommandError("--html needs --table stewart")
     else:
@@ -148,7 +148,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         write_json(args.json, out)
     if args.plot:
-        from hybridtable.plotting import plot_run
+        from hybridtable.reports.figures import plot_run
 
         plot_run(result, args.plot)
     return 0

@@ -6,7 +6,8 @@
 - :mod:`~hybridtable.stewart.identify`: second-order identification and tuning.
 """
 
-from hybridtable.stewart.geometry import StewartGeometry, WorkspaceError
+from hybridtable.errors import WorkspaceError
+from hybridtable.stewart.geometry import StewartGeometry
 from hybridtable.stewart.plant import StewartParams
 
 __all__ = ["StewartGeometry", "StewartParams", "WorkspaceError"]

@@ -1,6 +1,6 @@
 """The Stewart platform as a drop-in table + contact back-end of the hybrid loop.
 
-The loop's back-end ports (see :mod:`hybridtable.loop`) are kept exactly:
+The loop's back-end ports (see :mod:`hybridtable.loop.builder`) are kept exactly:
 
 - :class:`StewartTable` (passed as ``table=``): input ``commanded_state``
   (2: p_des m, v_des m/s along the docking axis), output ``motion`` (3:
@@ -35,8 +35,9 @@ from pydrake.systems.primitives import (
     ZeroOrderHold,
 )
 
-from hybridtable.loop import HybridLoop, HybridLoopParams, add_hybrid_loop
-from hybridtable.stewart.geometry import WorkspaceError
+from hybridtable.errors import WorkspaceError
+from hybridtable.loop.builder import HybridLoop, add_hybrid_loop
+from hybridtable.loop.params import HybridLoopParams
 from hybridtable.stewart.plant import (
     StewartParams,
     StewartPlant,
@@ -88,7 +89,7 @@ class LegServo(LeafSystem):
     Output ``leg_forces`` (6, N)
         Actuation of legs 0..5.
 
-    Raises :class:`~hybridtable.stewart.geometry.WorkspaceError` during a
+    Raises :class:`~hybridtable.errors.WorkspaceError` during a
     simulation when ``p_des`` leaves the docking axis' workspace.
     """
 
@@ -421,7 +422,7 @@ def add_stewart_loop(
     the same CoR for an impact of the spacecraft at the approach velocity.
     ``params.table_response_hz`` is not used: the table's response is the
     servo's (see :func:`hybridtable.stewart.identify.tune_leg_gains`).
-    Keyword arguments go to :func:`~hybridtable.loop.add_hybrid_loop`.
+    Keyword arguments go to :func:`~hybridtable.loop.builder.add_hybrid_loop`.
     """
     stewart = stewart_params_for_loop(params, stewart)
     dissipation = hunt_crossley_dissipation(

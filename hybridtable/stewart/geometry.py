@@ -22,12 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hybridtable._validation import (
-    ParameterError,
-    check_finite,
-    check_nonnegative,
-    check_positive,
-)
+from hybridtable._validation import check_finite, check_nonnegative, check_positive
+from hybridtable.errors import ParameterError, WorkspaceError
 
 __all__ = [
     "WorkspaceError",
@@ -37,10 +33,6 @@ __all__ = [
 ]
 
 NUM_LEGS = 6
-
-
-class WorkspaceError(ParameterError):
-    """A commanded pose leaves the platform's workspace or a leg's stroke."""
 
 
 def rotation_from_rpy(rpy: np.ndarray) -> np.ndarray:

@@ -25,10 +25,11 @@ from scipy.linalg import expm
 from scipy.optimize import least_squares
 from scipy.signal import lfilter
 
-from hybridtable._validation import ParameterError, check_nonnegative, check_positive
+from hybridtable._validation import check_nonnegative, check_positive
+from hybridtable.errors import ParameterError
 from hybridtable.stewart.backend import StewartTable
 from hybridtable.stewart.plant import StewartParams, heave_servo_gains
-from hybridtable.table import TableParams
+from hybridtable.systems.table import TableParams
 
 __all__ = [
     "TableResponse",
@@ -66,7 +67,7 @@ class TableResponse:
     excitation: str
 
     def table_params(self) -> TableParams:
-        """The identified model as :class:`~hybridtable.table.TableParams`."""
+        """The identified model as :class:`~hybridtable.systems.table.TableParams`."""
         return TableParams(self.response_frequency_hz, self.damping_ratio)
 
     def as_dict(self) -> dict[str, float | str]:

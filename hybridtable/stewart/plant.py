@@ -56,12 +56,8 @@ from pydrake.multibody.tree import (
 )
 from pydrake.systems.framework import DiagramBuilder
 
-from hybridtable._validation import (
-    ParameterError,
-    check_finite,
-    check_nonnegative,
-    check_positive,
-)
+from hybridtable._validation import check_finite, check_nonnegative, check_positive
+from hybridtable.errors import ParameterError
 from hybridtable.stewart.geometry import StewartGeometry
 
 __all__ = [

@@ -1,0 +1,113 @@
+"""Registry of compensators: name -> factory of a Drake system with the ports of
+:class:`~hybridtable.compensators.paper.Compensator`.
+
+The built-in compensators are imported here, statically (:data:`BUILTIN`); they
+never import this module. Other packages add theirs through the entry-point
+group ``hybridtable.compensators`` (loaded on first use), a script through
+:func:`register_compensator`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from importlib.metadata import entry_points
+from typing import Any
+
+from pydrake.systems.framework import System
+
+from hybridtable._validation import check_choice
+from hybridtable.compensators.online import make_online_sdmdc
+from hybridtable.compensators.paper import COMPENSATORS, paper_compensator
+from hybridtable.compensators.passivity import passivity_guarded
+from hybridtable.compensators.polynomial import make_polynomial
+from hybridtable.compensators.smith import make_smith, make_smith_online
+from hybridtable.errors import ParameterError
+
+__all__ = [
+    "CompensatorFactory",
+    "BUILTIN",
+    "ENTRY_POINT_GROUP",
+    "register_compensator",
+    "compensator_names",
+    "compensator_factory",
+    "make_compensator",
+]
+
+
+#: ``factory(params, derivative_period_s) -> System``: a compensator with the
+#: ports of :class:`Compensator` for a :class:`~hybridtable.loop.params.HybridLoopParams`;
+#: ``derivative_period_s`` is the period of the rig computer's discrete updates.
+CompensatorFactory = Callable[[Any, float | None], System]
+
+
+#: Entry-point group of compensators that other packages provide: each entry
+#: point names a compensator and loads its factory (a ``CompensatorFactory``).
+ENTRY_POINT_GROUP = "hybridtable.compensators"
+
+#: The built-in compensators: the paper's four, then the plug-ins, in the order
+#: ``--help`` lists them.
+BUILTIN: dict[str, CompensatorFactory] = {
+    **{name: paper_compensator for name in COMPENSATORS},
+    "sdmdc-online": make_online_sdmdc,
+    "polynomial": make_polynomial,
+    "smith": make_smith,
+    "smith-online": make_smith_online,
+}
+
+_REGISTRY: dict[str, CompensatorFactory] = dict(BUILTIN)
+_entry_points_loaded = False
+
+
+def _load_entry_points() -> None:
+    """Register the compensators of installed packages (entry-point group
+    :data:`ENTRY_POINT_GROUP`), once; a name already taken is refused."""
+    global _entry_points_loaded
+    if _entry_points_loaded:
+        return
+    _entry_points_loaded = True
+    for ep in entry_points(group=ENTRY_POINT_GROUP):
+        if ep.name in _REGISTRY:
+            raise ParameterError(
+                f"compensator {ep.name!r} of entry point {ep.value} is already registered"
+            )
+        _REGISTRY[ep.name] = ep.load()
+
+
+def register_compensator(name: str, factory: CompensatorFactory, replace: bool = False) -> None:
+    """Make ``name`` a choice of ``HybridLoopParams.compensator``.
+
+    Raises
+    ------
+    ValueError
+        If ``name`` is taken (unless ``replace``) or is one of the paper's
+        compensators.
+    """
+    if name in COMPENSATORS or (name in _REGISTRY and not replace):
+        raise ValueError(f"compensator {name!r} is already registered")
+    _REGISTRY[name] = factory
+
+
+def compensator_names() -> tuple[str, ...]:
+    """Names of the registered compensators (the paper's first)."""
+    _load_entry_points()
+    return tuple(_REGISTRY)
+
+
+def compensator_factory(name: str) -> CompensatorFactory:
+    """The factory registered under ``name`` (ParameterError if none)."""
+    check_choice("compensator", name, compensator_names())
+    return _REGISTRY[name]
+
+
+def make_compensator(
+    params: Any, derivative_period_s: float | None, system: System | None = None
+) -> System:
+    """The loop's compensator for ``params``: ``system`` if given, else the one
+    registered under ``params.compensator``; wrapped in the time-domain
+    passivity guard (:mod:`hybridtable.compensators.passivity`) when
+    ``params.passivity`` is true."""
+    if system is None:
+        system = compensator_factory(params.compensator)(params, derivative_period_s)
+    if getattr(params, "passivity", False):
+        system = passivity_guarded(system, params, derivative_period_s)
+    return system

@@ -1,0 +1,283 @@
+"""Candidates of a diagnosis: one fitted effect with its evidence, the ranking,
+look-alikes, and the :class:`Diagnosis` result.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from hybridtable.diagnosis.effects import Effect, ModelSpec, RigScale
+from hybridtable.diagnosis.evaluate import Evaluation, Evaluator, RunData
+from hybridtable.diagnosis.fit import (
+    Fit,
+    HeldOut,
+    _heldout,
+    _model_spec,
+    _starts_for,
+    delta_bic,
+    fit_effects,
+    pooled_error,
+)
+from hybridtable.diagnosis.registry import EFFECTS, get_effect
+from hybridtable.diagnosis.settings import (
+    BIC_THRESHOLD,
+    INDISTINGUISHABLE_BIC,
+    TIE_BIC,
+    Z_THRESHOLD,
+)
+
+__all__ = [
+    "Candidate",
+    "Diagnosis",
+]
+
+
+# -- candidates and the diagnosis ----------------------------------------------
+@dataclass
+class Candidate:
+    """One effect fitted on top of a base model in one round."""
+
+    effect: str
+    stage: str
+    parameters: dict[str, float]
+    model: list[str]
+    model_values: dict[str, dict[str, float]]
+    error_before: float
+    error_after: float
+    heldout_error_after: float
+    delta_bic: float
+    heldout_z: float
+    significant: bool
+    channel_error_before: dict[str, float]
+    channel_error_after: dict[str, float]
+    indistinguishable_from: list[str] = field(default_factory=list)
+    separation: dict | None = None
+    nfev: int = 0
+    notes: list[str] = field(default_factory=list)
+    fit: Fit | None = None
+
+    def to_json(self) -> dict:
+        return {
+            "effect": self.effect,
+            "stage": self.stage,
+            "parameters": dict(self.parameters),
+            "units": {p.name: p.unit for p in get_effect(self.effect).parameters},
+            "error_before": self.error_before,
+            "error_after": self.error_after,
+            "heldout_error_after": self.heldout_error_after,
+            "delta_bic": self.delta_bic,
+            "heldout_z": self.heldout_z,
+            "significant": self.significant,
+            "indistinguishable_from": list(self.indistinguishable_from),
+            "separating_run": self.separation,
+            "channel_error_before": dict(self.channel_error_before),
+            "channel_error_after": dict(self.channel_error_after),
+            "notes": list(self.notes),
+        }
+
+
+@dataclass
+class Diagnosis:
+    """Everything :func:`diagnose` found."""
+
+    data: list[RunData]
+    scale: RigScale
+    verdict: str
+    selected: list[str]
+    selected_values: dict[str, dict[str, float]]
+    rounds: list[list[Candidate]]
+    staircase: list[dict]
+    closed_loop_candidates: list[Candidate]
+    nominal: dict[int, Evaluation]
+    final: dict[int, Evaluation]
+    closed_loop: dict[str, dict]
+    simulations: int
+    wall_time_s: float = math.nan
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def ranking(self) -> list[Candidate]:
+        """The first round (every effect against the nominal model; the
+        closed-loop effects against the physics selected) by ``delta_bic``."""
+        first = self.rounds[0] if self.rounds else []
+        return list(first) + list(self.closed_loop_candidates)
+
+    def final_spec(self) -> ModelSpec:
+        return _model_spec(self.selected, self.selected_values, self.scale)
+
+    def to_json(self) -> dict:
+        return {
+            "verdict": self.verdict,
+            "selected": list(self.selected),
+            "parameters": {n: dict(v) for n, v in self.selected_values.items()},
+            "ranking": [c.to_json() for c in self.ranking],
+            "staircase": list(self.staircase),
+            "rounds": [[c.to_json() for c in r] for r in self.rounds],
+            "closed_loop": self.closed_loop,
+            "runs": [
+                {
+                    "run_id": d.run_id,
+                    "compensator": d.run.info.compensator,
+                    "initial_velocity_m_per_s": d.run.info.initial_velocity_m_per_s,
+                    "noise": {
+                        c: {"rms": m.sigma, "ar1": m.phi, "samples": m.samples}
+                        for c, m in d.noise.items()
+                    },
+                    "notes": list(d.notes),
+                }
+                for d in self.data
+            ],
+            "criteria": {
+                "bic_threshold": BIC_THRESHOLD,
+                "z_threshold": Z_THRESHOLD,
+                "indistinguishable_bic": INDISTINGUISHABLE_BIC,
+                "error_unit": "RMS residual / noise RMS, pooled over runs, f_mea and p_act",
+            },
+            "simulations": self.simulations,
+            "wall_time_s": self.wall_time_s,
+            "notes": list(self.notes),
+        }
+
+
+def _evaluate_candidate(
+    ev: Evaluator,
+    base_fit: Fit,
+    base_error: tuple[float, dict[str, float]],
+    effect: Effect,
+    residuals,
+    always_heldout: bool,
+    stage: str,
+) -> Candidate:
+    names = [*base_fit.effects, effect.name]
+    start = {**base_fit.values, effect.name: effect.start(ev.scale)}
+    starts = _starts_for(effect, ev.scale, residuals)
+    if base_fit.effects:
+        # The new effect alone on the fixed base first; jointly only if it helps.
+        fit = fit_effects(ev, names, start=start, fixed=base_fit.values, starts=starts, stage=stage)
+        fit.n_parameters += base_fit.n_parameters
+        if delta_bic(base_fit, fit) > 0.0:
+            joint = fit_effects(ev, names, start=fit.values, stage=stage)
+            if delta_bic(base_fit, joint) > delta_bic(base_fit, fit):
+                joint.nfev += fit.nfev
+                fit = joint
+    else:
+        fit = fit_effects(ev, names, start=start, starts=starts, stage=stage)
+    dbic = delta_bic(base_fit, fit)
+    if stage == "replay":
+        err_after, chan_after = pooled_error(ev.data, fit.evaluations)
+    else:
+        err_after, chan_after = _velocity_error(fit.evaluations)
+    notes = []
+    if fit.failed:
+        notes.append("a model run failed during the fit")
+    if dbic > BIC_THRESHOLD or always_heldout:
+        held = _heldout(ev, base_fit.evaluations, names, fit.values, stage)
+    else:
+        held = HeldOut(math.nan, math.nan, [])
+    if stage != "replay" and len(ev.data) > 1:
+        held.error = math.nan
+    if len(ev.data) < 2:
+        notes.append("one run: no leave-one-run-out check")
+    significant = bool(
+        dbic > BIC_THRESHOLD
+        and not fit.failed
+        and (len(ev.data) < 2 or (math.isfinite(held.z) and held.z > Z_THRESHOLD))
+    )
+    return Candidate(
+        effect=effect.name,
+        stage=stage,
+        parameters=dict(fit.values[effect.name]),
+        model=names,
+        model_values={n: dict(v) for n, v in fit.values.items()},
+        error_before=base_error[0],
+        error_after=err_after,
+        heldout_error_after=held.error,
+        delta_bic=dbic,
+        heldout_z=held.z,
+        significant=significant,
+        channel_error_before=base_error[1],
+        channel_error_after=chan_after,
+        nfev=fit.nfev,
+        notes=notes,
+        fit=fit,
+    )
+
+
+def _velocity_error(evaluations: Mapping[int, Evaluation]) -> tuple[float, dict[str, float]]:
+    sq = [float(np.mean(ev.residual["v_des_m_per_s"] ** 2)) for ev in evaluations.values()]
+    rms = math.sqrt(float(np.mean(sq)))
+    return rms, {"v_des_m_per_s": rms}
+
+
+def _mark_lookalikes(candidates: list[Candidate]) -> None:
+    sig = [c for c in candidates if c.significant]
+    for c in sig:
+        c.indistinguishable_from = [
+            o.effect
+            for o in sig
+            if o is not c and abs(o.delta_bic - c.delta_bic) < INDISTINGUISHABLE_BIC
+        ]
+
+
+def _cor_of(v_des: np.ndarray, f_comp: np.ndarray, v0: float) -> float:
+    on = np.flatnonzero(np.asarray(f_comp) != 0.0)
+    if on.size == 0:
+        return math.nan
+    v_in = float(v_des[on[0] - 1]) if on[0] > 0 else v0
+    return abs(float(v_des[-1])) / abs(v_in)
+
+
+def _closed_loop_summary(ev: Evaluator, spec: ModelSpec) -> dict:
+    """Closed-loop v_des RMS error and CoR error of a model (noise-free, as
+    ``hybridtable compare``), per run."""
+    rows = []
+    injected, ev.injected_noise = ev.injected_noise, [None] * len(ev.data)
+    for i, d in enumerate(ev.data):
+        e = ev.evaluate(spec, i, "closed_loop")
+        run = d.run
+        cor_meas = _cor_of(run.v_des_m_per_s, run.f_comp_n, run.info.initial_velocity_m_per_s)
+        if e.failed:
+            rows.append({"run_id": d.run_id, "v_des_rms_error_m_per_s": math.nan})
+            continue
+        cor_model = _cor_of(
+            e.prediction["v_des_m_per_s"],
+            e.prediction["f_comp_n"],
+            run.info.initial_velocity_m_per_s,
+        )
+        rows.append(
+            {
+                "run_id": d.run_id,
+                "v_des_rms_error_m_per_s": float(
+                    np.sqrt(np.mean(e.residual["v_des_m_per_s"] ** 2))
+                ),
+                "cor_measured": cor_meas,
+                "cor_model": cor_model,
+                "cor_error": cor_model - cor_meas,
+            }
+        )
+    ev.injected_noise = injected
+    return {"runs": rows}
+
+
+def _rank(cands: list[Candidate]) -> None:
+    """Sort by ``delta_bic``, ties (:data:`TIE_BIC`) broken by fewer
+    parameters, then registration order (a tie between, e.g., a stiffness
+    error and a series compliance, which predict the same, is numerical)."""
+    order = {n: i for i, n in enumerate(EFFECTS)}
+    cands.sort(key=lambda c: -c.delta_bic)
+    for _ in range(len(cands)):
+        swapped = False
+        for i in range(len(cands) - 1):
+            a, b = cands[i], cands[i + 1]
+            if a.delta_bic - b.delta_bic < TIE_BIC and (
+                len(b.parameters),
+                order.get(b.effect, len(order)),
+            ) < (len(a.parameters), order.get(a.effect, len(order))):
+                cands[i], cands[i + 1] = b, a
+                swapped = True
+        if not swapped:
+            break

@@ -1,0 +1,60 @@
+"""Every exception of hybridtable, in one dependency-free module (the ground floor).
+
+========================  ====================================================
+exception                 raised when
+========================  ====================================================
+``ParameterError``        a parameter is out of its physical range (names the
+                          field); the CLI prints one line and exits with 2
+``MeasurementError``      a recorded run is malformed (names file and line or
+                          key); exit 2
+``WorkspaceError``        a commanded pose leaves the Stewart platform's
+                          workspace or a leg's stroke; exit 2
+``CommandError``          any other bad command-line input; exit 2
+``SimulationError``       a simulation diverged or its contact never ended;
+                          exit 1
+``LinearizationError``    Drake could not linearize a system
+``InterconnectionError``  the wiring of linear blocks is inconsistent
+========================  ====================================================
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "ParameterError",
+    "MeasurementError",
+    "WorkspaceError",
+    "CommandError",
+    "SimulationError",
+    "LinearizationError",
+    "InterconnectionError",
+]
+
+
+class ParameterError(ValueError):
+    """A parameter given by the user is out of its physical range."""
+
+
+class MeasurementError(ParameterError):
+    """A recorded run is malformed; the message is one line naming the file
+    and the line or key (the CLI prints it and exits with code 2)."""
+
+
+class WorkspaceError(ParameterError):
+    """A commanded pose leaves the platform's workspace or a leg's stroke."""
+
+
+class CommandError(Exception):
+    """A user-facing error: printed as one line, exit code 2."""
+
+
+class SimulationError(RuntimeError):
+    """The simulation diverged or the contact never ended."""
+
+
+class LinearizationError(RuntimeError):
+    """Drake could not linearize a system, or a block's parameter structure
+    did not hold."""
+
+
+class InterconnectionError(ValueError):
+    """The wiring is inconsistent (unknown channel, unwired input, algebraic loop)."""

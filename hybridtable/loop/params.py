@@ -1,0 +1,217 @@
+"""Parameters of one hybrid-loop run (:class:`HybridLoopParams`), SI units."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+from hybridtable._validation import (
+    check_choice,
+    check_nonnegative,
+    check_positive,
+    check_positive_or_inf,
+)
+from hybridtable.compensators.paper import CompensatorParams
+from hybridtable.compensators.registry import compensator_names
+from hybridtable.systems.contact import ContactParams
+from hybridtable.systems.sensor import SensorParams
+from hybridtable.systems.spacecraft import SpacecraftParams
+from hybridtable.systems.table import TableParams
+
+__all__ = [
+    "TABLE_INITIAL_STATES",
+    "HybridLoopParams",
+]
+
+
+TABLE_INITIAL_STATES: tuple[str, ...] = ("tracking", "command", "rest")
+
+
+@dataclass(frozen=True)
+class HybridLoopParams:
+    """Every parameter of one hybrid-loop run, SI units.
+
+    Parameters
+    ----------
+    spacecraft_mass_kg : float
+        Spacecraft model mass m, > 0.
+    contact_stiffness_n_per_m : float
+        True contact stiffness k_con, > 0.
+    contact_damping_n_s_per_m : float
+        True contact damping, >= 0.
+    sensor_delay_s : float
+        Force-sensor delay T_fms, >= 0.
+    table_response_hz : float
+        Table response frequency f_resp, > 0, ``math.inf`` for an ideal table.
+    table_damping_ratio : float
+        Table damping ratio, >= 0.
+    compensator : str
+        A registered compensator (:func:`hybridtable.compensators.registry.compensator_names`):
+        the paper's "none", "SDC", "MDC", "SDMDC", or a plug-in.
+    lead_time_s : float or None
+        SDC lead time; ``None`` means ``sensor_delay_s`` (the paper's choice).
+    compensator_stiffness_n_per_m, compensator_damping_n_s_per_m : float or None
+        What the MDC believes; ``None`` means the true contact values.
+    force_deadband_n : float
+        Measured forces at or below this are "no contact".
+    clamp_nonnegative : bool
+        Clamp the compensated force at zero.
+    contact_gate : {"measured_force", "table_position"}
+        How the compensator tells contact (:mod:`hybridtable.compensators.paper`).
+    initial_velocity_m_per_s : float
+        Approach velocity of the spacecraft model, > 0.
+    initial_gap_m : float
+        Gap between the devices at t = 0, >= 0.
+    table_initial_state : {"tracking", "command", "rest"}
+        ``"tracking"``: the table starts in steady tracking of the approach
+        ramp (lag ``2 zeta / omega`` behind the command, same velocity), so the
+        contact sees no start-up transient. ``"command"``: at the initial
+        command position with the approach velocity (a rig that starts its
+        record while already moving). ``"rest"``: at the initial command, at
+        rest.
+    sample_rate_hz : float or None
+        ``None``: continuous rig computer. Otherwise the rate of the rig's
+        computer loop.
+    time_step_s : float
+        Continuous mode: the largest integration step and delay-line period.
+    passivity : bool
+        Guard the compensator with the time-domain passivity observer and
+        controller (:mod:`hybridtable.compensators.passivity`).
+    """
+
+    spacecraft_mass_kg: float
+    contact_stiffness_n_per_m: float
+    contact_damping_n_s_per_m: float = 0.0
+    sensor_delay_s: float = 0.0
+    table_response_hz: float = math.inf
+    table_damping_ratio: float = 0.8
+    compensator: str = "none"
+    lead_time_s: float | None = None
+    compensator_stiffness_n_per_m: float | None = None
+    compensator_damping_n_s_per_m: float | None = None
+    force_deadband_n: float = 0.0
+    clamp_nonnegative: bool = False
+    contact_gate: str = "measured_force"
+    initial_velocity_m_per_s: float = 0.1
+    initial_gap_m: float = 0.001
+    table_initial_state: str = "tracking"
+    sample_rate_hz: float | None = None
+    time_step_s: float | None = None
+    passivity: bool = False
+
+    def __post_init__(self) -> None:
+        s = object.__setattr__
+        s(self, "spacecraft_mass_kg", check_positive("spacecraft_mass_kg", self.spacecraft_mass_kg))
+        for name in ("contact_stiffness_n_per_m", "initial_velocity_m_per_s"):
+            s(self, name, check_positive(name, getattr(self, name)))
+        if self.time_step_s is not None:
+            s(self, "time_step_s", check_positive("time_step_s", self.time_step_s))
+        for name in (
+            "contact_damping_n_s_per_m",
+            "sensor_delay_s",
+            "table_damping_ratio",
+            "force_deadband_n",
+            "initial_gap_m",
+        ):
+            s(self, name, check_nonnegative(name, getattr(self, name)))
+        s(
+            self,
+            "table_response_hz",
+            check_positive_or_inf("table_response_hz", self.table_response_hz),
+        )
+        check_choice("compensator", self.compensator, compensator_names())
+        check_choice("table_initial_state", self.table_initial_state, TABLE_INITIAL_STATES)
+        for name in (
+            "lead_time_s",
+            "compensator_stiffness_n_per_m",
+            "compensator_damping_n_s_per_m",
+        ):
+            if getattr(self, name) is not None:
+                s(self, name, check_nonnegative(name, getattr(self, name)))
+        if self.sample_rate_hz is not None:
+            s(self, "sample_rate_hz", check_positive("sample_rate_hz", self.sample_rate_hz))
+            # Raises a clear error when the delay is not a whole number of ticks.
+            from hybridtable.systems.sensor import delay_samples
+
+            delay_samples(self.sensor_delay_s, self.sample_period_s)
+
+    # -- derived quantities ------------------------------------------------
+    @classmethod
+    def from_contact_frequency(
+        cls, contact_frequency_hz: float, contact_stiffness_n_per_m: float, **kwargs
+    ) -> HybridLoopParams:
+        """Parameters with the mass that gives the contact natural frequency
+        ``f_con = sqrt(k / m) / (2 pi)`` (how the paper specifies its runs)."""
+        f = check_positive("contact_frequency_hz", contact_frequency_hz)
+        k = check_positive("contact_stiffness_n_per_m", contact_stiffness_n_per_m)
+        return cls(
+            spacecraft_mass_kg=k / (2.0 * math.pi * f) ** 2, contact_stiffness_n_per_m=k, **kwargs
+        )
+
+    @property
+    def contact_frequency_hz(self) -> float:
+        """Undamped contact natural frequency sqrt(k/m) / 2 pi."""
+        return math.sqrt(self.contact_stiffness_n_per_m / self.spacecraft_mass_kg) / (2 * math.pi)
+
+    @property
+    def step_s(self) -> float:
+        """The continuous mode's step: ``time_step_s`` or its default."""
+        if self.time_step_s is not None:
+            return self.time_step_s
+        return min(2e-4, 1.0 / (5000.0 * self.contact_frequency_hz))
+
+    @property
+    def sample_period_s(self) -> float | None:
+        """1 / sample_rate_hz, or None for a continuous loop."""
+        return None if self.sample_rate_hz is None else 1.0 / self.sample_rate_hz
+
+    @property
+    def effective_delay_s(self) -> float:
+        """tau_eff = T_fms + 2 zeta / omega_resp, the loop's low-frequency delay."""
+        return self.sensor_delay_s + self.table().ramp_lag_s
+
+    def with_(self, **changes) -> HybridLoopParams:
+        """A copy with some fields changed (validated again)."""
+        return replace(self, **changes)
+
+    def spacecraft(self) -> SpacecraftParams:
+        return SpacecraftParams(mass_kg=self.spacecraft_mass_kg)
+
+    def table(self) -> TableParams:
+        return TableParams(self.table_response_hz, self.table_damping_ratio)
+
+    def contact(self) -> ContactParams:
+        return ContactParams(self.contact_stiffness_n_per_m, self.contact_damping_n_s_per_m)
+
+    def sensor(self) -> SensorParams:
+        return SensorParams(self.sensor_delay_s)
+
+    def compensator_params(self) -> CompensatorParams:
+        def pick(value, default):
+            return default if value is None else value
+
+        return CompensatorParams(
+            kind=self.compensator,
+            lead_time_s=pick(self.lead_time_s, self.sensor_delay_s),
+            stiffness_n_per_m=pick(
+                self.compensator_stiffness_n_per_m, self.contact_stiffness_n_per_m
+            ),
+            damping_n_s_per_m=pick(
+                self.compensator_damping_n_s_per_m, self.contact_damping_n_s_per_m
+            ),
+            force_deadband_n=self.force_deadband_n,
+            clamp_nonnegative=self.clamp_nonnegative,
+            contact_gate=self.contact_gate,
+        )
+
+    def initial_conditions(self) -> dict[str, float]:
+        """Initial spacecraft and table states."""
+        x0 = -self.initial_gap_m
+        v0 = self.initial_velocity_m_per_s
+        if self.table_initial_state == "rest":
+            pa, va = x0, 0.0
+        elif self.table_initial_state == "command":
+            pa, va = x0, v0
+        else:
+            pa, va = x0 - self.table().ramp_lag_s * v0, v0
+        return {"p_des_m": x0, "v_des_m_per_s": v0, "p_act_m": pa, "v_act_m_per_s": va}

@@ -1,0 +1,188 @@
+"""Run the hybrid loop through one contact and collect the logged signals."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from pydrake.systems.analysis import Simulator
+
+from hybridtable.errors import SimulationError
+from hybridtable.loop.builder import LOG_ROWS, HybridLoop, build_hybrid_loop
+from hybridtable.loop.metrics import ContactMetrics, contact_metrics
+from hybridtable.loop.params import HybridLoopParams
+
+__all__ = ["SimulationError", "SimulationResult", "simulate", "run_loop"]
+
+_F_ACT = LOG_ROWS.index("f_act_n")
+
+
+@dataclass
+class SimulationResult:
+    """Logged signals of a run (SI units) and its contact metrics.
+
+    In a sampled loop row ``k`` holds what the rig computer read at tick ``k``
+    (``p_act``, ``f_mea``), the force it computed (``f_comp``) and the
+    spacecraft state after the tick's update (``p_des``, ``v_des``), as in the
+    ``hybridtable-run/1`` format.
+    """
+
+    params: HybridLoopParams
+    time_s: np.ndarray
+    p_des_m: np.ndarray
+    v_des_m_per_s: np.ndarray
+    p_act_m: np.ndarray
+    v_act_m_per_s: np.ndarray
+    f_act_n: np.ndarray
+    f_mea_n: np.ndarray
+    f_comp_n: np.ndarray
+    metrics: ContactMetrics
+    steps: int
+
+    def signals(self) -> dict[str, np.ndarray]:
+        """The time series by column name."""
+        names = ("time_s", "p_des_m", "v_des_m_per_s", "p_act_m", "v_act_m_per_s")
+        names += ("f_act_n", "f_mea_n", "f_comp_n")
+        return {n: getattr(self, n) for n in names}
+
+
+def _default_t_max(params: HybridLoopParams) -> float:
+    approach = (
+        params.initial_gap_m + params.table().ramp_lag_s * params.initial_velocity_m_per_s
+    ) / (params.initial_velocity_m_per_s)
+    return approach + 10.0 / params.contact_frequency_hz + 20.0 * params.effective_delay_s + 1.0
+
+
+def run_loop(
+    loop: HybridLoop,
+    t_max_s: float | None = None,
+    integrator: str = "runge_kutta3",
+    accuracy: float = 1e-8,
+    stop_at_separation: bool = True,
+) -> SimulationResult:
+    """Simulate a built loop until the spacecraft has separated, and collect.
+
+    The run stops once a contact has happened and no force (actual, measured
+    or compensated) has acted for a settling window (the sensor delay, five
+    table time constants but at most 20 table periods, and five computer
+    periods). With
+    ``stop_at_separation=False`` it runs to ``t_max_s`` (e.g. the length of a
+    recorded run) and raises only on divergence or when no contact happened.
+
+    Raises
+    ------
+    SimulationError
+        If a signal becomes non-finite or exceeds 1e6 times the undamped
+        peak force (divergence), or no separation happens before ``t_max_s``.
+    """
+    params = loop.params
+    diagram = loop.diagram
+    t_max = _default_t_max(params) if t_max_s is None else t_max_s
+    simulator = Simulator(diagram)
+    context = simulator.get_mutable_context()
+    loop.set_initial_conditions(context)
+    from pydrake.systems.analysis import ResetIntegratorFromFlags
+
+    ResetIntegratorFromFlags(simulator, integrator, loop.computer_period_s)
+    integ = simulator.get_mutable_integrator()
+    integ.set_maximum_step_size(loop.computer_period_s)
+    if integrator in ("runge_kutta2", "explicit_euler", "semi_explicit_euler"):
+        integ.set_fixed_step_mode(True)
+    else:
+        integ.set_target_accuracy(accuracy)
+
+    table = params.table()
+    settle = params.sensor_delay_s + 5.0 * loop.computer_period_s
+    if not table.is_ideal:
+        # Five time constants of the table's decay, at most 20 of its periods
+        # (a lightly damped table rings long after the devices have parted).
+        settle += min(
+            5.0 / max(table.damping_ratio * table.omega_rad_per_s, 1e-9),
+            20.0 / table.response_frequency_hz,
+        )
+    f_scale = (
+        params.contact_stiffness_n_per_m
+        * params.initial_velocity_m_per_s
+        / (2 * math.pi * params.contact_frequency_hz)
+    )
+    contact_ctx = loop.contact.GetMyContextFromRoot(context)
+    sensor_ctx = loop.sensor.GetMyContextFromRoot(context)
+    comp_ctx = loop.compensator.GetMyContextFromRoot(context)
+    f_act_port = loop.contact.GetOutputPort("force")
+    f_mea_port = loop.sensor.GetOutputPort("measured_force")
+    f_comp_port = loop.compensator.GetOutputPort("compensated_force")
+
+    # Advance in chunks and look at the forces between chunks (a per-step
+    # Python monitor would cost as much as the systems themselves). The
+    # logger holds every step; a chunk only decides when to stop.
+    chunk = max(10.0 * loop.computer_period_s, settle / 4.0)
+    simulator.Initialize()
+    started, last_active = False, -math.inf
+    t = 0.0
+    separated = False
+    while t < t_max:
+        t = min(t + chunk, t_max)
+        try:
+            simulator.AdvanceTo(t)
+        except (RuntimeError, SystemExit) as err:  # Drake asserts reach Python as SystemExit
+            raise SimulationError(f"simulation failed: {err}") from None
+        f_act = f_act_port.Eval(contact_ctx)[0]
+        f_mea = f_mea_port.Eval(sensor_ctx)[0]
+        f_comp = f_comp_port.Eval(comp_ctx)[0]
+        if not all(math.isfinite(x) for x in (f_act, f_mea, f_comp)) or abs(f_comp) > 1e6 * f_scale:
+            raise SimulationError(
+                f"simulation diverged by t = {t:.4f} s (the loop is unstable for these parameters)"
+            )
+        log = loop.logger.FindLog(context).data()[_F_ACT]
+        if f_act > 0.0 or f_mea > params.force_deadband_n or f_comp != 0.0:
+            started, last_active = True, t
+        elif not started and (log > 0.0).any():
+            started, last_active = True, t
+        elif started and stop_at_separation and t - last_active > settle:
+            separated = True
+            break
+    if not started:
+        raise SimulationError(f"no contact within t_max = {t_max:.3f} s")
+    if stop_at_separation and not separated:
+        raise SimulationError(
+            f"the contact did not end within t_max = {t_max:.3f} s (spacecraft captured or "
+            "loop unstable)"
+        )
+    return _collect(loop, context, simulator.get_num_steps_taken())
+
+
+def _collect(loop: HybridLoop, context, steps: int) -> SimulationResult:
+    params = loop.params
+    log = loop.logger.FindLog(context)
+    t = log.sample_times()
+    data = log.data()
+    if params.sample_rate_hz is not None:
+        # Logged before each tick's update: the spacecraft state after tick k
+        # is the one logged at tick k + 1.
+        n = len(t) - 1
+        t = t[:n]
+        data = np.vstack([data[:2, 1:], data[2:, :n]])
+    else:
+        # Drop repeated samples at discrete-event times (kept: the last).
+        keep = np.append(np.diff(t) > 0, True)
+        t, data = t[keep], data[:, keep]
+    rows = dict(zip(LOG_ROWS, data, strict=True))
+    metrics = contact_metrics(
+        t, rows["v_des_m_per_s"], rows["f_act_n"], rows["f_comp_n"], params.spacecraft_mass_kg
+    )
+    return SimulationResult(
+        params=params,
+        time_s=np.array(t),
+        **{name: np.array(rows[name]) for name in LOG_ROWS if name != "a_act_m_per_s2"},
+        metrics=metrics,
+        steps=steps,
+    )
+
+
+def simulate(params: HybridLoopParams, **kwargs) -> SimulationResult:
+    """Build the hybrid loop for ``params`` and run it through one contact.
+
+    Keyword arguments go to :func:`run_loop`.
+    """
+    return run_loop(build_hybrid_loop(params), **kwargs)

@@ -1,0 +1,165 @@
+"""Phases of a contact in a record (approach, compression, restitution, free
+flight), contact masks, and quantities of the contact: duration, CoR, loop energy.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = [
+    "PHASES",
+    "contact_mask",
+    "phase_labels",
+    "delayed_labels",
+    "phase_breakdown",
+    "cor_from_record",
+    "contact_duration",
+    "loop_energy",
+]
+
+
+#: Phases of a contact record, in time order.
+PHASES: tuple[str, ...] = ("approach", "compression", "restitution", "free_flight")
+
+
+_APPROACH, _COMPRESSION, _RESTITUTION, _FREE = range(4)
+
+
+#: Ticks of measured contact that a gap must exceed to split a contact (noise
+#: near the zero crossing does not make two contacts).
+MERGE_GAP_TICKS = 3
+
+
+# -- phases --------------------------------------------------------------------
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """Inclusive index ranges of the True runs of ``mask``."""
+    m = np.asarray(mask, dtype=bool)
+    edges = np.diff(np.concatenate([[0], m.astype(np.int8), [0]]))
+    return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1, strict=True))
+
+
+def contact_mask(p_act_m: np.ndarray, merge_gap_ticks: int = MERGE_GAP_TICKS) -> np.ndarray:
+    """Ticks of contact (penetration ``p_act > 0``), with gaps of at most
+    ``merge_gap_ticks`` inside a contact filled."""
+    on = np.asarray(p_act_m, dtype=float) > 0.0
+    runs = _runs(on)
+    for (_, b), (c, _) in zip(runs[:-1], runs[1:], strict=True):
+        if c - b - 1 <= merge_gap_ticks:
+            on[b + 1 : c] = True
+    return on
+
+
+def phase_labels(p_act_m: np.ndarray) -> np.ndarray:
+    """Phase index (into :data:`PHASES`) of every tick, from the penetration.
+
+    Raises
+    ------
+    ValueError
+        If the record holds no contact.
+    """
+    p = np.asarray(p_act_m, dtype=float)
+    on = contact_mask(p)
+    runs = _runs(on)
+    if not runs:
+        raise ValueError("no contact in the record (p_act never > 0)")
+    labels = np.full(len(p), _FREE, dtype=int)
+    labels[: runs[0][0]] = _APPROACH
+    for a, b in runs:
+        peak = a + int(np.argmax(p[a : b + 1]))
+        labels[a : peak + 1] = _COMPRESSION
+        labels[peak + 1 : b + 1] = _RESTITUTION
+    return labels
+
+
+def delayed_labels(labels: np.ndarray, delay_ticks: int) -> np.ndarray:
+    """Labels of readings delayed by ``delay_ticks``: tick ``k`` gets the label
+    of tick ``k - delay_ticks`` (the first ticks that of tick 0)."""
+    if delay_ticks <= 0:
+        return labels.copy()
+    return np.concatenate([np.full(delay_ticks, labels[0]), labels[:-delay_ticks]])
+
+
+def phase_breakdown(residual: np.ndarray, labels: np.ndarray) -> dict[str, dict[str, float]]:
+    """Per phase: RMS and mean of the residual, share of the squared error,
+    number of ticks and fraction of the record."""
+    e = np.asarray(residual, dtype=float)
+    total = float(np.sum(e * e))
+    out = {}
+    for i, name in enumerate(PHASES):
+        sel = labels == i
+        n = int(sel.sum())
+        sq = float(np.sum(e[sel] ** 2))
+        out[name] = {
+            "rms_error": math.sqrt(sq / n) if n else math.nan,
+            "mean_error": float(e[sel].mean()) if n else math.nan,
+            "share": sq / total if total > 0.0 else math.nan,
+            "samples": n,
+            "time_fraction": n / len(e),
+        }
+    return out
+
+
+def _dilate(mask: np.ndarray, before: int, after: int) -> np.ndarray:
+    out = mask.copy()
+    for a, b in _runs(mask):
+        out[max(a - before, 0) : b + after + 1] = True
+    return out
+
+
+# -- contact metrics -----------------------------------------------------------
+def cor_from_record(
+    v_des_m_per_s: np.ndarray, f_comp_n: np.ndarray, initial_velocity_m_per_s: float
+) -> tuple[float, float, float]:
+    """CoR, ``v_in`` and ``v_out`` from a record's spacecraft velocity.
+
+    ``v_in`` is ``v_des`` at the last tick before the first non-zero ``f_comp``
+    (the initial velocity if that is tick 0), ``v_out`` the last ``v_des``.
+
+    Raises
+    ------
+    ValueError
+        If ``f_comp`` is never non-zero, or still non-zero at the last tick.
+    """
+    v = np.asarray(v_des_m_per_s, dtype=float)
+    f = np.asarray(f_comp_n, dtype=float)
+    on = np.flatnonzero(f != 0.0)
+    if on.size == 0:
+        raise ValueError("f_comp is zero throughout: the model never felt a contact")
+    if f[-1] != 0.0:
+        raise ValueError("f_comp is still non-zero at the last tick: the contact has not ended")
+    v_in = float(v[on[0] - 1]) if on[0] > 0 else float(initial_velocity_m_per_s)
+    v_out = float(v[-1])
+    return abs(v_out) / abs(v_in), v_in, v_out
+
+
+def contact_duration(time_s: np.ndarray, p_act_m: np.ndarray) -> float:
+    """Duration of the first contact, between the linearly interpolated zero
+    crossings of the penetration (NaN without a contact)."""
+    t = np.asarray(time_s, dtype=float)
+    p = np.asarray(p_act_m, dtype=float)
+    runs = _runs(contact_mask(p))
+    if not runs:
+        return math.nan
+    a, b = runs[0]
+
+    def crossing(i: int, j: int) -> float:  # p[i] <= 0 < p[j] or the reverse
+        return float(t[i] + (t[j] - t[i]) * (0.0 - p[i]) / (p[j] - p[i]))
+
+    start = crossing(a - 1, a) if a > 0 else float(t[0])
+    end = crossing(b, b + 1) if b + 1 < len(p) else float(t[-1])
+    return end - start
+
+
+def loop_energy(p_m: np.ndarray, f_n: np.ndarray, active: np.ndarray) -> float:
+    """``sum f dp`` (trapezoid) over the ticks of ``active`` and one tick on
+    each side: the energy absorbed by the contact over the loop, J."""
+    p = np.asarray(p_m, dtype=float)
+    f = np.asarray(f_n, dtype=float)
+    idx = np.flatnonzero(active)
+    if idx.size == 0:
+        return math.nan
+    a, b = max(idx[0] - 1, 0), min(idx[-1] + 1, len(p) - 1)
+    ps, fs = p[a : b + 1], f[a : b + 1]
+    return float(np.sum(0.5 * (fs[1:] + fs[:-1]) * np.diff(ps)))

@@ -1,0 +1,187 @@
+"""Replay: drive the rig's physical part with the recorded command.
+
+The recorded ``p_des`` (and ``v_des``) of a run, zero-order held from tick
+``k`` to tick ``k + 1`` exactly as the rig computer sent them, drive the table,
+the contact and the force sensor; the replay predicts ``p_act`` and ``f_mea``
+at the ticks. Unlike the closed loop, no error of the model feeds back into
+the command, so the residuals of the replay isolate the physics.
+
+::
+
+    TrajectorySource --> ZeroOrderHold(h) --commanded_state--> table --motion--> contact
+    (recorded p_des, v_des)                                                        |
+                                                 f_mea <-- force sensor <--force---+
+
+The command source is a piecewise-constant trajectory whose pieces are
+centred on the ticks, sampled by a Drake ``ZeroOrderHold`` at the ticks: the
+discrete hold changes the command only at a tick, so the table's integrator
+never steps across a jump. The physical part comes from
+:func:`hybridtable.measurement.rig.add_physical_part` (swappable with
+:class:`~hybridtable.measurement.rig.RigPhysics`); the logs are read at the ticks with the
+loop's semantics (``f_mea[k] = f_act(t_k - T_fms)`` for the sampled sensor).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from pydrake.systems.analysis import ResetIntegratorFromFlags, Simulator
+from pydrake.systems.framework import DiagramBuilder
+from pydrake.systems.primitives import LogVectorOutput, TrajectorySource, ZeroOrderHold
+from pydrake.trajectories import PiecewisePolynomial
+
+from hybridtable.errors import SimulationError
+from hybridtable.loop.params import HybridLoopParams
+from hybridtable.measurement.rig import (
+    RigPhysics,
+    add_physical_part,
+    rig_params,
+    set_table_initial_state,
+)
+from hybridtable.measurement.run_format import Run
+
+__all__ = ["ReplayResult", "replay", "replay_command"]
+
+
+@dataclass
+class ReplayResult:
+    """The physical part's response to a recorded command, one row per tick.
+
+    Attributes
+    ----------
+    params : HybridLoopParams
+        The model's parameters (after the physics changes).
+    time_s, p_des_m, v_des_m_per_s : ndarray
+        Ticks and the command held from each tick to the next.
+    p_act_m, v_act_m_per_s : ndarray
+        Table position and velocity at the ticks.
+    f_act_n : ndarray
+        Actual (model) contact force at the ticks.
+    f_mea_n : ndarray
+        The force sensor's reading at the ticks.
+    steps : int
+        Integrator steps taken.
+    """
+
+    params: HybridLoopParams
+    time_s: np.ndarray
+    p_des_m: np.ndarray
+    v_des_m_per_s: np.ndarray
+    p_act_m: np.ndarray
+    v_act_m_per_s: np.ndarray
+    f_act_n: np.ndarray
+    f_mea_n: np.ndarray
+    steps: int
+
+
+def replay_command(
+    params: HybridLoopParams,
+    p_des_m: np.ndarray,
+    v_des_m_per_s: np.ndarray,
+    physics: RigPhysics | None = None,
+    integrator: str = "runge_kutta3",
+    accuracy: float = 1e-8,
+) -> ReplayResult:
+    """Drive the physical part of ``params`` with a command held over ticks.
+
+    Parameters
+    ----------
+    params : HybridLoopParams
+        A sampled loop's parameters (``sample_rate_hz`` set); the physics of
+        ``physics`` is applied to them.
+    p_des_m, v_des_m_per_s : array
+        Command of tick ``k`` (held on ``[k h, (k + 1) h)``).
+    physics : RigPhysics, optional
+        Model variant of the physical part (default: nominal).
+    integrator, accuracy :
+        As in :func:`hybridtable.loop.simulation.run_loop` (the step never exceeds
+        a tick).
+
+    Raises
+    ------
+    SimulationError
+        If the response becomes non-finite.
+    """
+    physics = physics or RigPhysics()
+    params = physics.apply(params)
+    h = params.sample_period_s
+    if h is None:
+        raise ValueError("replay needs a sampled loop (sample_rate_hz set)")
+    p = np.asarray(p_des_m, dtype=float)
+    v = np.asarray(v_des_m_per_s, dtype=float)
+    n = len(p)
+    if n < 2 or len(v) != n:
+        raise ValueError("the command needs two equally long series of at least 2 ticks")
+    builder = DiagramBuilder()
+    # Pieces centred on the ticks: the value at tick k is sample k even when
+    # Drake's event time differs from k h by rounding.
+    breaks = h * (np.arange(n + 1) - 0.5)
+    samples = np.vstack([np.append(p, p[-1]), np.append(v, v[-1])])
+    source = builder.AddNamedSystem(
+        "recorded_command",
+        TrajectorySource(PiecewisePolynomial.ZeroOrderHold(breaks, samples)),
+    )
+    hold = builder.AddNamedSystem("command_hold", ZeroOrderHold(h, 2))
+    builder.Connect(source.get_output_port(), hold.get_input_port())
+    part = add_physical_part(builder, params, physics)
+    builder.Connect(hold.get_output_port(), part.table.GetInputPort("commanded_state"))
+    logs = {
+        "motion": LogVectorOutput(part.table.GetOutputPort("motion"), builder, h),
+        "f_act": LogVectorOutput(part.contact.GetOutputPort("force"), builder, h),
+        "f_mea": LogVectorOutput(part.sensor.GetOutputPort("measured_force"), builder, h),
+    }
+    diagram = builder.Build()
+    diagram.set_name("replay")
+    simulator = Simulator(diagram)
+    context = simulator.get_mutable_context()
+    set_table_initial_state(part.table, part.table.GetMyMutableContextFromRoot(context), params)
+    ResetIntegratorFromFlags(simulator, integrator, h)
+    integ = simulator.get_mutable_integrator()
+    integ.set_maximum_step_size(h)
+    if integrator in ("runge_kutta2", "explicit_euler", "semi_explicit_euler"):
+        integ.set_fixed_step_mode(True)
+    else:
+        integ.set_target_accuracy(accuracy)
+    simulator.Initialize()
+    try:
+        simulator.AdvanceTo((n - 0.5) * h)
+    except (RuntimeError, SystemExit) as err:  # Drake asserts reach Python as SystemExit
+        raise SimulationError(f"replay failed: {err}") from None
+    found = {name: sink.FindLog(context) for name, sink in logs.items()}
+    t = found["motion"].sample_times()
+    if len(t) < n or not np.allclose(t[:n], h * np.arange(n), rtol=0.0, atol=1e-6 * h):
+        raise SimulationError(f"replay logged {len(t)} samples out of step with {n} ticks")
+    motion = found["motion"].data()[:, :n]
+    f_act = found["f_act"].data()[0, :n]
+    f_mea = found["f_mea"].data()[0, :n]
+    if not (np.isfinite(motion).all() and np.isfinite(f_mea).all()):
+        raise SimulationError("replay diverged (non-finite table motion or force)")
+    return ReplayResult(
+        params=params,
+        time_s=h * np.arange(n),
+        p_des_m=p.copy(),
+        v_des_m_per_s=v.copy(),
+        p_act_m=motion[0].copy(),
+        v_act_m_per_s=motion[1].copy(),
+        f_act_n=f_act.copy(),
+        f_mea_n=f_mea.copy(),
+        steps=simulator.get_num_steps_taken(),
+    )
+
+
+def replay(
+    run: Run,
+    physics: RigPhysics | None = None,
+    integrator: str = "runge_kutta3",
+    accuracy: float = 1e-8,
+) -> ReplayResult:
+    """Replay a recorded run's command through the rig's physical part.
+
+    See :func:`replay_command`; the parameters come from the run's JSON
+    (:func:`hybridtable.measurement.rig.rig_params`).
+    """
+    params = rig_params(run.info, run.where("json"))
+    return replay_command(
+        params, run.p_des_m, run.v_des_m_per_s, physics, integrator=integrator, accuracy=accuracy
+    )

@@ -1,0 +1,265 @@
+"""The rig of a recorded run as a model: parameters, physics back-ends, closed loop.
+
+A recorded run (:mod:`hybridtable.measurement.run_format`) names the nominal parameters
+the rig ran with. :func:`rig_params` maps them to a sampled
+:class:`~hybridtable.loop.params.HybridLoopParams`: the rig computer at the run's
+sample rate (zero-order-held command, sampled sensors, the compensator exactly
+as ``hybridtable-run/1`` defines it, semi-implicit Euler spacecraft), the
+nominal physics (second-order table, unilateral spring, pure sensor delay).
+
+:class:`RigPhysics` holds optional factories for the physical part (table,
+contact, force sensor) and parameter changes of the physics, so that a model
+variant (a damped or nonlinear contact, another table, a sensor filter) is
+compared with the same code: :func:`simulate_rig` (the closed loop) and
+:func:`hybridtable.measurement.replay.replay` (the physical part driven by the recorded
+command) both take one. The compensator always keeps the nominal parameters
+of the run's JSON file: it is the rig's software, not physics.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from pydrake.systems.framework import DiagramBuilder, System
+
+from hybridtable.errors import MeasurementError, ParameterError, SimulationError
+from hybridtable.loop.builder import add_hybrid_loop
+from hybridtable.loop.params import HybridLoopParams
+from hybridtable.loop.simulation import SimulationResult, run_loop
+from hybridtable.measurement.run_format import Run, RunInfo
+from hybridtable.systems.contact import UnilateralSpringContact
+from hybridtable.systems.sensor import ForceSensorDelay
+from hybridtable.systems.table import SecondOrderTable
+
+__all__ = [
+    "PHYSICS_PARAMS",
+    "RigPhysics",
+    "PhysicalPart",
+    "rig_params",
+    "add_physical_part",
+    "build_rig_loop",
+    "simulate_rig",
+    "set_table_initial_state",
+]
+
+#: HybridLoopParams fields that describe physics (what :class:`RigPhysics`
+#: may change); every other field is the rig computer's.
+PHYSICS_PARAMS: tuple[str, ...] = (
+    "contact_stiffness_n_per_m",
+    "contact_damping_n_s_per_m",
+    "sensor_delay_s",
+    "table_response_hz",
+    "table_damping_ratio",
+    "table_initial_state",
+)
+
+SystemFactory = Callable[[HybridLoopParams], System]
+
+
+@dataclass(frozen=True)
+class RigPhysics:
+    """The physical part of a rig model: nominal unless told otherwise.
+
+    Parameters
+    ----------
+    table, contact, sensor : callable, optional
+        Factories ``f(params) -> System`` returning a *new* Drake system each
+        call (a model is built twice per run: replay and closed loop). Ports:
+        a table takes ``commanded_state`` (2) and gives ``motion`` (3); a
+        contact takes ``motion`` and gives ``force`` and ``force_rate``; a
+        sensor takes ``force`` and gives ``measured_force``. A table with a
+        ``set_initial_state(context, p, v)`` method gets the run's initial
+        table state. ``None``: the nominal system for ``params``.
+    changes : mapping, optional
+        Changes of the physical parameters (names in :data:`PHYSICS_PARAMS`),
+        e.g. ``{"contact_damping_n_s_per_m": 200.0}``. They change the
+        physics only; the compensator keeps the run's nominal values.
+    name : str
+        A label for reports.
+    """
+
+    table: SystemFactory | None = None
+    contact: SystemFactory | None = None
+    sensor: SystemFactory | None = None
+    changes: Mapping[str, Any] = field(default_factory=dict)
+    name: str = "nominal"
+
+    def __post_init__(self) -> None:
+        bad = [k for k in self.changes if k not in PHYSICS_PARAMS]
+        if bad:
+            raise ParameterError(
+                f"RigPhysics.changes: {', '.join(bad)} not physical parameters "
+                f"(one of {', '.join(PHYSICS_PARAMS)})"
+            )
+
+    def apply(self, params: HybridLoopParams) -> HybridLoopParams:
+        """``params`` with :attr:`changes` applied (the compensator's beliefs
+        pinned to their values before the change)."""
+        if not self.changes:
+            return params
+        pinned = params.with_(
+            lead_time_s=params.compensator_params().lead_time_s,
+            compensator_stiffness_n_per_m=params.compensator_params().stiffness_n_per_m,
+            compensator_damping_n_s_per_m=params.compensator_params().damping_n_s_per_m,
+        )
+        return pinned.with_(**dict(self.changes))
+
+    def make_table(self, params: HybridLoopParams) -> System:
+        return self.table(params) if self.table else SecondOrderTable(params.table())
+
+    def make_contact(self, params: HybridLoopParams) -> System:
+        return self.contact(params) if self.contact else UnilateralSpringContact(params.contact())
+
+    def make_sensor(self, params: HybridLoopParams) -> System:
+        if self.sensor:
+            return self.sensor(params)
+        return ForceSensorDelay(params.sensor(), "sampled", params.sample_period_s)
+
+
+def rig_params(info: RunInfo, source: str | None = None) -> HybridLoopParams:
+    """The sampled hybrid-loop parameters of a run's rig (nominal physics).
+
+    The table starts at the initial command with the approach velocity
+    (``table_initial_state="command"``: the record starts while the rig is
+    already moving), the compensated force is clamped at zero and gated by the
+    measured force, the MDC uses the JSON stiffness and no damping.
+
+    Raises
+    ------
+    MeasurementError
+        If the JSON values do not make a model (e.g. a sensor delay that is
+        not a whole number of sample periods), naming ``source``.
+    """
+    try:
+        return HybridLoopParams(
+            spacecraft_mass_kg=info.spacecraft_mass_kg,
+            contact_stiffness_n_per_m=info.contact_stiffness_n_per_m,
+            contact_damping_n_s_per_m=0.0,
+            sensor_delay_s=info.sensor_delay_s,
+            table_response_hz=info.table_natural_frequency_hz,
+            table_damping_ratio=info.table_damping_ratio,
+            compensator=info.compensator,
+            lead_time_s=info.lead_time_s,
+            compensator_stiffness_n_per_m=info.contact_stiffness_n_per_m,
+            compensator_damping_n_s_per_m=0.0,
+            force_deadband_n=info.force_deadband_n,
+            clamp_nonnegative=True,
+            contact_gate="measured_force",
+            initial_velocity_m_per_s=info.initial_velocity_m_per_s,
+            initial_gap_m=info.initial_gap_m,
+            table_initial_state="command",
+            sample_rate_hz=info.sample_rate_hz,
+        )
+    except ParameterError as err:
+        raise MeasurementError(f"{source or 'run ' + info.run_id}: {err}") from None
+
+
+def _run_params(run: Run, physics: RigPhysics) -> HybridLoopParams:
+    return physics.apply(rig_params(run.info, run.where("json")))
+
+
+@dataclass
+class PhysicalPart:
+    """Handles to the table, contact and sensor that :func:`add_physical_part` added."""
+
+    params: HybridLoopParams
+    table: System
+    contact: System
+    sensor: System
+
+
+def add_physical_part(
+    builder: DiagramBuilder, params: HybridLoopParams, physics: RigPhysics | None = None
+) -> PhysicalPart:
+    """Add the rig's physical part (table -> contact -> force sensor) and wire it.
+
+    The table's ``commanded_state`` input is left for the caller to connect.
+    """
+    physics = physics or RigPhysics()
+    table = builder.AddNamedSystem("table", physics.make_table(params))
+    contact = builder.AddNamedSystem("contact", physics.make_contact(params))
+    sensor = builder.AddNamedSystem("force_sensor", physics.make_sensor(params))
+    builder.Connect(table.GetOutputPort("motion"), contact.GetInputPort("motion"))
+    builder.Connect(contact.GetOutputPort("force"), sensor.GetInputPort("force"))
+    return PhysicalPart(params, table, contact, sensor)
+
+
+def set_table_initial_state(table: System, context, params: HybridLoopParams) -> None:
+    """Give ``table`` (in its own ``context``) the initial state of ``params``,
+    if it has a ``set_initial_state(context, p, v)`` method."""
+    setter = getattr(table, "set_initial_state", None)
+    if setter is not None:
+        ic = params.initial_conditions()
+        setter(context, ic["p_act_m"], ic["v_act_m_per_s"])
+
+
+def build_rig_loop(run: Run, physics: RigPhysics | None = None):
+    """The closed loop of a run's rig as a built :class:`~hybridtable.loop.builder.HybridLoop`."""
+    physics = physics or RigPhysics()
+    params = _run_params(run, physics)
+    builder = DiagramBuilder()
+    loop = add_hybrid_loop(
+        builder,
+        params,
+        table=physics.make_table(params),
+        contact=physics.make_contact(params),
+        sensor=physics.make_sensor(params),
+    )
+    loop.diagram = builder.Build()
+    loop.diagram.set_name(f"rig_loop_{run.run_id}")
+    if not isinstance(loop.table, SecondOrderTable):
+        # HybridLoop initializes only its own table type; give a swapped table
+        # the run's initial state too, when it can take one.
+        base = loop.set_initial_conditions
+
+        def set_initial_conditions(root_context) -> None:
+            base(root_context)
+            table_context = loop.diagram.GetMutableSubsystemContext(loop.table, root_context)
+            set_table_initial_state(loop.table, table_context, params)
+
+        loop.set_initial_conditions = set_initial_conditions
+    return loop
+
+
+def simulate_rig(
+    run: Run,
+    physics: RigPhysics | None = None,
+    integrator: str = "runge_kutta3",
+    accuracy: float = 1e-8,
+) -> SimulationResult:
+    """Re-run the rig's whole loop from the run's initial state, for the
+    record's full duration, and return one row per recorded tick.
+
+    Row ``k`` has the ``hybridtable-run/1`` meaning (what the computer read at
+    tick ``k``, the force it computed, the spacecraft state after the tick).
+
+    Raises
+    ------
+    SimulationError
+        If the model diverges or never touches.
+    MeasurementError
+        If the run's parameters do not make a model.
+    """
+    loop = build_rig_loop(run, physics)
+    h = run.sample_period_s
+    # Logs at ticks 0 .. n (the last one gives the state after tick n - 1).
+    result = run_loop(
+        loop,
+        t_max_s=(run.n + 0.5) * h,
+        integrator=integrator,
+        accuracy=accuracy,
+        stop_at_separation=False,
+    )
+    n = run.n
+    if len(result.time_s) < n:
+        raise SimulationError(
+            f"rig model of {run.run_id} stopped after {len(result.time_s)} of {n} ticks"
+        )
+    for name in result.signals():
+        setattr(result, name, getattr(result, name)[:n])
+    if not np.allclose(result.time_s, h * np.arange(n), rtol=0.0, atol=1e-6 * h):
+        raise SimulationError(f"rig model of {run.run_id}: ticks out of step with the record")
+    return result

@@ -1,0 +1,345 @@
+"""The report of ``hybridtable diagnose``: a text ranking and Markdown with PNG figures.
+
+Figures: the staircase (error against effects added), and per run the
+measured signals with the nominal and the diagnosed model (replay), the
+residuals by phase before and after, and the force-deflection loops before
+and after.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from hybridtable.diagnosis.candidates import Candidate, Diagnosis
+from hybridtable.diagnosis.evaluate import RunData  # noqa: E402
+from hybridtable.diagnosis.registry import get_effect  # noqa: E402
+from hybridtable.measurement.phases import PHASES, contact_mask, loop_energy  # noqa: E402
+from hybridtable.reports.compare import figure_stem  # noqa: E402
+
+__all__ = [
+    "REPORT_MARKER",
+    "format_ranking",
+    "format_parameters",
+    "separation_text",
+    "write_report",
+]
+
+#: File that marks a folder as written by ``hybridtable diagnose --report``.
+REPORT_MARKER = ".hybridtable-diagnose-report"
+
+
+def _fmt(x, spec: str) -> str:
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        width = "".join(ch for ch in spec.split(".")[0] if ch.isdigit())
+        return "-".rjust(int(width) if width else 1)
+    return format(x, spec)
+
+
+def format_parameters(effect: str, values: dict[str, float]) -> str:
+    """``name=value unit`` of an effect's parameters."""
+    units = {p.name: p.unit for p in get_effect(effect).parameters}
+    return ", ".join(
+        f"{k}={v:.4g}" + ("" if units.get(k, "1") == "1" else f" {units[k]}")
+        for k, v in values.items()
+    )
+
+
+def _rows(cands: list[Candidate]) -> list[str]:
+    out = []
+    for c in cands:
+        alike = ",".join(c.indistinguishable_from) or "-"
+        unit = " m/s" if c.stage == "closed_loop" else ""
+        out.append(
+            f"{c.effect:<20} {_fmt(c.delta_bic, '10.1f')} {_fmt(c.heldout_z, '7.1f')} "
+            f"{_fmt(c.error_before, '9.4g')} {_fmt(c.error_after, '9.4g')} "
+            f"{_fmt(c.heldout_error_after, '9.4g')}{unit:<4} {'yes' if c.significant else 'no':<4} "
+            f"{alike:<22} {format_parameters(c.effect, c.parameters)}"
+        )
+    return out
+
+
+def format_ranking(d: Diagnosis) -> str:
+    """The verdict, the first round's ranking and the staircase, as text."""
+    head = (
+        f"{'effect':<20} {'delta_bic':>10} {'z_held':>7} {'err_bef':>9} {'err_aft':>9} "
+        f"{'held_aft':>9}{'':<4} {'sig':<4} {'look-alikes':<22} parameters"
+    )
+    lines = [
+        f"verdict: {d.verdict}"
+        + (f"  (selected: {', '.join(d.selected)})" if len(d.selected) > 1 else ""),
+        "",
+        "ranking (each effect fitted to all runs on top of the nominal model; "
+        "errors in noise RMS units):",
+        head,
+        "-" * len(head),
+        *_rows(d.rounds[0] if d.rounds else []),
+    ]
+    if d.closed_loop_candidates:
+        lines += [
+            "closed loop (on top of the physics selected; errors: v_des RMS in m/s):",
+            *_rows(d.closed_loop_candidates),
+        ]
+    lines += ["", "staircase:"]
+    for s in d.staircase:
+        label = " + ".join(s["effects"]) or "nominal"
+        lines.append(
+            f"  {label:<48} error {_fmt(s['error'], '.4g')}  held-out {_fmt(s['heldout_error'], '.4g')}"
+        )
+    for c in d.ranking:
+        if c.separation and c.significant and c.effect == d.verdict:
+            lines += ["", separation_text(c)]
+    return "\n".join(lines)
+
+
+#: Most runs of one kind a separation message suggests.
+MAX_RUNS_SUGGESTED = 5
+
+
+def separation_text(c: Candidate) -> str:
+    """What run would tell ``c`` from its look-alikes, in words."""
+    s = c.separation
+    pair = s.get("effects") or [c.effect, *c.indistinguishable_from]
+    head = (
+        f"{pair[0]} and {', '.join(pair[1:])} are indistinguishable on "
+        f"these runs (predictions {s['recorded_distance']:.3g} noise units apart)"
+    )
+    if s.get("separates"):
+        return f"{head}; a run with {s['run']} would put them {s['distance']:.3g} apart."
+    needed = s.get("runs_needed")
+    if needed is not None and needed <= MAX_RUNS_SUGGESTED:
+        return (
+            f"{head}; {needed} runs with {s['run']} would separate them "
+            f"({s['distance']:.3g} noise units apart each)."
+        )
+    return (
+        f"{head}; none of the runs tried separates them (at most {s['distance']:.3g} "
+        f"apart, with {s['run']}): {s.get('hint') or 'another kind of measurement'}."
+    )
+
+
+# -- figures -------------------------------------------------------------------
+def _save(fig, path: Path) -> Path:
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def plot_staircase(d: Diagnosis, path: Path) -> Path:
+    """Error (fitted runs and held-out, noise units) against the effects added."""
+    steps = d.staircase
+    labels = ["nominal"] + [f"+ {s['effects'][-1]}" for s in steps[1:]]
+    x = np.arange(len(steps))
+    fig, ax = plt.subplots(figsize=(7, 4))
+    ax.bar(x - 0.18, [s["error"] for s in steps], 0.36, label="error (fitted runs)")
+    held = [s["heldout_error"] for s in steps]
+    ax.bar(x + 0.18, held, 0.36, label="held-out error (leave one run out)")
+    for xi, e in zip(x, [s["error"] for s in steps], strict=True):
+        ax.annotate(f"{e:.3g}", (xi - 0.18, e), ha="center", va="bottom", fontsize=8)
+    ax.axhline(1.0, color="k", ls=":", lw=1, label="noise floor")
+    ax.set_xticks(x, labels, fontsize=8)
+    ax.set_ylabel("RMS error / noise RMS")
+    ax.set_ylim(0, max(1.2, 1.12 * max(s["error"] for s in steps)))
+    ax.grid(True, alpha=0.3, axis="y")
+    ax.legend(fontsize=8)
+    ax.set_title(f"staircase: error against effects added (verdict: {d.verdict})", fontsize=9)
+    return _save(fig, path)
+
+
+def _window(d: RunData, margin: int = 60) -> slice:
+    idx = np.flatnonzero((d.labels == 1) | (d.labels == 2))
+    a = max(idx[0] - margin, 0)
+    b = min(idx[-1] + d.delay_ticks + margin, d.run.n - 1)
+    return slice(a, b + 1)
+
+
+def plot_overlay(d: Diagnosis, i: int, path: Path) -> Path:
+    """Measured f_mea and p_act with the nominal and the diagnosed replay."""
+    rd = d.data[i]
+    r = rd.run
+    nom, fin = d.nominal[i].prediction, d.final[i].prediction
+    w = _window(rd)
+    t = r.time_s[w]
+    fig, ax = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
+    ax[0].plot(t, r.f_mea_n[w], ".", ms=2, color="0.4", label="f_mea measured")
+    ax[0].plot(t, nom["f_mea_n"][w], lw=1.2, label="nominal model")
+    ax[0].plot(t, fin["f_mea_n"][w], lw=1.2, label="diagnosed model")
+    ax[0].set_ylabel("force [N]")
+    ax[1].plot(t, (r.f_mea_n - nom["f_mea_n"])[w], ".", ms=2, label="residual, nominal")
+    ax[1].plot(t, (r.f_mea_n - fin["f_mea_n"])[w], ".", ms=2, label="residual, diagnosed")
+    sig = rd.noise["f_mea_n"].sigma
+    for s in (-2, 2):
+        ax[1].axhline(s * sig, color="k", ls=":", lw=0.8)
+    ax[1].set_ylabel("f_mea residual [N]")
+    ax[2].plot(t, (r.p_act_m - nom["p_act_m"])[w] * 1e6, ".", ms=2, label="residual, nominal")
+    ax[2].plot(t, (r.p_act_m - fin["p_act_m"])[w] * 1e6, ".", ms=2, label="residual, diagnosed")
+    sig = rd.noise["p_act_m"].sigma * 1e6
+    for s in (-2, 2):
+        ax[2].axhline(s * sig, color="k", ls=":", lw=0.8)
+    ax[2].set_ylabel("p_act residual [um]")
+    ax[2].set_xlabel("time [s]")
+    for a in ax:
+        a.grid(True, alpha=0.3)
+        a.legend(fontsize=7, loc="best", markerscale=3)
+    model = " + ".join(d.selected) or "nominal"
+    ax[0].set_title(
+        f"{rd.run_id}: replay before and after ({model}); dotted: +-2 noise RMS", fontsize=9
+    )
+    return _save(fig, path)
+
+
+def _phase_rms(e: np.ndarray, labels: np.ndarray) -> list[float]:
+    return [
+        float(np.sqrt(np.mean(e[labels == k] ** 2))) if np.any(labels == k) else math.nan
+        for k in range(len(PHASES))
+    ]
+
+
+def plot_phases(d: Diagnosis, i: int, path: Path) -> Path:
+    """RMS residual per phase, before and after, in noise units."""
+    rd = d.data[i]
+    r = rd.run
+    fig, ax = plt.subplots(1, 2, figsize=(9, 3.6))
+    x = np.arange(len(PHASES))
+    for k, (ch, labels) in enumerate((("f_mea_n", rd.f_labels), ("p_act_m", rd.labels))):
+        sig = rd.noise[ch].sigma
+        before = _phase_rms((getattr(r, ch) - d.nominal[i].prediction[ch]) / sig, labels)
+        after = _phase_rms((getattr(r, ch) - d.final[i].prediction[ch]) / sig, labels)
+        ax[k].bar(x - 0.2, before, 0.4, label="nominal")
+        ax[k].bar(x + 0.2, after, 0.4, label="diagnosed")
+        ax[k].axhline(1.0, color="k", ls=":", lw=1)
+        ax[k].set_xticks(x, [p.replace("_", "\n") for p in PHASES], fontsize=8)
+        ax[k].set_ylabel("RMS residual / noise RMS")
+        ax[k].set_title(f"{ch} residual by phase", fontsize=9)
+        ax[k].grid(True, alpha=0.3, axis="y")
+        ax[k].legend(fontsize=7)
+    fig.suptitle(rd.run_id, fontsize=9)
+    return _save(fig, path)
+
+
+def _loop(rd: RunData, p: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    on = contact_mask(p)
+    idx = np.flatnonzero(on)
+    a, b = max(idx[0] - 3, 0), min(idx[-1] + 3, len(p) - 1)
+    return p[a : b + 1], f[a : b + 1], loop_energy(p, f, on)
+
+
+def plot_force_deflection(d: Diagnosis, i: int, path: Path) -> Path:
+    """Reading (``M`` ticks later, ``M`` the nominal delay) against penetration:
+    measured, and predicted by the nominal and the diagnosed models."""
+    rd = d.data[i]
+    r, m = rd.run, rd.delay_ticks
+
+    def aligned(f):
+        return np.concatenate([np.asarray(f)[m:], np.full(m, np.nan)])
+
+    valid = np.isfinite(aligned(r.f_mea_n))
+    fig, ax = plt.subplots(figsize=(6, 5))
+    p, f, e = _loop(rd, r.p_act_m[valid], aligned(r.f_mea_n)[valid])
+    ax.plot(p * 1e3, f, ".-", ms=2, lw=0.5, color="0.4", label=f"measured ({e:+.3g} J)")
+    for name, ev in (("nominal", d.nominal[i]), ("diagnosed", d.final[i])):
+        pred = ev.prediction
+        p, f, e = _loop(rd, pred["p_act_m"][valid], aligned(pred["f_mea_n"])[valid])
+        ax.plot(p * 1e3, f, lw=1.4, label=f"{name} model ({e:+.3g} J)")
+    ax.set_xlabel("penetration p_act [mm]")
+    ax.set_ylabel(f"force reading {m} ticks later [N]")
+    ax.set_title(f"{rd.run_id}: force-deflection loops (enclosed energy)", fontsize=9)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7)
+    return _save(fig, path)
+
+
+def write_report(d: Diagnosis, folder: str | Path) -> list[Path]:
+    """Write ``report.md`` and the figures into ``folder``; returns the files written."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / REPORT_MARKER).write_text("written by hybridtable diagnose --report\n")
+    written = [plot_staircase(d, folder / "staircase.png")]
+    md = [
+        "# Which physical effect is missing",
+        "",
+        f"Verdict: **{d.verdict}**"
+        + (f"; model selected: {' + '.join(d.selected)}" if d.selected else "")
+        + ". Definitions: `docs/diagnose.md`.",
+        "",
+        "```",
+        format_ranking(d),
+        "```",
+        "",
+        "## Ranking",
+        "",
+        "| effect | delta BIC | held-out z | error before | error after | held-out error after "
+        "| significant | indistinguishable from | parameters |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+    ]
+    for c in d.ranking:
+        md.append(
+            f"| {c.effect} ({c.stage}) | {_fmt(c.delta_bic, '.1f')} | {_fmt(c.heldout_z, '.1f')} "
+            f"| {_fmt(c.error_before, '.4g')} | {_fmt(c.error_after, '.4g')} "
+            f"| {_fmt(c.heldout_error_after, '.4g')} | {'yes' if c.significant else 'no'} "
+            f"| {', '.join(c.indistinguishable_from) or '-'} "
+            f"| {format_parameters(c.effect, c.parameters)} |"
+        )
+    md += ["", *[separation_text(c) for c in d.ranking if c.separation and c.effect in d.selected]]
+    md += [
+        "",
+        "Errors of replay effects: RMS residual / noise RMS over the runs and both channels "
+        "(1 = noise floor); of closed-loop effects: v_des RMS error in m/s.",
+        "",
+        "## Staircase",
+        "",
+        "| model | error | held-out error | delta BIC of the step |",
+        "| --- | --- | --- | --- |",
+    ]
+    for s in d.staircase:
+        md.append(
+            f"| {' + '.join(s['effects']) or 'nominal'} | {_fmt(s['error'], '.4g')} "
+            f"| {_fmt(s['heldout_error'], '.4g')} | {_fmt(s['delta_bic'], '.1f')} |"
+        )
+    md += ["", "![staircase](staircase.png)", "", "## Closed loop", ""]
+    md += [
+        "| run | CoR measured | CoR nominal | CoR diagnosed | v_des RMS error nominal -> diagnosed [m/s] |"
+    ]
+    md += ["| --- | --- | --- | --- | --- |"]
+    for b, a in zip(d.closed_loop["before"]["runs"], d.closed_loop["after"]["runs"], strict=True):
+        md.append(
+            f"| {b['run_id']} | {_fmt(b.get('cor_measured'), '.5f')} | "
+            f"{_fmt(b.get('cor_model'), '.5f')} | {_fmt(a.get('cor_model'), '.5f')} | "
+            f"{_fmt(b['v_des_rms_error_m_per_s'], '.3g')} -> {_fmt(a['v_des_rms_error_m_per_s'], '.3g')} |"
+        )
+    md.append("")
+    for i, rd in enumerate(d.data):
+        stem = figure_stem(i, rd.run_id)
+        figs = {
+            "overlay": plot_overlay(d, i, folder / f"{stem}_overlay.png"),
+            "phases": plot_phases(d, i, folder / f"{stem}_phases.png"),
+            "force_deflection": plot_force_deflection(
+                d, i, folder / f"{stem}_force_deflection.png"
+            ),
+        }
+        written.extend(figs.values())
+        nz = rd.noise
+        md += [
+            f"## {rd.run_id}",
+            "",
+            f"`{rd.run.csv_path}`, compensator {rd.run.info.compensator}, approach "
+            f"{rd.run.info.initial_velocity_m_per_s:g} m/s. Noise: f_mea "
+            f"{nz['f_mea_n'].sigma:.3g} N (AR(1) {nz['f_mea_n'].phi:+.2f}), p_act "
+            f"{nz['p_act_m'].sigma * 1e6:.3g} um (AR(1) {nz['p_act_m'].phi:+.2f}).",
+            "",
+        ]
+        md += [f"Note: {n}" for n in rd.notes]
+        for title, p in figs.items():
+            md += [f"![{rd.run_id} {title}]({p.name})", ""]
+    if d.notes:
+        md += ["", *[f"Note: {n}" for n in d.notes]]
+    report = folder / "report.md"
+    report.write_text("\n".join(md) + "\n")
+    return [report, *written]

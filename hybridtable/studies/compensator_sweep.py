@@ -1,0 +1,490 @@
+"""Every compensator over the paper's Table 2 grid, under stiffness mismatch,
+sensor noise and a damped contact (``hybridtable compensators``).
+
+Scenarios (each with and without the passivity guard):
+
+- ``mismatch``: the undamped contact of each grid point; the compensators
+  that use a stiffness believe ``prior_ratio * k`` (ratio 1: nominal);
+- ``noise``: white noise on the measured force (``force_noise_ratio`` of the
+  undamped peak force ``v0 sqrt(k m)``) and on the table position
+  (``position_noise_ratio`` of the peak deflection ``v0 / omega``), a new
+  sample every computer period, with a force deadband of
+  ``deadband_sigmas`` standard deviations;
+- ``damped``: a contact with damping ratio ``contact_damping_ratio``
+  (``c = 2 zeta sqrt(k m)``) that the compensators do not know (prior
+  damping 0).
+
+Metrics of a run, against the reference run of the same contact with an ideal
+loop (no delay, ideal table, no compensation):
+
+- ``cor_error``: CoR minus the reference CoR (1 for an undamped contact);
+- ``peak_force_error``: relative error of the peak actual contact force;
+- ``energy_drift``: spacecraft kinetic energy after the contact minus the
+  reference's, relative to the energy before the contact;
+- ``energy_created``: the largest excess of the spacecraft's kinetic energy
+  over its value before the contact, relative to it (> 0: the loop created
+  energy at some instant; a passive contact never does).
+
+Compensators that use no stiffness (``none``, ``SDC``, ``polynomial``) are run
+at ratio 1 only: their results hold for every ratio.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from hybridtable._validation import check_nonnegative, check_positive
+from hybridtable.errors import ParameterError
+
+__all__ = [
+    "SCENARIOS",
+    "STIFFNESS_FREE",
+    "SweepSettings",
+    "SweepCase",
+    "SweepResult",
+    "sweep_points",
+    "sweep_cases",
+    "case_params",
+    "run_case",
+    "run_sweep",
+    "summarize",
+    "acceptance",
+    "default_jobs",
+]
+
+
+SCENARIOS: tuple[str, ...] = ("mismatch", "noise", "damped")
+
+
+#: Compensators whose force does not depend on the believed stiffness.
+STIFFNESS_FREE: frozenset[str] = frozenset({"none", "SDC", "polynomial"})
+
+
+#: Acceptance thresholds of the issue.
+ONLINE_COR_TOLERANCE = 0.01
+
+
+PASSIVITY_MAX_COR = 1.005
+
+
+@dataclass(frozen=True)
+class SweepSettings:
+    """What :func:`run_sweep` runs.
+
+    Parameters
+    ----------
+    compensators : tuple of str
+        Registered compensator names (default: all).
+    prior_ratios : tuple of float
+        Believed / true stiffness in the ``mismatch`` scenario (> 0).
+    noise_prior_ratios, damped_prior_ratios : tuple of float
+        The same for the ``noise`` and ``damped`` scenarios.
+    force_noise_ratio : float
+        Force noise standard deviation / undamped peak force.
+    position_noise_ratio : float
+        Position noise standard deviation / undamped peak deflection.
+    deadband_sigmas : float
+        Force deadband of the noise scenario, in force-noise deviations.
+    contact_damping_ratio : float
+        Damping ratio of the ``damped`` scenario's contact.
+    passivity : tuple of bool
+        Guard settings to run.
+    scenarios : tuple of str
+        Subset of :data:`SCENARIOS`.
+    sample_rate_hz : float or None
+        Sampled rig computer (None: continuous loop, as the paper).
+    seed : int
+        Base seed of the noise (each grid point adds its index).
+    """
+
+    compensators: tuple[str, ...] = ()
+    prior_ratios: tuple[float, ...] = (0.5, 0.75, 1.0, 1.5, 2.0)
+    noise_prior_ratios: tuple[float, ...] = (0.5, 1.0)
+    damped_prior_ratios: tuple[float, ...] = (0.5, 1.0)
+    force_noise_ratio: float = 1e-3
+    position_noise_ratio: float = 1e-4
+    deadband_sigmas: float = 5.0
+    contact_damping_ratio: float = 0.1
+    passivity: tuple[bool, ...] = (False, True)
+    scenarios: tuple[str, ...] = SCENARIOS
+    sample_rate_hz: float | None = None
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        from hybridtable.compensators.registry import compensator_names
+
+        names = compensator_names()
+        comps = tuple(self.compensators) or names
+        for c in comps:
+            if c not in names:
+                raise ParameterError(f"compensator must be one of {', '.join(names)} (got {c!r})")
+        object.__setattr__(self, "compensators", comps)
+        for name in ("prior_ratios", "noise_prior_ratios", "damped_prior_ratios"):
+            values = tuple(check_positive(name, r) for r in getattr(self, name))
+            if not values:
+                raise ParameterError(f"{name} must not be empty")
+            object.__setattr__(self, name, values)
+        for name in (
+            "force_noise_ratio",
+            "position_noise_ratio",
+            "deadband_sigmas",
+            "contact_damping_ratio",
+        ):
+            object.__setattr__(self, name, check_nonnegative(name, getattr(self, name)))
+        if self.contact_damping_ratio >= 1.0:
+            raise ParameterError("contact_damping_ratio must be < 1")
+        for s in self.scenarios:
+            if s not in SCENARIOS:
+                raise ParameterError(f"scenario must be one of {', '.join(SCENARIOS)} (got {s!r})")
+        object.__setattr__(self, "scenarios", tuple(self.scenarios))
+        object.__setattr__(self, "passivity", tuple(bool(p) for p in self.passivity))
+        if self.sample_rate_hz is not None:
+            object.__setattr__(
+                self, "sample_rate_hz", check_positive("sample_rate_hz", self.sample_rate_hz)
+            )
+
+
+@dataclass(frozen=True)
+class SweepCase:
+    """One run of the sweep (picklable: plain values only)."""
+
+    point: int
+    row: tuple[tuple[str, float], ...]
+    scenario: str
+    compensator: str
+    prior_ratio: float
+    passivity: bool
+
+    @property
+    def row_dict(self) -> dict[str, float]:
+        return dict(self.row)
+
+    @property
+    def is_reference(self) -> bool:
+        return self.compensator == "ideal"
+
+
+@dataclass
+class SweepResult:
+    """Runs of :func:`run_sweep` (dicts, JSON-ready) and the settings."""
+
+    settings: SweepSettings
+    points: list[dict[str, float]]
+    runs: list[dict[str, Any]]
+    references: list[dict[str, Any]]
+    wall_time_s: float = 0.0
+    figures: list[str] = field(default_factory=list)
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "settings": asdict(self.settings),
+            "points": self.points,
+            "references": self.references,
+            "runs": self.runs,
+            "summary": summarize(self),
+            "acceptance": acceptance(self),
+            "figures": self.figures,
+            "wall_time_s": self.wall_time_s,
+        }
+
+
+def sweep_points(tables: dict[str, Any] | None = None, quick: bool = False) -> list[dict]:
+    """The distinct rows of Table 2 (paper units, without the CoR column);
+    ``quick``: the Table 1 point only."""
+    from hybridtable.studies.paper import load_tables, table2_rows
+
+    tables = tables or load_tables()
+    points: list[dict[str, float]] = []
+    for row in table2_rows(tables):
+        row = {k: float(v) for k, v in row.items() if k != "cor_sdmdc"}
+        if row not in points:
+            points.append(row)
+    if quick:
+        t1 = tables["table1_simulation"]["parameters"]
+        point = {
+            "sensor_delay_ms": t1["sensor_delay_s"] * 1e3,
+            "table_response_hz": t1["table_response_hz"],
+            "contact_frequency_hz": t1["contact_frequency_hz"],
+            "contact_stiffness_n_per_mm": t1["contact_stiffness_n_per_m"] * 1e-3,
+            "initial_velocity_mm_per_s": t1["initial_velocity_m_per_s"] * 1e3,
+        }
+        points = [{k: float(v) for k, v in point.items()}]
+    return points
+
+
+def sweep_cases(settings: SweepSettings, points: Sequence[dict[str, float]]) -> list[SweepCase]:
+    """Every run of the sweep, references excluded."""
+    ratios = {
+        "mismatch": settings.prior_ratios,
+        "noise": settings.noise_prior_ratios,
+        "damped": settings.damped_prior_ratios,
+    }
+    cases = []
+    for i, row in enumerate(points):
+        frozen = tuple(sorted(row.items()))
+        for scenario in settings.scenarios:
+            for comp in settings.compensators:
+                rs = (1.0,) if comp in STIFFNESS_FREE else ratios[scenario]
+                for ratio in rs:
+                    for guard in settings.passivity:
+                        cases.append(SweepCase(i, frozen, scenario, comp, ratio, guard))
+    return cases
+
+
+def _reference_cases(settings: SweepSettings, points) -> list[SweepCase]:
+    damped = [False, True] if "damped" in settings.scenarios else [False]
+    return [
+        SweepCase(i, tuple(sorted(row.items())), "damped" if d else "mismatch", "ideal", 1.0, False)
+        for i, row in enumerate(points)
+        for d in damped
+    ]
+
+
+def _noise_levels(params) -> tuple[float, float]:
+    """Undamped peak force v0 sqrt(k m) and peak deflection v0 / omega."""
+    k, m = params.contact_stiffness_n_per_m, params.spacecraft_mass_kg
+    v0 = params.initial_velocity_m_per_s
+    return v0 * math.sqrt(k * m), v0 / math.sqrt(k / m)
+
+
+def case_params(case: SweepCase, settings: SweepSettings):
+    """The :class:`~hybridtable.loop.params.HybridLoopParams` of a case, and the
+    noise it reads (a :class:`~hybridtable.systems.noise.MeasurementNoiseParams`
+    or None)."""
+    from hybridtable.studies.paper import table2_params
+    from hybridtable.systems.noise import MeasurementNoiseParams
+
+    base = table2_params(case.row_dict, sample_rate_hz=settings.sample_rate_hz)
+    k, m = base.contact_stiffness_n_per_m, base.spacecraft_mass_kg
+    c = 2.0 * settings.contact_damping_ratio * math.sqrt(k * m)
+    damping = c if case.scenario == "damped" else 0.0
+    if case.is_reference:
+        return (
+            base.with_(
+                compensator="none",
+                sensor_delay_s=0.0,
+                table_response_hz=math.inf,
+                contact_damping_n_s_per_m=damping,
+                sample_rate_hz=None,
+            ),
+            None,
+        )
+    params = base.with_(
+        compensator=case.compensator,
+        compensator_stiffness_n_per_m=case.prior_ratio * k,
+        compensator_damping_n_s_per_m=0.0,
+        contact_damping_n_s_per_m=damping,
+        passivity=case.passivity,
+    )
+    noise = None
+    if case.scenario == "noise":
+        f0, x0 = _noise_levels(params)
+        sigma_f = settings.force_noise_ratio * f0
+        noise = MeasurementNoiseParams(
+            sigma_f, settings.position_noise_ratio * x0, settings.seed + case.point
+        )
+        params = params.with_(force_deadband_n=settings.deadband_sigmas * sigma_f)
+    return params, noise
+
+
+def run_case(case: SweepCase, settings: SweepSettings) -> dict[str, Any]:
+    """Run one case; a failed run (divergence, capture) is recorded with its
+    error and NaN metrics, never dropped."""
+    from hybridtable.compensators.registry import make_compensator
+    from hybridtable.errors import SimulationError
+    from hybridtable.loop.builder import build_hybrid_loop
+    from hybridtable.loop.simulation import run_loop
+    from hybridtable.systems.noise import with_measurement_noise
+
+    params, noise = case_params(case, settings)
+    out: dict[str, Any] = {
+        "point": case.point,
+        "scenario": case.scenario,
+        "compensator": case.compensator,
+        "prior_ratio": case.prior_ratio,
+        "passivity": case.passivity,
+        "error": None,
+    }
+    try:
+        compensator = None
+        if noise is not None:
+            period = build_hybrid_loop(params, log=False).computer_period_s
+            inner = make_compensator(params.with_(passivity=False), period)
+            compensator = with_measurement_noise(inner, noise, period)
+        result = run_loop(build_hybrid_loop(params, compensator=compensator))
+    except SimulationError as err:
+        out.update(cor=math.nan, peak_force_n=math.nan, energy_created=math.nan, error=str(err))
+        return out
+    m = result.metrics
+    v = result.v_des_m_per_s
+    ke_in = 0.5 * m.v_in_m_per_s**2
+    ke_max = float(np.max(0.5 * v**2))
+    out.update(
+        cor=m.cor,
+        peak_force_n=m.peak_force_n,
+        v_in_m_per_s=m.v_in_m_per_s,
+        v_out_m_per_s=m.v_out_m_per_s,
+        energy_created=max(0.0, ke_max - ke_in) / ke_in,
+        steps=result.steps,
+    )
+    return out
+
+
+def _run_indexed(item):
+    index, case, settings = item
+    return index, run_case(case, settings)
+
+
+def run_sweep(
+    settings: SweepSettings,
+    points: Sequence[dict[str, float]],
+    progress: bool = True,
+    jobs: int = 1,
+) -> SweepResult:
+    """Run the references and every case (``jobs`` worker processes)."""
+    import time
+
+    from tqdm import tqdm
+
+    t0 = time.perf_counter()
+    refs = _reference_cases(settings, points)
+    cases = sweep_cases(settings, points)
+    work = list(enumerate(refs + cases))
+    results: list[dict[str, Any] | None] = [None] * len(work)
+    bar = tqdm(total=len(work), desc="compensators", unit="run", disable=not progress)
+    items = [(i, c, settings) for i, c in work]
+    if jobs <= 1:
+        for item in items:
+            i, r = _run_indexed(item)
+            results[i] = r
+            bar.update(1)
+    else:
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+
+        # fork where available (no main-module guard needed in scripts).
+        methods = multiprocessing.get_all_start_methods()
+        ctx = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
+        with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as pool:
+            for i, r in pool.map(_run_indexed, items, chunksize=4):
+                results[i] = r
+                bar.update(1)
+    bar.close()
+    ref_runs = results[: len(refs)]
+    runs = results[len(refs) :]
+    ref_by = {(r["point"], r["scenario"] == "damped"): r for r in ref_runs}
+    for r in runs:
+        ref = ref_by[(r["point"], r["scenario"] == "damped")]
+        r["cor_reference"] = ref["cor"]
+        r["cor_error"] = r["cor"] - ref["cor"]
+        r["peak_force_error"] = r["peak_force_n"] / ref["peak_force_n"] - 1.0
+        r["energy_drift"] = r["cor"] ** 2 - ref["cor"] ** 2
+    return SweepResult(settings, list(points), runs, ref_runs, wall_time_s=time.perf_counter() - t0)
+
+
+def _key(r: dict[str, Any]) -> str:
+    return r["compensator"] + (" +passivity" if r["passivity"] else "")
+
+
+def _max_abs(values: list[float]) -> float:
+    if not values:
+        return math.nan
+    arr = np.asarray(values, dtype=float)
+    return math.inf if np.isnan(arr).any() else float(np.max(np.abs(arr)))
+
+
+def summarize(result: SweepResult) -> dict[str, dict[str, Any]]:
+    """Per compensator (and guard) and scenario: worst |CoR error|, largest
+    CoR, worst |peak-force error|, worst |energy drift|, largest energy
+    created, number of runs and of failed runs."""
+    out: dict[str, dict[str, Any]] = {}
+    for r in result.runs:
+        entry = out.setdefault(_key(r), {}).setdefault(r["scenario"], {"runs": []})
+        entry["runs"].append(r)
+    for key, scen in out.items():
+        for name, entry in scen.items():
+            rs = entry.pop("runs")
+            nominal = [r for r in rs if r["prior_ratio"] == 1.0]
+            scen[name] = {
+                "runs": len(rs),
+                "failed": sum(r["error"] is not None for r in rs),
+                "max_abs_cor_error": _max_abs([r["cor_error"] for r in rs]),
+                "max_abs_cor_error_nominal_k": _max_abs([r["cor_error"] for r in nominal]),
+                "max_cor": float(np.nanmax([r["cor"] for r in rs]))
+                if any(r["error"] is None for r in rs)
+                else math.nan,
+                "max_abs_peak_force_error": _max_abs([r["peak_force_error"] for r in rs]),
+                "max_abs_energy_drift": _max_abs([r["energy_drift"] for r in rs]),
+                "max_energy_created": _max_abs([r["energy_created"] for r in rs]),
+            }
+        out[key] = scen
+    return out
+
+
+def acceptance(result: SweepResult) -> dict[str, Any]:
+    """The issue's acceptance checks on this sweep.
+
+    - ``sdmdc_online``: every unguarded ``sdmdc-online`` run of the
+      ``mismatch`` scenario within 0.01 of the reference CoR;
+    - ``passivity``: no guarded run ends with CoR above 1.005 (a failed
+      guarded run fails the check);
+    - ``fixed_k_sdmdc_at_half_k``: fixed-k SDMDC's CoR error at prior ratio
+      0.5 (shown, not a pass/fail point).
+    """
+    online = [
+        r
+        for r in result.runs
+        if r["compensator"] == "sdmdc-online" and not r["passivity"] and r["scenario"] == "mismatch"
+    ]
+    online_err = _max_abs([r["cor_error"] for r in online])
+    guarded = [r for r in result.runs if r["passivity"]]
+    worst = max(guarded, key=lambda r: -math.inf if r["error"] else r["cor"], default=None)
+    guarded_ok = all(r["error"] is None and r["cor"] <= PASSIVITY_MAX_COR for r in guarded)
+    half = [
+        {"point": r["point"], "cor": r["cor"], "cor_error": r["cor_error"]}
+        for r in result.runs
+        if r["compensator"] == "SDMDC"
+        and not r["passivity"]
+        and r["scenario"] == "mismatch"
+        and r["prior_ratio"] == 0.5
+    ]
+    online_half = [
+        {"point": r["point"], "cor": r["cor"], "cor_error": r["cor_error"]}
+        for r in online
+        if r["prior_ratio"] == 0.5
+    ]
+    out: dict[str, Any] = {
+        "sdmdc_online": {
+            "runs": len(online),
+            "max_abs_cor_error": online_err,
+            "tolerance": ONLINE_COR_TOLERANCE,
+            "passed": bool(online) and online_err <= ONLINE_COR_TOLERANCE,
+        },
+        "passivity": {
+            "runs": len(guarded),
+            "max_cor": None if worst is None else worst["cor"],
+            "worst_case": None
+            if worst is None
+            else {k: worst[k] for k in ("point", "scenario", "compensator", "prior_ratio")},
+            "limit": PASSIVITY_MAX_COR,
+            "passed": bool(guarded) and guarded_ok,
+        },
+        "fixed_k_sdmdc_at_half_k": half,
+        "sdmdc_online_at_half_k": online_half,
+    }
+    return out
+
+
+def default_jobs() -> int:
+    """Worker processes: the CPUs available, at most 4."""
+    try:
+        n = len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover
+        n = os.cpu_count() or 1
+    return max(1, min(4, n))

@@ -1,0 +1,106 @@
+"""The seed paper's parameter sets and tables (``../shared/paper/tables.json``).
+
+The package ships a copy of ``tables.json``; a file given explicitly, or
+``../shared/paper/tables.json`` beside the repository, is preferred.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from hybridtable.loop.params import HybridLoopParams
+
+__all__ = [
+    "TABLE1_DEFAULTS",
+    "cor_estimate",
+    "load_tables",
+    "paper_params",
+    "table1_params",
+    "table2_params",
+    "table2_rows",
+]
+
+#: The paper's Table 1 operating point (Sec. III.A).
+TABLE1_DEFAULTS: dict[str, float] = {
+    "contact_stiffness_n_per_m": 1e5,
+    "contact_frequency_hz": 1.0,
+    "initial_velocity_m_per_s": 0.1,
+    "table_response_hz": 25.0,
+    "table_damping_ratio": 0.8,
+    "sensor_delay_s": 0.005,
+}
+
+
+def _default_tables_path() -> Path | None:
+    here = Path(__file__).resolve().parent.parent.parent / "shared" / "paper" / "tables.json"
+    return here if here.is_file() else None
+
+
+def load_tables(path: str | Path | None = None) -> dict[str, Any]:
+    """The paper's tables as a dict (the ``tables.json`` schema)."""
+    path = Path(path) if path is not None else _default_tables_path()
+    if path is not None:
+        return json.loads(Path(path).read_text())
+    return json.loads(resources.files("hybridtable.data").joinpath("paper_tables.json").read_text())
+
+
+def paper_params(
+    compensator: str = "none",
+    sensor_delay_s: float = 0.005,
+    table_response_hz: float = 25.0,
+    table_damping_ratio: float = 0.8,
+    contact_frequency_hz: float = 1.0,
+    contact_stiffness_n_per_m: float = 1e5,
+    initial_velocity_m_per_s: float = 0.1,
+    **kwargs: Any,
+) -> HybridLoopParams:
+    """Loop parameters of a paper-style run (continuous, T_lead = T_fms)."""
+    return HybridLoopParams.from_contact_frequency(
+        contact_frequency_hz,
+        contact_stiffness_n_per_m,
+        sensor_delay_s=sensor_delay_s,
+        table_response_hz=table_response_hz,
+        table_damping_ratio=table_damping_ratio,
+        compensator=compensator,
+        initial_velocity_m_per_s=initial_velocity_m_per_s,
+        **kwargs,
+    )
+
+
+def table1_params(
+    compensator: str, tables: dict[str, Any] | None = None, **kwargs: Any
+) -> HybridLoopParams:
+    """Parameters of Table 1 for one compensator."""
+    tables = tables or load_tables()
+    p = dict(tables["table1_simulation"]["parameters"])
+    return paper_params(compensator=compensator, **p, **kwargs)
+
+
+def table2_rows(tables: dict[str, Any] | None = None) -> list[dict[str, float]]:
+    """Rows of Table 2, in the paper's order, with the paper's units."""
+    tables = tables or load_tables()
+    t2 = tables["table2_simulation_sdmdc"]
+    return [dict(zip(t2["columns"], row, strict=True)) for row in t2["rows"]]
+
+
+def table2_params(row: dict[str, float], **kwargs: Any) -> HybridLoopParams:
+    """Loop parameters (SDMDC, table damping 0.8) of one Table 2 row."""
+    return paper_params(
+        compensator="SDMDC",
+        sensor_delay_s=row["sensor_delay_ms"] * 1e-3,
+        table_response_hz=row["table_response_hz"],
+        contact_frequency_hz=row["contact_frequency_hz"],
+        contact_stiffness_n_per_m=row["contact_stiffness_n_per_mm"] * 1e3,
+        initial_velocity_m_per_s=row["initial_velocity_mm_per_s"] * 1e-3,
+        **kwargs,
+    )
+
+
+def cor_estimate(params: HybridLoopParams) -> float:
+    """First-order CoR estimate exp(pi^2 f_con tau_eff) of an uncompensated,
+    undamped loop with small effective delay tau_eff."""
+    return math.exp(math.pi**2 * params.contact_frequency_hz * params.effective_delay_s)

@@ -1,0 +1,148 @@
+"""The force-measurement chain of a sampled rig: first-order low pass, fractional
+delay and offset (:class:`MeasurementChain`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from pydrake.systems.framework import Diagram, DiagramBuilder
+from pydrake.systems.primitives import (
+    Adder,
+    ConstantVectorSource,
+    DiscreteTimeDelay,
+    LinearSystem,
+    MatrixGain,
+    Multiplexer,
+    PassThrough,
+)
+
+from hybridtable._validation import check_finite, check_nonnegative, check_positive
+
+__all__ = [
+    "MeasurementChainParams",
+    "MeasurementChain",
+    "first_order_hold_filter",
+]
+
+
+# -- force-measurement chain ---------------------------------------------------
+@dataclass(frozen=True)
+class MeasurementChainParams:
+    """The force-measurement chain of a sampled rig, SI units.
+
+    ``f_mea[k] = b + y(t_k - D)``, ``y`` the force through a first-order low
+    pass of time constant ``tau``; a delay ``D`` between ticks is linear
+    interpolation of the two neighbouring tick samples.
+
+    Parameters
+    ----------
+    sample_period_s : float
+        Tick period ``h`` of the rig computer, > 0.
+    delay_s : float
+        Total delay ``D`` of the reading, >= 0 (any value, not only whole ticks).
+    time_constant_s : float
+        ``tau`` of the low pass, >= 0 (0: none).
+    bias_n : float
+        Offset ``b`` of the reading.
+    """
+
+    sample_period_s: float
+    delay_s: float = 0.0
+    time_constant_s: float = 0.0
+    bias_n: float = 0.0
+
+    def __post_init__(self) -> None:
+        s = object.__setattr__
+        s(self, "sample_period_s", check_positive("sample_period_s", self.sample_period_s))
+        s(self, "delay_s", check_nonnegative("delay_s", self.delay_s))
+        s(self, "time_constant_s", check_nonnegative("time_constant_s", self.time_constant_s))
+        s(self, "bias_n", check_finite("bias_n", self.bias_n))
+
+    def taps(self) -> tuple[int, float]:
+        """Whole ticks ``M`` and fraction ``alpha`` of the delay,
+        ``D = (M + alpha) h`` (a delay within 1e-9 of a whole tick is whole)."""
+        x = self.delay_s / self.sample_period_s
+        m = math.floor(x + 1e-9)
+        alpha = x - m
+        return m, (0.0 if alpha < 1e-9 else alpha)
+
+
+def first_order_hold_filter(
+    time_constant_s: float, sample_period_s: float
+) -> tuple[float, float, float]:
+    """Exact discretization of ``1 / (tau s + 1)`` for an input linear between
+    ticks: ``y[k+1] = a y[k] + b0 u[k] + b1 u[k+1]``; returns ``(a, b0, b1)``."""
+    tau, h = time_constant_s, sample_period_s
+    if tau <= 0.0:
+        return 0.0, 0.0, 1.0
+    a = math.exp(-h / tau)
+    q = tau / h * (1.0 - a)  # -expm1 keeps precision for large tau
+    return a, q - a, 1.0 - q
+
+
+class MeasurementChain(Diagram):
+    """The force-measurement chain as Drake primitives (:class:`MeasurementChainParams`).
+
+    Ports
+    -----
+    Input ``force`` (size 1, N)
+        Actual contact force.
+    Output ``measured_force`` (size 1, N)
+        The reading the rig computer gets at its ticks.
+
+    ``force -> [low pass] -> DiscreteTimeDelay taps M, M+1 -> (1 - alpha, alpha) -> + b``.
+    The low pass is a discrete ``LinearSystem`` with feedthrough (the
+    first-order-hold discretization of the continuous filter: exact while the
+    force is linear between ticks). The taps follow the sampled sensor's
+    semantics (``DiscreteTimeDelay(h, M - 1)`` read at tick ``k`` is
+    ``u(t_k - M h)``), so with ``tau = 0``, ``b = 0`` and a whole-tick delay it
+    is exactly :class:`~hybridtable.systems.sensor.ForceSensorDelay` ``"sampled"``.
+    """
+
+    def __init__(self, params: MeasurementChainParams) -> None:
+        Diagram.__init__(self)
+        self.params = params
+        h = params.sample_period_s
+        builder = DiagramBuilder()
+        entry = builder.AddNamedSystem("entry", PassThrough(1))
+        signal = entry.get_output_port()
+        if params.time_constant_s > 0.0:
+            a, b0, b1 = first_order_hold_filter(params.time_constant_s, h)
+            # z[k] = y[k] - b1 u[k]:  z[k+1] = a z[k] + (a b1 + b0) u[k], y = z + b1 u.
+            lowpass = builder.AddNamedSystem(
+                "low_pass",
+                LinearSystem([[a]], [[a * b1 + b0]], [[1.0]], [[b1]], time_period=h),
+            )
+            builder.Connect(signal, lowpass.get_input_port())
+            signal = lowpass.get_output_port()
+        m, alpha = params.taps()
+
+        def tap(j: int):
+            if j == 0:
+                return signal
+            delay = builder.AddNamedSystem(f"delay_{j}", DiscreteTimeDelay(h, j - 1, 1))
+            builder.Connect(signal, delay.get_input_port())
+            return delay.get_output_port()
+
+        out = tap(m)
+        if alpha > 0.0:
+            mux = builder.AddNamedSystem("taps", Multiplexer(2))
+            builder.Connect(out, mux.get_input_port(0))
+            builder.Connect(tap(m + 1), mux.get_input_port(1))
+            mix = builder.AddNamedSystem(
+                "interpolation", MatrixGain(np.array([[1 - alpha, alpha]]))
+            )
+            builder.Connect(mux.get_output_port(), mix.get_input_port())
+            out = mix.get_output_port()
+        if params.bias_n != 0.0:
+            bias = builder.AddNamedSystem("bias", ConstantVectorSource([params.bias_n]))
+            adder = builder.AddNamedSystem("add_bias", Adder(2, 1))
+            builder.Connect(out, adder.get_input_port(0))
+            builder.Connect(bias.get_output_port(), adder.get_input_port(1))
+            out = adder.get_output_port()
+        builder.ExportInput(entry.get_input_port(), "force")
+        builder.ExportOutput(out, "measured_force")
+        builder.BuildInto(self)

@@ -1,0 +1,149 @@
+"""The force-sensor delay T_fms: ``f_mea(t) = f_act(t - T_fms)``.
+
+Three realizations of the same pure delay, with the same ports:
+
+- ``"continuous"``: Drake's ``DiscreteTimeDelay`` at a fine period ``h``. Seen
+  by continuous consumers, ``DiscreteTimeDelay(h, N)`` delays by ``N h`` to
+  ``(N + 1) h``, on average ``N h + h/2``, so ``h = T / (N + 1/2)``.
+- ``"sampled"``: the rig computer's view at a sample rate. Discrete consumers
+  updating at tick ``k`` read ``DiscreteTimeDelay(h, N)`` as ``u(t_k - (N+1) h)``,
+  so a delay of ``M`` samples is ``DiscreteTimeDelay(h, M - 1)`` and
+  ``f_mea[k] = f_act(t_k - M h)`` exactly.
+- ``"pade"``: a continuous Pade approximant (``control.pade``) for analysis.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from pydrake.systems.framework import Diagram, DiagramBuilder
+from pydrake.systems.primitives import DiscreteTimeDelay, LinearSystem, PassThrough
+
+from hybridtable._validation import check_nonnegative, check_positive
+from hybridtable.errors import ParameterError
+
+__all__ = [
+    "SensorParams",
+    "ForceSensorDelay",
+    "continuous_delay_period",
+    "delay_samples",
+    "pade_state_space",
+]
+
+
+@dataclass(frozen=True)
+class SensorParams:
+    """Parameters of the force-measurement chain.
+
+    Parameters
+    ----------
+    sensor_delay_s : float
+        Pure delay T_fms of the measured force behind the actual force, >= 0.
+    """
+
+    sensor_delay_s: float = 0.0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(
+            self, "sensor_delay_s", check_nonnegative("sensor_delay_s", self.sensor_delay_s)
+        )
+
+
+def continuous_delay_period(delay_s: float, max_period_s: float) -> tuple[float, int]:
+    """Period ``h`` and length ``N`` of a ``DiscreteTimeDelay`` whose mean delay
+    ``N h + h/2`` equals ``delay_s``, with ``h <= max_period_s``."""
+    check_positive("sensor_delay_s", delay_s)
+    check_positive("time_step_s", max_period_s)
+    n = max(0, math.ceil(delay_s / max_period_s - 0.5))
+    return delay_s / (n + 0.5), n
+
+
+def delay_samples(delay_s: float, sample_period_s: float) -> int:
+    """Number of samples ``M`` with ``M h = delay_s``; raises if not an integer."""
+    m = delay_s / sample_period_s
+    mi = int(round(m))
+    if abs(m - mi) > 1e-6:
+        raise ParameterError(
+            f"sensor_delay_s ({delay_s}) must be a whole number of sample periods "
+            f"({sample_period_s} s) for a sampled loop"
+        )
+    return mi
+
+
+def pade_state_space(
+    delay_s: float, order: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """State-space (A, B, C, D) of the order-``order`` Pade approximant of e^{-sT}."""
+    import control  # only analysis needs it; keeps it out of the CLI's start-up
+
+    if order < 1:
+        raise ParameterError(f"pade_order must be >= 1 (got {order})")
+    num, den = control.pade(delay_s, order)
+    ss = control.tf2ss(control.tf(num, den))
+    return (np.asarray(ss.A), np.asarray(ss.B), np.asarray(ss.C), np.asarray(ss.D))
+
+
+class ForceSensorDelay(Diagram):
+    """Pure delay of the force-measurement chain, as a Drake system.
+
+    Ports
+    -----
+    Input ``force`` (size ``size``, N and/or N/s)
+        Actual contact force f_act (and optionally its rate, for analysis).
+    Output ``measured_force`` (size ``size``)
+        The same signal delayed by T_fms: f_mea.
+
+    Parameters
+    ----------
+    params : SensorParams
+    mode : {"continuous", "sampled", "pade"}
+    period_s : float
+        Fine period of the continuous realization (an upper bound) or the
+        sample period of the sampled one; unused for ``"pade"``.
+    pade_order : int
+        Order of the Pade approximant.
+    size : int
+        Number of channels delayed (1, or 2 for ``[f, df/dt]``).
+    """
+
+    def __init__(
+        self,
+        params: SensorParams,
+        mode: str = "continuous",
+        period_s: float = 1e-4,
+        pade_order: int = 3,
+        size: int = 1,
+    ) -> None:
+        Diagram.__init__(self)
+        self.params = params
+        self.mode = mode
+        T = params.sensor_delay_s
+        builder = DiagramBuilder()
+        self.update_period_s: float | None = None
+        if T == 0.0:
+            inner = builder.AddNamedSystem("no_delay", PassThrough(size))
+        elif mode == "continuous":
+            h, n = continuous_delay_period(T, period_s)
+            self.update_period_s = h
+            inner = builder.AddNamedSystem("delay", DiscreteTimeDelay(h, n, size))
+        elif mode == "sampled":
+            m = delay_samples(T, period_s)
+            self.update_period_s = period_s
+            if m == 0:
+                inner = builder.AddNamedSystem("no_delay", PassThrough(size))
+            else:
+                inner = builder.AddNamedSystem("delay", DiscreteTimeDelay(period_s, m - 1, size))
+        elif mode == "pade":
+            A, B, C, D = pade_state_space(T, pade_order)
+            eye = np.eye(size)
+            inner = builder.AddNamedSystem(
+                "pade_delay",
+                LinearSystem(np.kron(eye, A), np.kron(eye, B), np.kron(eye, C), np.kron(eye, D)),
+            )
+        else:
+            raise ParameterError(f"sensor mode must be continuous, sampled or pade (got {mode!r})")
+        builder.ExportInput(inner.get_input_port(), "force")
+        builder.ExportOutput(inner.get_output_port(), "measured_force")
+        builder.BuildInto(self)
