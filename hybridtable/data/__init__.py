@@ -1,0 +1,3 @@
+"""Data files shipped with the package (the paper's tables)."""
+
+__all__: list[str] = []

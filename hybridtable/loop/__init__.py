@@ -1,0 +1,34 @@
+"""The 1-D hybrid loop of the paper as a Drake diagram, and its simulation.
+
+::
+
+    spacecraft --state--> table --motion--> contact --force--> sensor delay
+        ^                   |                                      |
+        |                   +--table_motion--+                     |
+        +--compensated_force-- compensator <-+---measured_force----+
+                               ^--commanded_state-- spacecraft
+
+- :mod:`~hybridtable.loop.params`: :class:`HybridLoopParams`, every parameter of a run;
+- :mod:`~hybridtable.loop.builder`: :func:`add_hybrid_loop` wires the systems of
+  :mod:`hybridtable.systems` and a compensator of :mod:`hybridtable.compensators`;
+- :mod:`~hybridtable.loop.simulation`: :func:`simulate` runs one contact;
+- :mod:`~hybridtable.loop.metrics`: CoR, contact duration, peak force, energy gained.
+"""
+
+from hybridtable.loop.builder import LOGGED, HybridLoop, add_hybrid_loop, build_hybrid_loop
+from hybridtable.loop.metrics import ContactMetrics, contact_metrics
+from hybridtable.loop.params import HybridLoopParams
+from hybridtable.loop.simulation import SimulationResult, run_loop, simulate
+
+__all__ = [
+    "LOGGED",
+    "ContactMetrics",
+    "HybridLoop",
+    "HybridLoopParams",
+    "SimulationResult",
+    "add_hybrid_loop",
+    "build_hybrid_loop",
+    "contact_metrics",
+    "run_loop",
+    "simulate",
+]

@@ -1,4 +1,4 @@
-"""diagnose on runs with a hidden effect (tests/_effectsim.py: RK4, exact contact
+"""diagnose on runs with a hidden effect (tests/generators/effectsim.py: RK4, exact contact
 laws, continuous filter and delay, white or AR(1) noise) and on runs without one.
 
 A representative subset (the full confusion study over every effect, sizes and
@@ -14,8 +14,6 @@ import math
 
 import numpy as np
 import pytest
-from _effectsim import make_runs, simulate_hidden
-from _rigsim import NOMINAL
 from pydrake.systems.primitives import MatrixGain
 
 from hybridtable.cli import main
@@ -27,6 +25,8 @@ from hybridtable.diagnosis.registry import register_effect, unregister_effect
 from hybridtable.measurement.noise import NoiseModel, estimate_noise, whiten
 from hybridtable.measurement.run_format import Run, RunInfo
 from hybridtable.systems.blocks import chain_output
+from tests.generators.effectsim import make_runs, simulate_hidden
+from tests.generators.rigsim import NOMINAL
 
 VELOCITIES = (0.06, 0.1)
 COMPENSATORS = ("SDMDC", "none")

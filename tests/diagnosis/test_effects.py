@@ -1,16 +1,11 @@
-"""Candidate effects: their Drake systems (closed forms, nominal limits, AutoDiff),
-the library and registry, and each effect against an independent simulation of
-a rig that has it (tests/_effectsim.py)."""
+"""Candidate effects: the library and registry, and each effect against an
+independent simulation of a rig that has it (tests/generators/effectsim.py).
+"""
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
-from _effectsim import HIDDEN, simulate_hidden
-from _rigsim import NOMINAL, write_run
-from pydrake.autodiffutils import AutoDiffXd, InitializeAutoDiff
 from pydrake.systems.primitives import MatrixGain
 
 from hybridtable.diagnosis.effects import Effect, EffectParameter, ModelSpec, RigScale, Signature
@@ -28,140 +23,11 @@ from hybridtable.measurement.replay import replay
 from hybridtable.measurement.rig import RigPhysics
 from hybridtable.measurement.run_format import read_run
 from hybridtable.systems.blocks import chain_output
-from hybridtable.systems.contact import ContactParams, UnilateralSpringContact
-from hybridtable.systems.contact_law import ContactLaw, ContactLawParams, contact_law_force
-from hybridtable.systems.measurement_chain import MeasurementChainParams, first_order_hold_filter
-from hybridtable.systems.resonant_table import StructuralModeParams, resonant_table_matrices
-from hybridtable.systems.table import TableParams
+from tests.generators.effectsim import HIDDEN, simulate_hidden
+from tests.generators.rigsim import NOMINAL, write_run
 
+#: Contact stiffness of the test rigs, N/m.
 K = 60000.0
-
-
-def _eval(system, motion):
-    ctx = system.CreateDefaultContext()
-    system.GetInputPort("motion").FixValue(ctx, np.asarray(motion, dtype=float))
-    return system.GetOutputPort("force").Eval(ctx)[0], system.GetOutputPort("force_rate").Eval(ctx)[
-        0
-    ]
-
-
-# -- contact law -----------------------------------------------------------------
-@pytest.mark.parametrize(
-    "motion", [(-1e-3, 0.1, 0.0), (0.0, 0.2, 1.0), (2e-3, 0.05, -3.0), (5e-3, -0.08, 2.0)]
-)
-def test_contact_law_at_null_values_is_the_nominal_spring(motion):
-    assert _eval(ContactLaw(ContactLawParams(K)), motion) == pytest.approx(
-        _eval(UnilateralSpringContact(ContactParams(K)), motion), rel=1e-15, abs=0.0
-    )
-
-
-def test_contact_law_closed_forms():
-    p, v, a = 3e-3, 0.05, -2.0
-    f, rate = contact_law_force(ContactLawParams(K, damping_n_s_per_m=400.0), p, v, a)
-    assert f == pytest.approx(K * p + 400.0 * v) and rate == pytest.approx(K * v + 400.0 * a)
-    f, _ = contact_law_force(ContactLawParams(K, hunt_crossley_s_per_m=3.0), p, v)
-    assert f == pytest.approx(K * p * (1 + 3.0 * v))
-    # Power law: secant stiffness k at d_ref, f ~ d^n elsewhere.
-    law = ContactLawParams(K, exponent=1.5, reference_deflection_m=4e-3)
-    assert contact_law_force(law, 4e-3, 0.0)[0] == pytest.approx(K * 4e-3)
-    assert contact_law_force(law, 1e-3, 0.0)[0] == pytest.approx(K * 4e-3 * (1 / 4) ** 1.5)
-    # Series compliance: k / (1 + k s) for a linear spring; the implicit law otherwise.
-    s = 2e-6
-    f, _ = contact_law_force(ContactLawParams(K, series_compliance_m_per_n=s), p, 0.0)
-    assert f == pytest.approx(K / (1 + K * s) * p)
-    law = ContactLawParams(
-        K, exponent=1.5, reference_deflection_m=4e-3, series_compliance_m_per_n=s
-    )
-    f, _ = contact_law_force(law, p, 0.0)
-    assert f == pytest.approx(K * 4e-3 * ((p - s * f) / 4e-3) ** 1.5, rel=1e-12)
-    # Coulomb friction: +F compressing, -F relaxing, smoothed over v_F.
-    law = ContactLawParams(K, friction_force_n=15.0, friction_velocity_m_per_s=1e-3)
-    assert contact_law_force(law, p, 0.05)[0] == pytest.approx(K * p + 15.0)
-    assert contact_law_force(law, p, -0.05)[0] == pytest.approx(K * p - 15.0)
-    assert contact_law_force(law, p, 0.0)[0] == pytest.approx(K * p)
-
-
-def test_contact_law_never_pulls_and_is_zero_apart():
-    law = ContactLawParams(K, damping_n_s_per_m=5000.0, friction_force_n=50.0)
-    assert contact_law_force(law, 1e-4, -0.05) == (0.0, 0.0)  # 6 - 250 - 50 < 0
-    assert contact_law_force(law, -1e-3, 0.3) == (0.0, 0.0)
-
-
-def test_contact_law_force_rate_is_the_time_derivative():
-    law = ContactLawParams(
-        K,
-        exponent=1.4,
-        reference_deflection_m=5e-3,
-        damping_n_s_per_m=200.0,
-        hunt_crossley_s_per_m=1.0,
-        friction_force_n=10.0,
-        friction_velocity_m_per_s=0.01,
-        series_compliance_m_per_n=1e-6,
-    )
-    p, v, a, dt = 3e-3, 0.004, -1.5, 1e-7
-    f0, rate = contact_law_force(law, p, v, a)
-    f1, _ = contact_law_force(law, p + v * dt + 0.5 * a * dt * dt, v + a * dt)
-    assert rate == pytest.approx((f1 - f0) / dt, rel=1e-4)
-
-
-def test_contact_law_converts_to_autodiff():
-    law = ContactLawParams(
-        K,
-        exponent=1.5,
-        reference_deflection_m=4e-3,
-        damping_n_s_per_m=100.0,
-        series_compliance_m_per_n=1e-6,
-    )
-    ad = ContactLaw(law).ToAutoDiffXd()
-    ctx = ad.CreateDefaultContext()
-    x = np.array([3e-3, 0.02, 0.0])
-    ad.GetInputPort("motion").FixValue(ctx, InitializeAutoDiff(x))
-    f = ad.GetOutputPort("force").Eval(ctx)[0]
-    assert isinstance(f, AutoDiffXd)
-    eps = 1e-9
-    fd = [
-        (contact_law_force(law, *(x + eps * e))[0] - contact_law_force(law, *(x - eps * e))[0])
-        / (2 * eps)
-        for e in np.eye(3)
-    ]
-    np.testing.assert_allclose(f.derivatives(), fd, rtol=1e-5, atol=1e-6)
-
-
-def test_contact_law_parameters_are_validated():
-    with pytest.raises(ParameterError, match="damping_n_s_per_m"):
-        ContactLawParams(K, damping_n_s_per_m=-1.0)
-    with pytest.raises(ParameterError, match="exponent"):
-        ContactLawParams(K, exponent=0.0)
-
-
-# -- measurement chain and table -------------------------------------------------
-def test_first_order_hold_filter_is_exact_for_a_ramp():
-    tau, h = 2e-3, 1e-3
-    a, b0, b1 = first_order_hold_filter(tau, h)
-    t = h * np.arange(50)
-    u = 3.0 * t
-    y = np.zeros_like(t)
-    for k in range(len(t) - 1):
-        y[k + 1] = a * y[k] + b0 * u[k] + b1 * u[k + 1]
-    np.testing.assert_allclose(y, 3.0 * (t - tau * (1 - np.exp(-t / tau))), rtol=0, atol=1e-12)
-    assert first_order_hold_filter(0.0, h) == (0.0, 0.0, 1.0)
-
-
-def test_measurement_chain_taps():
-    c = MeasurementChainParams(1e-3, delay_s=0.0045)
-    assert c.taps() == (4, pytest.approx(0.5))
-    assert MeasurementChainParams(1e-3, delay_s=0.004).taps() == (4, 0.0)
-    with pytest.raises(ParameterError, match="delay_s"):
-        MeasurementChainParams(1e-3, delay_s=-1e-3)
-
-
-def test_resonant_table_has_unit_static_gain_and_its_mode():
-    A, B, C, D = resonant_table_matrices(TableParams(30.0, 0.7), StructuralModeParams(80.0, 0.05))
-    x = -np.linalg.solve(A, B @ [1.0, 0.0])  # static response to a unit command
-    np.testing.assert_allclose((C @ x + D @ [1.0, 0.0])[:2], [1.0, 0.0], atol=1e-12)
-    w = 2 * math.pi * 80.0
-    eig = np.linalg.eigvals(A)
-    assert np.min(np.abs(eig - complex(-0.05 * w, w * math.sqrt(1 - 0.05**2)))) < 1e-6 * w
 
 
 # -- each effect's model against an independent rig with that effect ------------

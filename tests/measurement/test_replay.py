@@ -1,5 +1,5 @@
 """Replay of a recorded command and the closed-loop rig model, against an
-independent fixed-step RK4 simulation of the rig (tests/_rigsim.py) and closed
+independent fixed-step RK4 simulation of the rig (tests/generators/rigsim.py) and closed
 forms."""
 
 from __future__ import annotations
@@ -8,7 +8,6 @@ import math
 
 import numpy as np
 import pytest
-from _rigsim import NOMINAL, damped_spring, simulate_record, write_run
 
 from hybridtable.errors import ParameterError
 from hybridtable.measurement.replay import replay, replay_command
@@ -16,6 +15,7 @@ from hybridtable.measurement.rig import RigPhysics, rig_params, simulate_rig
 from hybridtable.measurement.run_format import RunInfo, read_run
 from hybridtable.systems.contact import ContactParams, UnilateralSpringContact
 from hybridtable.systems.table import TableParams, table_step_response
+from tests.generators.rigsim import NOMINAL, damped_spring, simulate_record, write_run
 
 #: A rig unlike the examples: 500 Hz, 3-tick delay, slower and less damped table, MDC.
 OTHER_RIG = dict(

@@ -23,9 +23,9 @@ import math
 from pathlib import Path
 
 import numpy as np
-from _rigsim import NOMINAL, compensate, write_run
 
 from hybridtable.measurement.run_format import read_run
+from tests.generators.rigsim import NOMINAL, compensate, write_run
 
 #: Hidden effects and their default sizes (the generator's own parameters).
 HIDDEN: dict[str, dict[str, float]] = {

@@ -9,7 +9,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from _rigsim import NOMINAL, damped_spring, simulate_record, write_run
 
 from hybridtable.cli import main
 from hybridtable.measurement.comparison import compare_run
@@ -28,6 +27,7 @@ from hybridtable.measurement.stats import (
     force_noise_rms,
     position_noise_rms,
 )
+from tests.generators.rigsim import NOMINAL, damped_spring, simulate_record, write_run
 
 EXAMPLES = Path("/work/shared/examples/nominal")
 needs_examples = pytest.mark.skipif(not EXAMPLES.is_dir(), reason="example runs not available")

@@ -1,0 +1,1 @@
+"""Independent generators of recorded runs (plain fixed-step RK4, written apart from the model)."""
