@@ -18,6 +18,7 @@ __all__ = [
     "write_json",
     "write_json_atomic",
     "input_paths",
+    "add_run_arguments",
     "check_outputs",
 ]
 
@@ -115,3 +116,19 @@ def write_json_atomic(path: str, data) -> None:
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+
+
+def add_run_arguments(parser: argparse.ArgumentParser, report: str) -> None:
+    """The inputs and outputs of a command that reads recorded runs: ``RUN...``,
+    ``--json``, ``--report`` (``report`` says what it writes) and ``--column-map``."""
+    parser.add_argument("runs", nargs="+", metavar="RUN", help="a run's .csv or .json, or a folder")
+    parser.add_argument("--json", metavar="FILE", help="write the results as JSON (- for stdout)")
+    parser.add_argument("--report", metavar="DIR", help=report)
+    parser.add_argument(
+        "--column-map",
+        metavar="FORMAT=LOG",
+        action="append",
+        default=[],
+        help="read the format's column FORMAT from the log's column LOG (repeatable, or "
+        "comma separated), e.g. --column-map f_mea_n=force,time_s=t",
+    )

@@ -9,7 +9,7 @@ __all__ = ["register", "run"]
 
 
 def register(sub) -> None:
-    from hybridtable.commands._common import parse_float
+    from hybridtable.commands._common import add_run_arguments, parse_float
 
     p = sub.add_parser(
         "compare",
@@ -20,19 +20,7 @@ def register(sub) -> None:
         "phase, with whiteness tests and force-deflection loops. Any defect of an input "
         "file is reported in one line (exit code 2).",
     )
-    p.add_argument("runs", nargs="+", metavar="RUN", help="a run's .csv or .json, or a folder")
-    p.add_argument("--json", metavar="FILE", help="write the results as JSON (- for stdout)")
-    p.add_argument(
-        "--report", metavar="DIR", help="write report.md with PNG figures into this folder"
-    )
-    p.add_argument(
-        "--column-map",
-        metavar="FORMAT=LOG",
-        action="append",
-        default=[],
-        help="read the format's column FORMAT from the log's column LOG (repeatable, or "
-        "comma separated), e.g. --column-map f_mea_n=force,time_s=t",
-    )
+    add_run_arguments(p, report="write report.md with PNG figures into this folder")
     p.add_argument(
         "--max-lag-s",
         type=parse_float,

@@ -9,6 +9,8 @@ __all__ = ["register", "run", "diagnosis_json"]
 
 
 def register(sub) -> None:
+    from hybridtable.commands._common import add_run_arguments
+
     p = sub.add_parser(
         "diagnose",
         help="name the physical effect the rig model is missing (fit, rank, select)",
@@ -20,11 +22,7 @@ def register(sub) -> None:
         "check, and add effects one by one until nothing significant is left. The verdict "
         "is the missing effect, or none.",
     )
-    p.add_argument("runs", nargs="+", metavar="RUN", help="a run's .csv or .json, or a folder")
-    p.add_argument("--json", metavar="FILE", help="write the results as JSON (- for stdout)")
-    p.add_argument(
-        "--report", metavar="DIR", help="write report.md with PNG figures into this folder"
-    )
+    add_run_arguments(p, report="write report.md with PNG figures into this folder")
     p.add_argument(
         "--effects",
         metavar="NAME[,NAME...]",
@@ -38,13 +36,6 @@ def register(sub) -> None:
     )
     p.add_argument(
         "--workers", type=int, default=None, help="processes fitting in parallel (default: 2)"
-    )
-    p.add_argument(
-        "--column-map",
-        metavar="FORMAT=LOG",
-        action="append",
-        default=[],
-        help="read the format's column FORMAT from the log's column LOG (as in compare)",
     )
     p.add_argument("--no-progress", action="store_true", help="no progress output")
     p.set_defaults(func=run)
