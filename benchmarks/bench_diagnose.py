@@ -27,7 +27,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from hybridtable.diagnosis.diagnose import diagnose  # noqa: E402
-from hybridtable.measurement.run_format import read_runs  # noqa: E402
+from hybridtable.measurement.run_reader import read_runs  # noqa: E402
 from tests.generators.effectsim import make_runs  # noqa: E402
 
 

@@ -27,7 +27,7 @@ import numpy as np
 from hybridtable.loop.simulation import run_loop
 from hybridtable.stewart.backend import build_stewart_loop
 from hybridtable.stewart.identify import drive_table, tune_table
-from hybridtable.stewart.plant import StewartParams
+from hybridtable.stewart.params import StewartParams
 from hybridtable.studies.paper import table1_params
 
 

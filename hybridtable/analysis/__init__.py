@@ -1,23 +1,22 @@
 """Linear models and stability margins of the hybrid loop, from the Drake diagram.
 
 - :mod:`hybridtable.analysis.linearize`: continuous in-contact loop (Pade delay) by Drake's
-  ``Linearize``, whole diagram or block-wise (:class:`ContactLoopLinearizer`);
+  ``Linearize`` of the whole diagram;
+- :mod:`hybridtable.analysis.blockwise`: the same, block-wise, assembled per point
+  (:class:`ContactLoopLinearizer`);
 - :mod:`hybridtable.analysis.exact_delay`: the same loop with the exact delay ``e^{-sT}``;
 - :mod:`hybridtable.analysis.sampled`: sampled-data model of a rig computer (ZOH, ``z^-M``);
 - :mod:`hybridtable.analysis.margins`: contact pole, predicted CoR, phase margin, effective
   delay, critical sensor delay and table frequency;
 - :mod:`hybridtable.analysis.sweep`: all of it over a (delay, table frequency) grid;
 - :mod:`hybridtable.analysis.validation`: predictions against the nonlinear simulation;
-- :mod:`hybridtable.reports.margins`: heatmaps, curves, Bode plot, Markdown summary.
+- :mod:`hybridtable.reports.margin_plots` and :mod:`hybridtable.reports.margins`: heatmaps,
+  curves, Bode plot; Markdown summary.
 """
 
+from hybridtable.analysis.blockwise import ContactLoopLinearizer
 from hybridtable.analysis.exact_delay import ExactDelayMargins, exact_contact_root, exact_margins
-from hybridtable.analysis.linearize import (
-    ContactLoopLinearizer,
-    LinearLoop,
-    add_contact_loop,
-    linearize_contact_loop,
-)
+from hybridtable.analysis.linearize import LinearLoop, add_contact_loop, linearize_contact_loop
 from hybridtable.analysis.margins import (
     LoopMargins,
     critical_sensor_delay,

@@ -1,7 +1,7 @@
 """The loop with the exact sensor delay ``e^{-sT}``, to measure the Pade error.
 
 The Drake-linearized loop is cut at the delay
-(:meth:`~hybridtable.analysis.linearize.ContactLoopLinearizer.delay_cut`): a finite model
+(:meth:`~hybridtable.analysis.blockwise.ContactLoopLinearizer.delay_cut`): a finite model
 ``H`` from ``[u, f_mea, df_mea/dt]`` to ``[f_comp, f, df/dt]``. Closing the
 delay exactly, ``[f_mea, df_mea/dt] = e^{-sT} [f, df/dt]``, gives the open
 loop
@@ -22,8 +22,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy.optimize import root
 
+from hybridtable.analysis.blockwise import ContactLoopLinearizer
 from hybridtable.analysis.interconnect import StateSpaceBlock
-from hybridtable.analysis.linearize import ContactLoopLinearizer
 from hybridtable.analysis.margins import (
     contact_pole,
     continuous_poles,

@@ -5,7 +5,7 @@ continuous state with discrete state, and the rig computer alone has two
 discrete groups), so each block is linearized by Drake on its own:
 
 - the continuous part, table + bilateral contact, linearized as in
-  :class:`~hybridtable.analysis.linearize.ContactLoopLinearizer` and discretized with a
+  :class:`~hybridtable.analysis.blockwise.ContactLoopLinearizer` and discretized with a
   zero-order hold over one period ``h``;
 - the spacecraft model (semi-implicit Euler, period ``h``);
 - the sensor's ``DiscreteTimeDelay`` of ``M`` samples, which linearizes to
@@ -43,13 +43,9 @@ from pydrake.systems.primitives import Multiplexer
 from scipy.linalg import matrix_balance
 
 from hybridtable._validation import check_positive
+from hybridtable.analysis.blockwise import ContactLoopLinearizer, check_close
 from hybridtable.analysis.interconnect import Interconnection, StateSpaceBlock, state_slices
-from hybridtable.analysis.linearize import (
-    ContactLoopLinearizer,
-    LinearLoop,
-    check_close,
-    linearize_system,
-)
+from hybridtable.analysis.linearize import LinearLoop, linearize_system
 from hybridtable.compensators.paper import Compensator, CompensatorParams
 from hybridtable.errors import LinearizationError, ParameterError
 from hybridtable.loop.params import HybridLoopParams

@@ -17,7 +17,8 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from hybridtable.analysis.linearize import ContactLoopLinearizer, LinearLoop
+from hybridtable.analysis.blockwise import ContactLoopLinearizer
+from hybridtable.analysis.linearize import LinearLoop
 from hybridtable.analysis.margins import (
     critical_sensor_delay,
     critical_table_frequency,

@@ -26,8 +26,8 @@ from collections.abc import Sequence
 import numpy as np
 from scipy.linalg import expm
 
+from hybridtable.analysis.blockwise import ContactLoopLinearizer
 from hybridtable.analysis.exact_delay import exact_margins
-from hybridtable.analysis.linearize import ContactLoopLinearizer
 from hybridtable.analysis.sampled import SampledLoopLinearizer
 from hybridtable.analysis.sweep import SweepResult, ValidationPoint
 from hybridtable.loop.params import HybridLoopParams

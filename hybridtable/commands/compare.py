@@ -40,7 +40,7 @@ def register(sub) -> None:
 def run(args: argparse.Namespace) -> int:
     from hybridtable.commands._common import check_outputs, input_paths, write_json_atomic
     from hybridtable.measurement.comparison import check_comparable, compare_run
-    from hybridtable.measurement.run_format import parse_column_map, read_runs
+    from hybridtable.measurement.run_reader import parse_column_map, read_runs
     from hybridtable.reports.compare import REPORT_MARKER, format_table, write_report
 
     if args.max_lag_s is not None:

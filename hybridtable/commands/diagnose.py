@@ -53,7 +53,7 @@ def run(args: argparse.Namespace) -> int:
     from hybridtable.diagnosis.diagnose import diagnose
     from hybridtable.diagnosis.registry import get_effect
     from hybridtable.errors import CommandError
-    from hybridtable.measurement.run_format import parse_column_map, read_runs
+    from hybridtable.measurement.run_reader import parse_column_map, read_runs
     from hybridtable.reports.diagnose import REPORT_MARKER, format_ranking, write_report
 
     effects = None

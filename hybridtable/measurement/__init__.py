@@ -1,7 +1,9 @@
 """Recorded runs and the model against them.
 
-- :mod:`~hybridtable.measurement.run_format`: read and validate the
-  ``hybridtable-run/1`` format (:func:`read_runs`);
+- :mod:`~hybridtable.measurement.run_format`: the ``hybridtable-run/1`` format
+  (:class:`Run`, :class:`RunInfo`);
+- :mod:`~hybridtable.measurement.run_reader`: read and validate runs in that
+  format (:func:`read_runs`);
 - :mod:`~hybridtable.measurement.rig`: the rig model of a run (:class:`RigPhysics`);
 - :mod:`~hybridtable.measurement.replay`: the physical part driven by the recorded command;
 - :mod:`~hybridtable.measurement.comparison`: replay and closed loop against the
@@ -15,7 +17,8 @@ from hybridtable.measurement.comparison import RunComparison, check_comparable, 
 from hybridtable.measurement.noise import NoiseModel, estimate_noise, whiten
 from hybridtable.measurement.replay import ReplayResult, replay
 from hybridtable.measurement.rig import RigPhysics, rig_params, simulate_rig
-from hybridtable.measurement.run_format import Run, RunInfo, read_run, read_runs
+from hybridtable.measurement.run_format import Run, RunInfo
+from hybridtable.measurement.run_reader import read_run, read_runs
 
 __all__ = [
     "NoiseModel",

@@ -38,13 +38,9 @@ from pydrake.systems.primitives import (
 from hybridtable.errors import WorkspaceError
 from hybridtable.loop.builder import HybridLoop, add_hybrid_loop
 from hybridtable.loop.params import HybridLoopParams
-from hybridtable.stewart.plant import (
-    StewartParams,
-    StewartPlant,
-    add_stewart_plant,
-    hunt_crossley_dissipation,
-    reference_matrices,
-)
+from hybridtable.stewart.hunt_crossley import hunt_crossley_dissipation
+from hybridtable.stewart.params import StewartParams, reference_matrices
+from hybridtable.stewart.plant import StewartPlant, add_stewart_plant
 
 __all__ = [
     "LegServo",

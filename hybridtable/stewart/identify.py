@@ -28,7 +28,7 @@ from scipy.signal import lfilter
 from hybridtable._validation import check_nonnegative, check_positive
 from hybridtable.errors import ParameterError
 from hybridtable.stewart.backend import StewartTable
-from hybridtable.stewart.plant import StewartParams, heave_servo_gains
+from hybridtable.stewart.params import StewartParams, heave_servo_gains
 from hybridtable.systems.table import TableParams
 
 __all__ = [
@@ -326,7 +326,7 @@ def tune_leg_gains(
     model) has ``response_hz`` and ``damping_ratio`` (relative tolerance
     ``tolerance`` on the frequency, absolute ``tolerance`` on the damping).
 
-    Starts from the rigid-heave gains (:func:`~hybridtable.stewart.plant.heave_servo_gains`)
+    Starts from the rigid-heave gains (:func:`~hybridtable.stewart.params.heave_servo_gains`)
     and solves for ``(Kp, Kd)`` by Broyden's method (first guess: ``f ~ Kp^1/2``,
     ``zeta ~ Kd / Kp^1/2``).
 

@@ -11,11 +11,13 @@ Model (see ``docs/stewart.md``):
 - the passive contact device (a stiff frame, a box) is fixed above the plate
   so that the devices touch exactly when the plate is at its home pose;
 - compliant point contact between the tip and the frame, stiffness and
-  Hunt–Crossley dissipation from the run's contact parameters; the plant uses
+  Hunt–Crossley dissipation from the run's contact parameters
+  (:mod:`hybridtable.stewart.hunt_crossley`); the plant uses
   the ``"lagged"`` discrete contact approximation (``"sap"`` ignores
   Hunt–Crossley dissipation and adds its own).
 
-The legs are driven by a digital PD servo (see :mod:`hybridtable.stewart.backend`)
+The parameters are :class:`~hybridtable.stewart.params.StewartParams`. The legs
+are driven by a digital PD servo (see :mod:`hybridtable.stewart.backend`)
 through the plant's actuation input, not by the plant's implicit PD
 controllers (with the ball constraints, SAP failed to converge with them in
 drake 1.51); the servo then is a sampled PD loop, whose response
@@ -25,8 +27,7 @@ drake 1.51); the servo then is a sampled PD loop, whose response
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
-from functools import lru_cache
+from dataclasses import dataclass, field
 
 import numpy as np
 from pydrake.geometry import (
@@ -59,259 +60,14 @@ from pydrake.systems.framework import DiagramBuilder
 from hybridtable._validation import check_finite, check_nonnegative, check_positive
 from hybridtable.errors import ParameterError
 from hybridtable.stewart.geometry import StewartGeometry
+from hybridtable.stewart.params import StewartParams
 
 __all__ = [
-    "StewartParams",
-    "heave_mass_kg",
-    "heave_servo_gains",
     "StewartPlant",
     "add_stewart_plant",
-    "hunt_crossley_cor",
-    "hunt_crossley_dissipation",
-    "reference_matrices",
 ]
 
 
-@dataclass(frozen=True)
-class StewartParams:
-    """Parameters of the Stewart-platform table back-end, SI units.
-
-    The legs are driven by a digital PD servo at the plant's time step. Two
-    ways to give the table its response (see ``docs/stewart.md``):
-
-    - with a reference model (default): the command passes through a
-      discrete second-order model (``reference_response_hz``,
-      ``reference_damping_ratio``) whose position and velocity stiff legs
-      track; the table stays stiff under the contact force;
-    - without (``reference_response_hz=None``): the leg gains alone shape the
-      response (tune them with :func:`hybridtable.stewart.identify.tune_leg_gains`);
-      the table is then as compliant as its response is slow.
-
-    Parameters
-    ----------
-    geometry : StewartGeometry
-    leg_stiffness_n_per_m, leg_damping_n_s_per_m : float or None
-        PD gains Kp (> 0) and Kd (>= 0) of each leg's servo; ``None``: from
-        ``servo_bandwidth_hz`` and ``servo_damping_ratio`` for the plate's
-        heave mass (:func:`heave_servo_gains`).
-    servo_bandwidth_hz : float or None
-        Heave natural frequency of the servo loop that sets default gains;
-        ``None``: ``0.08 / time_step_s`` (80 Hz at 1 ms). The explicit servo
-        is stable up to about ``servo_bandwidth_hz * time_step_s = 0.1``.
-    servo_damping_ratio : float
-        Damping ratio of that servo loop.
-    time_step_s : float
-        Time step of the discrete plant and the servo's sample period, > 0.
-    gravity_m_per_s2 : float
-        Gravity along -z (the docking axis is +z), >= 0. The servo adds the
-        static leg forces that hold the platform at home, and the sensor
-        reading is compensated for the device's weight and inertia.
-    friction_coefficient : float
-        Coulomb friction of the contact pair, >= 0.
-    sensor_resolution_n : float
-        Resolution of the F/T sensor's force reading, > 0: the reading is
-        rounded to a multiple of it, so the round-off of the reaction wrench
-        (~1e-14 N) reads as an exact zero when the devices are apart.
-    reference_response_hz : float or None
-        Natural frequency of the reference model, > 0 and below the Nyquist
-        rate, or ``None`` for none.
-    reference_damping_ratio : float
-        Damping ratio of the reference model, >= 0.
-    """
-
-    geometry: StewartGeometry = field(default_factory=StewartGeometry)
-    leg_stiffness_n_per_m: float | None = None
-    leg_damping_n_s_per_m: float | None = None
-    servo_bandwidth_hz: float | None = None
-    servo_damping_ratio: float = 0.7
-    time_step_s: float = 1e-3
-    gravity_m_per_s2: float = 9.81
-    friction_coefficient: float = 0.3
-    sensor_resolution_n: float = 1e-6
-    reference_response_hz: float | None = 25.0
-    reference_damping_ratio: float = 0.8
-
-    def __post_init__(self) -> None:
-        s = object.__setattr__
-        if not isinstance(self.geometry, StewartGeometry):
-            raise ParameterError(f"geometry must be a StewartGeometry (got {self.geometry!r})")
-        for name in ("time_step_s", "sensor_resolution_n"):
-            s(self, name, check_positive(name, getattr(self, name)))
-        for name in (
-            "servo_damping_ratio",
-            "gravity_m_per_s2",
-            "friction_coefficient",
-            "reference_damping_ratio",
-        ):
-            s(self, name, check_nonnegative(name, getattr(self, name)))
-        if self.leg_stiffness_n_per_m is not None:
-            s(
-                self,
-                "leg_stiffness_n_per_m",
-                check_positive("leg_stiffness_n_per_m", self.leg_stiffness_n_per_m),
-            )
-        if self.leg_damping_n_s_per_m is not None:
-            s(
-                self,
-                "leg_damping_n_s_per_m",
-                check_nonnegative("leg_damping_n_s_per_m", self.leg_damping_n_s_per_m),
-            )
-        if self.servo_bandwidth_hz is not None:
-            f_s = check_positive("servo_bandwidth_hz", self.servo_bandwidth_hz)
-            s(self, "servo_bandwidth_hz", f_s)
-            if self.leg_stiffness_n_per_m is None and f_s * self.time_step_s > 0.1:
-                raise ParameterError(
-                    f"servo_bandwidth_hz {f_s:g} is too fast for time_step_s "
-                    f"{self.time_step_s:g} (need servo_bandwidth_hz * time_step_s <= 0.1)"
-                )
-        if self.reference_response_hz is not None:
-            f = check_positive("reference_response_hz", self.reference_response_hz)
-            if f * self.time_step_s >= 0.5:
-                raise ParameterError(
-                    "reference_response_hz must be below the Nyquist rate "
-                    f"{0.5 / self.time_step_s:g} Hz (got {f!r})"
-                )
-            s(self, "reference_response_hz", f)
-
-    @property
-    def effective_servo_bandwidth_hz(self) -> float:
-        """``servo_bandwidth_hz``, or its default ``0.08 / time_step_s``."""
-        if self.servo_bandwidth_hz is None:
-            return 0.08 / self.time_step_s
-        return self.servo_bandwidth_hz
-
-    def servo_gains(self) -> tuple[float, float]:
-        """The legs' (Kp, Kd): the given ones, or from the servo bandwidth."""
-        kp, kd = heave_servo_gains(
-            self.geometry, self.effective_servo_bandwidth_hz, self.servo_damping_ratio
-        )
-        if self.leg_stiffness_n_per_m is not None:
-            kp = self.leg_stiffness_n_per_m
-        if self.leg_damping_n_s_per_m is not None:
-            kd = self.leg_damping_n_s_per_m
-        return kp, kd
-
-    def with_gains(self, stiffness_n_per_m: float, damping_n_s_per_m: float) -> StewartParams:
-        """A copy with other leg servo gains."""
-        return replace(
-            self, leg_stiffness_n_per_m=stiffness_n_per_m, leg_damping_n_s_per_m=damping_n_s_per_m
-        )
-
-    def with_reference(self, response_hz: float | None, damping_ratio: float) -> StewartParams:
-        """A copy with another reference model (``None``: none)."""
-        return replace(
-            self, reference_response_hz=response_hz, reference_damping_ratio=damping_ratio
-        )
-
-
-def heave_mass_kg(geometry: StewartGeometry) -> float:
-    """Rough mass moving with the plate in heave: plate, device, pistons and a
-    third of each cylinder."""
-    g = geometry
-    return g.plate_mass_kg + g.device_mass_kg + 6.0 * (g.piston_mass_kg + g.cylinder_mass_kg / 3)
-
-
-def heave_servo_gains(
-    geometry: StewartGeometry, bandwidth_hz: float, damping_ratio: float
-) -> tuple[float, float]:
-    """Leg gains (Kp, Kd) giving the plate's heave (rigid-body estimate) the
-    natural frequency ``bandwidth_hz`` and damping ratio ``damping_ratio``:
-    the heave stiffness is ``Kp sum(u_z^2)`` with ``u`` the leg directions."""
-    w = 2.0 * math.pi * check_positive("bandwidth_hz", bandwidth_hz)
-    z = check_nonnegative("damping_ratio", damping_ratio)
-    uz = geometry.home_leg_directions[:, 2]
-    scale = heave_mass_kg(geometry) / float(np.sum(uz * uz))
-    return scale * w * w, 2.0 * z * w * scale
-
-
-def reference_matrices(
-    params: StewartParams,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Discrete (A, B, C, D) of the servo's reference model, exact for a
-    command held over each time step: state and output ``[p_r, v_r]``, input
-    ``[p_des, v_des]`` (``v_des`` unused)."""
-    from scipy.linalg import expm
-
-    if params.reference_response_hz is None:
-        raise ParameterError("these StewartParams have no reference model")
-    w = 2.0 * math.pi * params.reference_response_hz
-    z = params.reference_damping_ratio
-    M = np.zeros((3, 3))
-    M[:2, :2] = [[0.0, 1.0], [-w * w, -2.0 * z * w]]
-    M[1, 2] = w * w
-    E = expm(M * params.time_step_s)
-    B = np.zeros((2, 2))
-    B[:, 0] = E[:2, 2]
-    return E[:2, :2], B, np.eye(2), np.zeros((2, 2))
-
-
-# -- Hunt–Crossley dissipation from a viscous damping --------------------------
-@lru_cache(maxsize=256)
-def hunt_crossley_cor(dissipation_times_velocity: float) -> float:
-    """CoR of a mass hitting a linear Hunt–Crossley contact
-    ``f = k x (1 + d dx/dt)`` at speed v; it depends on ``d v`` only."""
-    from scipy.integrate import solve_ivp
-
-    beta = check_nonnegative("dissipation_times_velocity", dissipation_times_velocity)
-    if beta == 0.0:
-        return 1.0
-
-    # Dimensionless: x = (v / w) xi, t = tau / w; xi'' = -xi (1 + beta xi').
-    def rhs(_, y):
-        return [y[1], -y[0] * (1.0 + beta * y[1]) if y[0] > 0.0 else 0.0]
-
-    def out(_, y):
-        return y[0]
-
-    out.terminal = True
-    out.direction = -1.0
-    sol = solve_ivp(
-        rhs, (0.0, 50.0), [0.0, 1.0], events=out, rtol=1e-10, atol=1e-12, first_step=1e-6
-    )
-    if not sol.t_events[0].size:
-        return 0.0
-    return float(-sol.y_events[0][0][1])
-
-
-def hunt_crossley_dissipation(
-    stiffness_n_per_m: float,
-    damping_n_s_per_m: float,
-    mass_kg: float,
-    velocity_m_per_s: float,
-) -> float:
-    """Hunt–Crossley dissipation d (s/m) whose impact of ``mass_kg`` at
-    ``velocity_m_per_s`` has the CoR of the viscous contact ``k x + c v``.
-
-    Point contact in Drake has no viscous damping; this maps the loop's
-    ``contact_damping_n_s_per_m`` to the dissipation with the same energy
-    loss in the run's first impact. Zero damping gives zero dissipation.
-    """
-    k = check_positive("stiffness_n_per_m", stiffness_n_per_m)
-    c = check_nonnegative("damping_n_s_per_m", damping_n_s_per_m)
-    m = check_positive("mass_kg", mass_kg)
-    v = check_positive("velocity_m_per_s", velocity_m_per_s)
-    if c == 0.0:
-        return 0.0
-    zeta = c / (2.0 * math.sqrt(k * m))
-    if zeta >= 1.0:
-        raise ParameterError(
-            f"contact damping ratio {zeta:.3f} >= 1 has no Hunt–Crossley equivalent "
-            "(the viscous contact does not rebound)"
-        )
-    target = math.exp(-zeta * math.pi / math.sqrt(1.0 - zeta * zeta))
-    from scipy.optimize import brentq
-
-    # hunt_crossley_cor decreases from 1 (beta = 0) towards 0.
-    hi = 1.0
-    while hunt_crossley_cor(hi) > target:
-        hi *= 2.0
-        if hi > 1e6:
-            raise ParameterError(f"no Hunt–Crossley dissipation reaches CoR {target:.4f}")
-    beta = brentq(lambda b: hunt_crossley_cor(b) - target, 0.0, hi, xtol=1e-12)
-    return beta / v
-
-
-# -- the plant -----------------------------------------------------------------
 def _rod_inertia(mass: float, length: float, com_z: float) -> SpatialInertia:
     transverse = mass * length**2 / 12.0
     axial = max(transverse * 1e-3, 1e-6)
@@ -424,7 +180,7 @@ def add_stewart_plant(
         2 k (point-contact stiffnesses combine in series).
     contact_dissipation_s_per_m : float
         Hunt–Crossley dissipation d of both geometries (combined: d); see
-        :func:`hunt_crossley_dissipation`.
+        :func:`~hybridtable.stewart.hunt_crossley.hunt_crossley_dissipation`.
     """
     k = check_positive("contact_stiffness_n_per_m", contact_stiffness_n_per_m)
     d = check_nonnegative("contact_dissipation_s_per_m", contact_dissipation_s_per_m)

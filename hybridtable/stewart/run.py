@@ -16,7 +16,7 @@ from hybridtable.stewart.backend import (
     write_meshcat_html,
 )
 from hybridtable.stewart.identify import TableResponse, identify_chirp, tune_table
-from hybridtable.stewart.plant import StewartParams
+from hybridtable.stewart.params import StewartParams
 
 __all__ = ["DEFAULT_SAMPLE_RATE_HZ", "StewartRun", "stewart_loop_params", "simulate_stewart"]
 

@@ -1,5 +1,5 @@
 """Linear models of the in-contact loop from Drake's Linearize (hybridtable.analysis.linearize,
-hybridtable.analysis.sampled, hybridtable.analysis.interconnect)."""
+hybridtable.analysis.blockwise, hybridtable.analysis.sampled, hybridtable.analysis.interconnect)."""
 
 from __future__ import annotations
 
@@ -10,12 +10,9 @@ import numpy as np
 import pytest
 from pydrake.systems.framework import DiagramBuilder
 
+from hybridtable.analysis.blockwise import ContactLoopLinearizer
 from hybridtable.analysis.interconnect import Interconnection, StateSpaceBlock
-from hybridtable.analysis.linearize import (
-    ContactLoopLinearizer,
-    linearize_contact_loop,
-    linearize_system,
-)
+from hybridtable.analysis.linearize import linearize_contact_loop, linearize_system
 from hybridtable.analysis.sampled import SampledLoopLinearizer
 from hybridtable.compensators.paper import Compensator
 from hybridtable.errors import InterconnectionError, LinearizationError

@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
+from hybridtable.analysis.blockwise import ContactLoopLinearizer
 from hybridtable.analysis.exact_delay import exact_contact_root, exact_growth, exact_margins
-from hybridtable.analysis.linearize import ContactLoopLinearizer
 from hybridtable.analysis.margins import (
     critical_sensor_delay,
     critical_table_frequency,

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from hybridtable.analysis.linearize import ContactLoopLinearizer
+from hybridtable.analysis.blockwise import ContactLoopLinearizer
 from hybridtable.analysis.margins import loop_margins
 from hybridtable.analysis.sweep import sweep_margins
 from hybridtable.analysis.validation import (

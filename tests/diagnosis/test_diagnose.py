@@ -186,7 +186,7 @@ def test_a_registered_user_effect_is_diagnosed(tmp_path):
 def test_examples_of_the_nominal_rig_say_none():
     from pathlib import Path
 
-    from hybridtable.measurement.run_format import read_runs
+    from hybridtable.measurement.run_reader import read_runs
 
     folder = Path("/work/shared/examples/nominal")
     if not folder.is_dir():

@@ -21,7 +21,7 @@ from hybridtable.diagnosis.registry import (
 from hybridtable.errors import ParameterError
 from hybridtable.measurement.replay import replay
 from hybridtable.measurement.rig import RigPhysics
-from hybridtable.measurement.run_format import read_run
+from hybridtable.measurement.run_reader import read_run
 from hybridtable.systems.blocks import chain_output
 from tests.generators.effectsim import HIDDEN, simulate_hidden
 from tests.generators.rigsim import NOMINAL, write_run

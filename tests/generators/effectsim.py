@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hybridtable.measurement.run_format import read_run
+from hybridtable.measurement.run_reader import read_run
 from tests.generators.rigsim import NOMINAL, compensate, write_run
 
 #: Hidden effects and their default sizes (the generator's own parameters).

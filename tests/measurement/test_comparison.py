@@ -20,7 +20,7 @@ from hybridtable.measurement.phases import (
     loop_energy,
     phase_labels,
 )
-from hybridtable.measurement.run_format import read_run, read_runs
+from hybridtable.measurement.run_reader import read_run, read_runs
 from hybridtable.measurement.stats import (
     channel_error,
     correlation,

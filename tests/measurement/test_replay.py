@@ -12,7 +12,8 @@ import pytest
 from hybridtable.errors import ParameterError
 from hybridtable.measurement.replay import replay, replay_command
 from hybridtable.measurement.rig import RigPhysics, rig_params, simulate_rig
-from hybridtable.measurement.run_format import RunInfo, read_run
+from hybridtable.measurement.run_format import RunInfo
+from hybridtable.measurement.run_reader import read_run
 from hybridtable.systems.contact import ContactParams, UnilateralSpringContact
 from hybridtable.systems.table import TableParams, table_step_response
 from tests.generators.rigsim import NOMINAL, damped_spring, simulate_record, write_run

@@ -12,7 +12,8 @@ import pytest
 
 from hybridtable.cli import main
 from hybridtable.errors import MeasurementError
-from hybridtable.measurement.run_format import RUN_COLUMNS, parse_column_map, read_run, read_runs
+from hybridtable.measurement.run_format import RUN_COLUMNS
+from hybridtable.measurement.run_reader import parse_column_map, read_run, read_runs
 
 EXAMPLES = Path("/work/shared/examples/nominal")
 if not EXAMPLES.is_dir():  # the repository's copy of the shared folder

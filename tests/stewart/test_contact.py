@@ -12,12 +12,9 @@ from pydrake.systems.primitives import ConstantVectorSource
 
 from hybridtable.errors import ParameterError
 from hybridtable.stewart.backend import StewartTable
-from hybridtable.stewart.plant import (
-    StewartParams,
-    add_stewart_plant,
-    hunt_crossley_cor,
-    hunt_crossley_dissipation,
-)
+from hybridtable.stewart.hunt_crossley import hunt_crossley_cor, hunt_crossley_dissipation
+from hybridtable.stewart.params import StewartParams
+from hybridtable.stewart.plant import add_stewart_plant
 
 
 def _pressed_table(stiffness: float, offset_m: float, params: StewartParams):

@@ -13,7 +13,8 @@ from pydrake.systems.primitives import ConstantVectorSource
 from hybridtable.errors import ParameterError, WorkspaceError
 from hybridtable.stewart.backend import StewartTable
 from hybridtable.stewart.geometry import StewartGeometry, rotation_from_rpy, rpy_from_rotation
-from hybridtable.stewart.plant import StewartParams, add_stewart_plant
+from hybridtable.stewart.params import StewartParams
+from hybridtable.stewart.plant import add_stewart_plant
 
 GEOMETRIES = {
     "3-3": StewartGeometry(),

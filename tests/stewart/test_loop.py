@@ -12,7 +12,7 @@ from hybridtable.errors import ParameterError, WorkspaceError
 from hybridtable.loop.simulation import run_loop, simulate
 from hybridtable.stewart.backend import build_stewart_loop
 from hybridtable.stewart.identify import identify_chirp, tune_leg_gains, tune_table
-from hybridtable.stewart.plant import StewartParams
+from hybridtable.stewart.params import StewartParams
 from hybridtable.studies.paper import paper_params, table1_params
 
 TARGET_HZ, TARGET_ZETA = 25.0, 0.8

@@ -1,0 +1,394 @@
+"""Reader and validator of recorded rig runs (``hybridtable-run/1``).
+
+A run is a CSV time series and a JSON file of nominal parameters with the same
+stem (``run1.csv`` + ``run1.json``); the format is described in
+``measurement-format.md``. :func:`read_runs` takes files or folders, checks
+every pair and returns :class:`~hybridtable.measurement.run_format.Run` objects
+(the format's columns, keys and objects are in
+:mod:`hybridtable.measurement.run_format`); any defect raises
+:class:`MeasurementError` whose message is one line naming the file, the line
+(or JSON key) and what is wrong::
+
+    run1.csv line 14, column f_mea_n: not a number ('1.2.3')
+    run1.json: key sample_rate_hz must be a number (got "1000")
+
+The CLI prints that line and exits with code 2.
+
+Logs whose columns are named differently are read with a column map
+``{format_name: log_name}`` (:func:`parse_column_map` reads the command-line
+form ``FORMAT=LOG``).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+
+from hybridtable.compensators.paper import COMPENSATORS
+from hybridtable.errors import MeasurementError
+from hybridtable.measurement.run_format import (
+    FORMAT,
+    MIN_ROWS,
+    RUN_COLUMNS,
+    RUN_KEYS,
+    SAMPLE_RATE_TOLERANCE,
+    Run,
+    RunInfo,
+)
+
+__all__ = [
+    "MeasurementError",
+    "parse_column_map",
+    "read_run",
+    "read_runs",
+    "find_run_files",
+]
+
+
+# -- column map ----------------------------------------------------------------
+def parse_column_map(items: Iterable[str] | None) -> dict[str, str]:
+    """Parse ``FORMAT=LOG`` items (each may hold several, comma separated) into
+    ``{format_column: log_column}``.
+
+    Raises
+    ------
+    MeasurementError
+        For an item without ``=``, an unknown format column, or a column
+        mapped twice.
+    """
+    mapping: dict[str, str] = {}
+    for item in items or ():
+        for part in str(item).split(","):
+            part = part.strip()
+            if not part:
+                continue
+            if "=" not in part:
+                raise MeasurementError(
+                    f"column map item {part!r} must be FORMAT_COLUMN=LOG_COLUMN "
+                    f"(format columns: {', '.join(RUN_COLUMNS)})"
+                )
+            fmt, log = (s.strip() for s in part.split("=", 1))
+            if fmt not in RUN_COLUMNS:
+                raise MeasurementError(
+                    f"column map: {fmt!r} is not a column of the format "
+                    f"(one of {', '.join(RUN_COLUMNS)})"
+                )
+            if not log:
+                raise MeasurementError(f"column map: empty log column name for {fmt}")
+            if fmt in mapping:
+                raise MeasurementError(f"column map: {fmt} is mapped twice")
+            if log in mapping.values():
+                raise MeasurementError(f"column map: log column {log!r} is mapped twice")
+            mapping[fmt] = log
+    return mapping
+
+
+# -- JSON ----------------------------------------------------------------------
+def _read_text(path: Path) -> str:
+    try:
+        data = path.read_bytes()
+    except OSError as err:
+        raise MeasurementError(f"{path}: cannot read ({err.strerror})") from None
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as err:
+        raise MeasurementError(
+            f"{path}: not a UTF-8 text file (byte {err.start}: {data[err.start]:#04x})"
+        ) from None
+
+
+def _read_info(path: Path) -> RunInfo:
+    text = _read_text(path)
+    if not text.strip():
+        raise MeasurementError(f"{path}: empty file")
+    try:
+        raw = json.loads(text)
+    except json.JSONDecodeError as err:
+        raise MeasurementError(
+            f"{path} line {err.lineno}, column {err.colno}: not valid JSON ({err.msg})"
+        ) from None
+    if not isinstance(raw, dict):
+        raise MeasurementError(f"{path}: must hold a JSON object (got {type(raw).__name__})")
+    missing = [k for k in RUN_KEYS if k not in raw]
+    if missing:
+        raise MeasurementError(f"{path}: missing key(s) {', '.join(missing)}")
+    values: dict = {}
+    for key, (kind, rng) in RUN_KEYS.items():
+        v = raw[key]
+        if kind == "string":
+            if not isinstance(v, str) or not v.strip():
+                raise MeasurementError(
+                    f"{path}: key {key} must be a non-empty string (got {json.dumps(v)})"
+                )
+            values[key] = v
+            continue
+        if isinstance(v, bool) or not isinstance(v, int | float):
+            raise MeasurementError(f"{path}: key {key} must be a number (got {json.dumps(v)})")
+        x = float(v)
+        if not math.isfinite(x):
+            raise MeasurementError(f"{path}: key {key} must be finite (got {v})")
+        if (rng == ">0" and x <= 0.0) or (rng == ">=0" and x < 0.0):
+            raise MeasurementError(f"{path}: key {key} must be {rng[:-1]} 0 (got {v})")
+        values[key] = x
+    if values["format"] != FORMAT:
+        raise MeasurementError(
+            f"{path}: key format must be {FORMAT!r} (got {json.dumps(values['format'])})"
+        )
+    if values["compensator"] not in COMPENSATORS:
+        raise MeasurementError(
+            f"{path}: key compensator: unknown compensator {json.dumps(values['compensator'])} "
+            f"(one of {', '.join(COMPENSATORS)})"
+        )
+    extra = {k: v for k, v in raw.items() if k not in RUN_KEYS}
+    return RunInfo(extra=extra, **values)
+
+
+# -- CSV -----------------------------------------------------------------------
+def _parse_cell(text: str) -> float:
+    s = text.strip()
+    if not s or "_" in s:
+        raise ValueError
+    return float(s)
+
+
+def _read_series(
+    path: Path, column_map: Mapping[str, str] | None
+) -> tuple[dict[str, np.ndarray], list[int]]:
+    """Columns by format name and the file line of every data row."""
+    text = _read_text(path)
+    if not text.strip():
+        raise MeasurementError(f"{path}: empty file")
+    lines = text.splitlines()
+    rows = csv.reader(lines)
+    header: list[str] | None = None
+    header_line = 0
+    data: list[list[str]] = []
+    line_of_row: list[int] = []
+    try:
+        for i, row in enumerate(rows, start=1):
+            if not row or all(not c.strip() for c in row):
+                continue  # blank line
+            if header is None:
+                header, header_line = [c.strip() for c in row], i
+            else:
+                data.append(row)
+                line_of_row.append(i)
+    except csv.Error as err:
+        raise MeasurementError(f"{path}: not a CSV file ({err})") from None
+    if header is None:
+        raise MeasurementError(f"{path}: no header row")
+    # Log names -> format names.
+    rename = {log: fmt for fmt, log in (column_map or {}).items()}
+    names = [rename.get(c, c) for c in header]
+    seen: set[str] = set()
+    for c, name in zip(header, names, strict=True):
+        if not c:
+            raise MeasurementError(f"{path} line {header_line}: empty column name in the header")
+        if name in seen:
+            raise MeasurementError(f"{path} line {header_line}: column {c!r} appears twice")
+        seen.add(name)
+    unmatched = [f"{f}={log}" for f, log in (column_map or {}).items() if log not in header]
+    if unmatched:
+        raise MeasurementError(
+            f"{path} line {header_line}: column map entries not in the header: "
+            f"{', '.join(unmatched)}"
+        )
+    missing = [c for c in RUN_COLUMNS if c not in seen]
+    if missing:
+        raise MeasurementError(f"{path} line {header_line}: missing column(s) {', '.join(missing)}")
+    extra = [c for c, name in zip(header, names, strict=True) if name not in RUN_COLUMNS]
+    if extra:
+        raise MeasurementError(
+            f"{path} line {header_line}: unexpected column(s) {', '.join(extra)} "
+            f"(the format has {', '.join(RUN_COLUMNS)}; rename with --column-map)"
+        )
+    if not data:
+        raise MeasurementError(f"{path}: no data rows after the header")
+    if len(data) < MIN_ROWS:
+        raise MeasurementError(f"{path}: only {len(data)} data row(s), need at least {MIN_ROWS}")
+    ncol = len(header)
+    values = np.empty((len(data), ncol))
+    for r, (row, line) in enumerate(zip(data, line_of_row, strict=True)):
+        if len(row) != ncol:
+            raise MeasurementError(f"{path} line {line}: {len(row)} cells, the header has {ncol}")
+        for c, cell in enumerate(row):
+            if not cell.strip():
+                raise MeasurementError(f"{path} line {line}, column {names[c]}: empty cell")
+            try:
+                x = _parse_cell(cell)
+            except ValueError:
+                raise MeasurementError(
+                    f"{path} line {line}, column {names[c]}: not a number ({cell.strip()!r})"
+                ) from None
+            if not math.isfinite(x):
+                raise MeasurementError(
+                    f"{path} line {line}, column {names[c]}: not finite ({cell.strip()})"
+                )
+            values[r, c] = x
+    cols = {name: values[:, names.index(name)].copy() for name in RUN_COLUMNS}
+    return cols, line_of_row
+
+
+def _check_time(path: Path, json_path: Path, t: np.ndarray, lines: list[int], info: RunInfo):
+    h = info.sample_period_s
+    dt = np.diff(t)
+    bad = np.flatnonzero(dt <= 0.0)
+    if bad.size:
+        i = int(bad[0]) + 1
+        raise MeasurementError(
+            f"{path} line {lines[i]}: time_s not increasing ({t[i]:.9g} s after {t[i - 1]:.9g} s)"
+        )
+    h_seen = float(np.median(dt))
+    if abs(h_seen - h) > SAMPLE_RATE_TOLERANCE * h:
+        raise MeasurementError(
+            f"{path}: time_s is sampled at {1.0 / h_seen:.6g} Hz but {json_path.name} says "
+            f"sample_rate_hz = {info.sample_rate_hz:g}"
+        )
+    uneven = np.flatnonzero(np.abs(dt - h) > SAMPLE_RATE_TOLERANCE * h)
+    if uneven.size:
+        i = int(uneven[0]) + 1
+        raise MeasurementError(
+            f"{path} line {lines[i]}: time_s unevenly sampled (step {dt[i - 1]:.6g} s, "
+            f"sample period {h:.6g} s)"
+        )
+    if abs(t[0]) > SAMPLE_RATE_TOLERANCE * h:
+        raise MeasurementError(
+            f"{path} line {lines[0]}: time_s starts at {t[0]:.9g} s; the format's ticks are "
+            "k / sample_rate_hz from 0"
+        )
+    drift = np.abs(t - h * np.arange(len(t)))
+    late = np.flatnonzero(drift > 0.5 * h)
+    if late.size:
+        i = int(late[0])
+        raise MeasurementError(
+            f"{path} line {lines[i]}: time_s = {t[i]:.9g} s is not tick {i} at "
+            f"{info.sample_rate_hz:g} Hz ({i * h:.9g} s)"
+        )
+
+
+# -- pairs ---------------------------------------------------------------------
+def read_run(
+    csv_path: str | Path,
+    json_path: str | Path | None = None,
+    column_map: Mapping[str, str] | None = None,
+) -> Run:
+    """Read and validate one run.
+
+    Parameters
+    ----------
+    csv_path : path
+        The time series.
+    json_path : path, optional
+        Its parameters (default: the CSV's stem with ``.json``).
+    column_map : mapping, optional
+        ``{format_column: log_column}`` for logs named differently.
+
+    Raises
+    ------
+    MeasurementError
+        For any defect, in one line naming the file and the line or key.
+    """
+    csv_path = Path(csv_path)
+    json_path = Path(json_path) if json_path is not None else csv_path.with_suffix(".json")
+    for p in (csv_path, json_path):
+        if not p.is_file():
+            partner = csv_path if p is json_path else json_path
+            raise MeasurementError(
+                f"{p}: no such file" + (f" (the partner of {partner})" if partner.is_file() else "")
+            )
+    info = _read_info(json_path)
+    cols, lines = _read_series(csv_path, column_map)
+    _check_time(csv_path, json_path, cols["time_s"], lines, info)
+    return Run(info=info, csv_path=csv_path, json_path=json_path, **cols)
+
+
+def _looks_like_run(path: Path) -> bool:
+    """True if ``path`` is a JSON object with the format's ``format`` value."""
+    try:
+        raw = json.loads(path.read_text(encoding="utf-8-sig"))
+    except (OSError, ValueError):
+        return False
+    return isinstance(raw, dict) and raw.get("format") == FORMAT
+
+
+def find_run_files(paths: Sequence[str | Path]) -> list[tuple[Path, Path]]:
+    """The ``(csv, json)`` pairs named by ``paths``: a CSV or JSON file names its
+    pair, a folder every pair in it (sorted by name, not recursive).
+
+    Raises
+    ------
+    MeasurementError
+        For a missing path, a file of another kind, a folder without runs, a
+        CSV or run JSON file in a folder without its partner (other JSON files
+        in a folder, e.g. results of ``compare --json``, are ignored).
+    """
+    pairs: list[tuple[Path, Path]] = []
+    if not paths:
+        raise MeasurementError("no runs given")
+    for raw in paths:
+        p = Path(raw)
+        if p.is_dir():
+            stems = sorted({q.stem for q in p.iterdir() if q.suffix in (".csv", ".json")})
+            if not stems:
+                raise MeasurementError(f"{p}: folder holds no runs (no .csv/.json pairs)")
+            found = len(pairs)
+            for stem in stems:
+                c, j = p / f"{stem}.csv", p / f"{stem}.json"
+                if not c.is_file():
+                    if not _looks_like_run(j):
+                        continue  # another JSON file (e.g. results of compare)
+                    raise MeasurementError(f"{j}: no {c.name} beside it")
+                if not j.is_file():
+                    raise MeasurementError(f"{c}: no {j.name} beside it")
+                pairs.append((c, j))
+            if len(pairs) == found:
+                raise MeasurementError(f"{p}: folder holds no runs (no .csv/.json pairs)")
+        elif p.is_file() or p.suffix in (".csv", ".json"):
+            if p.suffix not in (".csv", ".json"):
+                raise MeasurementError(f"{p}: not a run file (expected .csv or .json)")
+            c, j = p.with_suffix(".csv"), p.with_suffix(".json")
+            if not p.is_file():
+                raise MeasurementError(f"{p}: no such file")
+            other = j if p == c else c
+            if not other.is_file():
+                raise MeasurementError(f"{p}: no {other.name} beside it")
+            pairs.append((c, j))
+        else:
+            raise MeasurementError(f"{p}: no such file or folder")
+    seen: dict[Path, int] = {}
+    unique = []
+    for c, j in pairs:
+        key = c.resolve()
+        if key not in seen:
+            seen[key] = len(unique)
+            unique.append((c, j))
+    return unique
+
+
+def read_runs(
+    paths: Sequence[str | Path], column_map: Mapping[str, str] | None = None
+) -> list[Run]:
+    """Read and validate every run named by ``paths`` (files or folders).
+
+    All runs are read before any is returned, so a defect anywhere stops
+    everything. Run ids must be unique.
+
+    Raises
+    ------
+    MeasurementError
+        For any defect (see :func:`read_run` and :func:`find_run_files`).
+    """
+    runs = [read_run(c, j, column_map) for c, j in find_run_files(paths)]
+    ids: dict[str, Path | None] = {}
+    for r in runs:
+        if r.run_id in ids:
+            raise MeasurementError(
+                f"{r.json_path}: run_id {r.run_id!r} is also the run_id of {ids[r.run_id]}"
+            )
+        ids[r.run_id] = r.json_path
+    return runs
