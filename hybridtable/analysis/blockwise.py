@@ -34,6 +34,7 @@ from hybridtable.analysis.linearize import (
 from hybridtable.compensators.paper import Compensator, CompensatorParams
 from hybridtable.errors import LinearizationError
 from hybridtable.loop.params import HybridLoopParams
+from hybridtable.loop.wiring import LOOP_WIRING, channel_wiring, edge
 from hybridtable.systems.contact import ContactParams, UnilateralSpringContact
 from hybridtable.systems.sensor import ForceSensorDelay, SensorParams
 from hybridtable.systems.spacecraft import Spacecraft, SpacecraftParams
@@ -112,22 +113,19 @@ class ContactLoopLinearizer:
             ],
         )
 
-    # channel wiring of add_contact_loop
+    # channel wiring of add_contact_loop: the loop's, open at the spacecraft's
+    # force, with the sensor carrying [f, df/dt] to the compensator's two inputs
     @staticmethod
     def _connections(with_sensor: bool) -> dict[str, str]:
-        c = {
-            "table.commanded_state[0]": "spacecraft.state[0]",
-            "table.commanded_state[1]": "spacecraft.state[1]",
-            "compensator.commanded_state[0]": "spacecraft.state[0]",
-            "compensator.commanded_state[1]": "spacecraft.state[1]",
-        }
-        for i in range(3):
-            c[f"contact.motion[{i}]"] = f"table.motion[{i}]"
-            c[f"compensator.table_motion[{i}]"] = f"table.motion[{i}]"
+        cut = {edge("compensator.compensated_force", "spacecraft.force")}
+        if not with_sensor:
+            cut |= {
+                edge("contact.force", "force_sensor.force"),
+                edge("force_sensor.measured_force", "compensator.measured_force"),
+            }
+        c = channel_wiring(e for e in LOOP_WIRING if e not in cut)
         if with_sensor:
-            c["force_sensor.force[0]"] = "contact.force[0]"
             c["force_sensor.force[1]"] = "contact.force_rate[0]"
-            c["compensator.measured_force[0]"] = "force_sensor.measured_force[0]"
             c["compensator.measured_force_rate[0]"] = "force_sensor.measured_force[1]"
         return c
 

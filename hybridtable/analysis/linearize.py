@@ -39,6 +39,7 @@ from hybridtable.analysis.interconnect import StateSpaceBlock
 from hybridtable.compensators.paper import Compensator
 from hybridtable.errors import LinearizationError, ParameterError
 from hybridtable.loop.params import HybridLoopParams
+from hybridtable.loop.wiring import LOOP_WIRING, connect, edge
 from hybridtable.systems.contact import UnilateralSpringContact
 from hybridtable.systems.sensor import ForceSensorDelay
 from hybridtable.systems.spacecraft import Spacecraft
@@ -239,16 +240,23 @@ def add_contact_loop(
         "compensator",
         Compensator(params.compensator_params(), derivative_period_s=None, gated=False),
     )
-    builder.Connect(sc.GetOutputPort("state"), table.GetInputPort("commanded_state"))
-    builder.Connect(table.GetOutputPort("motion"), contact.GetInputPort("motion"))
+    # The loop's wiring, but the spacecraft's force left open and the sensor
+    # carrying [f, df/dt] from the contact to the compensator's two inputs.
+    sensor_path = {
+        edge("compensator.compensated_force", "spacecraft.force"),
+        edge("contact.force", "force_sensor.force"),
+        edge("force_sensor.measured_force", "compensator.measured_force"),
+    }
+    systems = dict(
+        spacecraft=sc, table=table, contact=contact, force_sensor=sensor, compensator=comp
+    )
+    connect(builder, systems, [e for e in LOOP_WIRING if e not in sensor_path])
     builder.Connect(contact.GetOutputPort("force"), mux.get_input_port(0))
     builder.Connect(contact.GetOutputPort("force_rate"), mux.get_input_port(1))
     builder.Connect(mux.get_output_port(0), sensor.GetInputPort("force"))
     builder.Connect(sensor.GetOutputPort("measured_force"), demux.get_input_port(0))
     builder.Connect(demux.get_output_port(0), comp.GetInputPort("measured_force"))
     builder.Connect(demux.get_output_port(1), comp.GetInputPort("measured_force_rate"))
-    builder.Connect(table.GetOutputPort("motion"), comp.GetInputPort("table_motion"))
-    builder.Connect(sc.GetOutputPort("state"), comp.GetInputPort("commanded_state"))
     return ContactLoop(params, sc, table, contact, mux, sensor, demux, comp)
 
 

@@ -49,6 +49,7 @@ from hybridtable.analysis.linearize import LinearLoop, linearize_system
 from hybridtable.compensators.paper import Compensator, CompensatorParams
 from hybridtable.errors import LinearizationError, ParameterError
 from hybridtable.loop.params import HybridLoopParams
+from hybridtable.loop.wiring import LOOP_WIRING, channel_wiring, edge
 from hybridtable.systems.contact import UnilateralSpringContact
 from hybridtable.systems.sensor import ForceSensorDelay, SensorParams, delay_samples
 from hybridtable.systems.spacecraft import Spacecraft, SpacecraftParams
@@ -126,7 +127,7 @@ class SampledLoopLinearizer:
                 ("table", self._table_in(), self._table_out()),
                 ("contact", self._contact_in(), self._contact_out()),
             ],
-            {f"contact.motion[{i}]": f"table.motion[{i}]" for i in range(3)},
+            channel_wiring([edge("table.motion", "contact.motion")]),
             ["table.commanded_state[0]", "table.commanded_state[1]"],
             [*(f"table.motion[{i}]" for i in range(3)), "contact.force[0]"],
         )
@@ -144,16 +145,19 @@ class SampledLoopLinearizer:
             "compensator.commanded_state[0]",
             "compensator.commanded_state[1]",
         )
-        conn = {
-            "table.commanded_state[0]": "spacecraft.state_next[0]",
-            "table.commanded_state[1]": "spacecraft.state_next[1]",
-            "force_sensor.force[0]": "contact.force[0]",
-            "compensator.measured_force[0]": "force_sensor.measured_force[0]",
-            "compensator.commanded_state[0]": "spacecraft.state[0]",
-            "compensator.commanded_state[1]": "spacecraft.state[1]",
+        # The loop's wiring, open at the spacecraft's force; the plant holds the
+        # table -> contact connection; the table follows the command the tick's
+        # update computes (state_next), the compensator reads the state at the tick.
+        command = edge("spacecraft.state", "table.commanded_state")
+        cut = {
+            edge("compensator.compensated_force", "spacecraft.force"),
+            edge("table.motion", "contact.motion"),
+            command,
         }
-        for i in range(3):
-            conn[f"compensator.table_motion[{i}]"] = f"table.motion[{i}]"
+        conn = channel_wiring(
+            [("spacecraft", "state_next", "table", "commanded_state")]
+            + [e for e in LOOP_WIRING if e not in cut]
+        )
         self._loop_wiring = Interconnection(
             [
                 ("spacecraft", ("spacecraft.force[0]",), sc_out),

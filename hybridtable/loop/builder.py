@@ -26,6 +26,7 @@ from pydrake.systems.primitives import LogVectorOutput, Multiplexer, VectorLogSi
 
 from hybridtable.compensators.registry import make_compensator
 from hybridtable.loop.params import HybridLoopParams
+from hybridtable.loop.wiring import LOOP_WIRING, connect
 from hybridtable.systems.contact import UnilateralSpringContact
 from hybridtable.systems.sensor import ForceSensorDelay, continuous_delay_period
 from hybridtable.systems.spacecraft import Spacecraft
@@ -146,17 +147,14 @@ def add_hybrid_loop(
     compensator = builder.AddNamedSystem(
         "compensator", make_compensator(params, h_computer, compensator)
     )
-    builder.Connect(spacecraft.GetOutputPort("state"), table.GetInputPort("commanded_state"))
-    builder.Connect(table.GetOutputPort("motion"), contact.GetInputPort("motion"))
-    builder.Connect(contact.GetOutputPort("force"), sensor.GetInputPort("force"))
-    builder.Connect(
-        sensor.GetOutputPort("measured_force"), compensator.GetInputPort("measured_force")
+    systems = dict(
+        spacecraft=spacecraft,
+        table=table,
+        contact=contact,
+        force_sensor=sensor,
+        compensator=compensator,
     )
-    builder.Connect(table.GetOutputPort("motion"), compensator.GetInputPort("table_motion"))
-    builder.Connect(spacecraft.GetOutputPort("state"), compensator.GetInputPort("commanded_state"))
-    builder.Connect(
-        compensator.GetOutputPort("compensated_force"), spacecraft.GetInputPort("force")
-    )
+    connect(builder, systems, LOOP_WIRING)
     loop = HybridLoop(
         params, spacecraft, table, contact, sensor, compensator, computer_period_s=h_computer
     )
