@@ -67,7 +67,7 @@ from hybridtable.diagnosis.fit import (
     fit_effects,
     pooled_error,
 )
-from hybridtable.diagnosis.registry import EFFECTS, get_effect
+from hybridtable.diagnosis.registry import effect_names, get_effect
 from hybridtable.diagnosis.settings import BIC_THRESHOLD, FIT_ACCURACY, Z_THRESHOLD
 from hybridtable.measurement.run_format import Run
 
@@ -168,7 +168,7 @@ def diagnose(
     t0 = time.perf_counter()
     data = prepare_runs(runs)
     scale = RigScale.from_runs(runs)
-    names = list(effects) if effects is not None else list(EFFECTS)
+    names = list(effects) if effects is not None else list(effect_names())
     for n in names:
         get_effect(n)
     if workers is None:

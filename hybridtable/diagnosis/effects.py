@@ -4,7 +4,8 @@ An :class:`Effect` is a change of the rig model, expressed as a change of a
 :class:`ModelSpec` (which turns into the Drake back-ends of
 :class:`hybridtable.measurement.rig.RigPhysics`), with named parameters (units, bounds,
 the null value at which the effect vanishes) and the signature it leaves in
-the residuals (channels, phases). The library (:data:`EFFECTS`):
+the residuals (channels, phases). The built-in library
+(:mod:`hybridtable.diagnosis.library`, one module per effect):
 
 =====================  ==========================================  ==================
 effect                 parameters                                  signature

@@ -19,7 +19,7 @@ from hybridtable.diagnosis.settings import (
     NUMERICAL_FLOOR,
 )
 from hybridtable.errors import MeasurementError, SimulationError
-from hybridtable.measurement.noise import NoiseModel, estimate_noise, whiten
+from hybridtable.measurement.noise_model import NoiseModel, estimate_noise, whiten
 from hybridtable.measurement.phases import delayed_labels, phase_labels
 from hybridtable.measurement.replay import replay
 from hybridtable.measurement.rig import rig_params, simulate_rig

@@ -1,8 +1,15 @@
-"""The registry of candidate effects: name -> :class:`~hybridtable.diagnosis.effects.Effect`."""
+"""The registry of candidate effects: name -> :class:`~hybridtable.diagnosis.effects.Effect`.
+
+The built-in effects come from :mod:`hybridtable.diagnosis.library` (one module
+each, imported statically), registered in its order. Other packages add
+theirs through the entry-point group ``hybridtable.effects`` (loaded on first
+use), a script through :func:`register_effect`.
+"""
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from importlib.metadata import entry_points
 
 from hybridtable.diagnosis.effects import Effect, ModelSpec, RigScale
 from hybridtable.diagnosis.library import builtin_effects
@@ -10,6 +17,7 @@ from hybridtable.errors import ParameterError
 
 __all__ = [
     "EFFECTS",
+    "ENTRY_POINT_GROUP",
     "register_effect",
     "unregister_effect",
     "effect_names",
@@ -21,6 +29,40 @@ __all__ = [
 
 #: The registry: effect name -> Effect.
 EFFECTS: dict[str, Effect] = {}
+
+#: Entry-point group of effects that other packages provide: each entry point
+#: loads an :class:`~hybridtable.diagnosis.effects.Effect`.
+ENTRY_POINT_GROUP = "hybridtable.effects"
+
+_entry_points_loaded = False
+
+
+def _load_entry_points() -> None:
+    """Register the effects of installed packages (entry-point group
+    :data:`ENTRY_POINT_GROUP`), once; a name already taken is refused.
+
+    Raises
+    ------
+    ParameterError
+        If an entry point's effect has a registered name, or the entry point
+        does not load an ``Effect``.
+    """
+    global _entry_points_loaded
+    if _entry_points_loaded:
+        return
+    _entry_points_loaded = True
+    for ep in entry_points(group=ENTRY_POINT_GROUP):
+        effect = ep.load()
+        if not isinstance(effect, Effect):
+            raise ParameterError(
+                f"entry point {ep.name} = {ep.value} of {ENTRY_POINT_GROUP} is not an Effect"
+            )
+        if effect.name in EFFECTS:
+            raise ParameterError(
+                f"effect {effect.name!r} of entry point {ep.name} = {ep.value} "
+                "is already registered"
+            )
+        EFFECTS[effect.name] = effect
 
 
 def register_effect(effect: Effect, replace_existing: bool = False) -> Effect:
@@ -43,7 +85,9 @@ def unregister_effect(name: str) -> None:
 
 
 def effect_names() -> tuple[str, ...]:
-    """Names of the registered effects, in registration order."""
+    """Names of the registered effects, in registration order (the built-ins
+    first; the effects of entry points are registered on the first use)."""
+    _load_entry_points()
     return tuple(EFFECTS)
 
 
@@ -55,6 +99,7 @@ def get_effect(name: str) -> Effect:
     ParameterError
         If there is none.
     """
+    _load_entry_points()
     try:
         return EFFECTS[name]
     except KeyError:

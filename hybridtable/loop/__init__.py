@@ -10,7 +10,9 @@
 
 - :mod:`~hybridtable.loop.params`: :class:`HybridLoopParams`, every parameter of a run;
 - :mod:`~hybridtable.loop.builder`: :func:`add_hybrid_loop` wires the systems of
-  :mod:`hybridtable.systems` and a compensator of :mod:`hybridtable.compensators`;
+  :mod:`hybridtable.systems` and a compensator of :mod:`hybridtable.compensators`
+  along :data:`~hybridtable.loop.wiring.LOOP_WIRING`, the one table of the
+  loop's connections that the linear models of :mod:`hybridtable.analysis` reuse;
 - :mod:`~hybridtable.loop.simulation`: :func:`simulate` runs one contact;
 - :mod:`~hybridtable.loop.metrics`: CoR, contact duration, peak force, energy gained.
 """

@@ -10,11 +10,11 @@
   record (:func:`compare_run`), built from
   :mod:`~hybridtable.measurement.phases` (contact phases, CoR, loop energy),
   :mod:`~hybridtable.measurement.stats` (errors, noise floor, whiteness) and
-  :mod:`~hybridtable.measurement.noise` (AR(1) noise models, prewhitening).
+  :mod:`~hybridtable.measurement.noise_model` (AR(1) noise models, prewhitening).
 """
 
 from hybridtable.measurement.comparison import RunComparison, check_comparable, compare_run
-from hybridtable.measurement.noise import NoiseModel, estimate_noise, whiten
+from hybridtable.measurement.noise_model import NoiseModel, estimate_noise, whiten
 from hybridtable.measurement.replay import ReplayResult, replay
 from hybridtable.measurement.rig import RigPhysics, rig_params, simulate_rig
 from hybridtable.measurement.run_format import Run, RunInfo

@@ -22,7 +22,7 @@ from hybridtable.diagnosis.effects import Effect, EffectParameter, Signature
 from hybridtable.diagnosis.evaluate import prepare_runs
 from hybridtable.diagnosis.fit import fit_effect
 from hybridtable.diagnosis.registry import register_effect, unregister_effect
-from hybridtable.measurement.noise import NoiseModel, estimate_noise, whiten
+from hybridtable.measurement.noise_model import NoiseModel, estimate_noise, whiten
 from hybridtable.measurement.run_format import Run, RunInfo
 from hybridtable.systems.blocks import chain_output
 from tests.generators.effectsim import make_runs, simulate_hidden

@@ -1,0 +1,62 @@
+"""The built-in candidate effects of ``hybridtable diagnose``, one module each.
+
+Each module of this package (apart from ``_common``, the shared helpers) is
+named after its effect and defines one ``EFFECT = Effect(...)``: its
+parameters with units, bounds and null values, what it changes in the
+:class:`~hybridtable.diagnosis.effects.ModelSpec`, and its signature in the
+residuals. :data:`BUILTIN_EFFECTS` lists them in registration order, which
+matters: a tie of the ranking goes to the effect registered first.
+
+To add an effect:
+
+1. copy a module, e.g. ``contact_damping.py``, to ``my_effect.py`` (the
+   effect's name) and edit its docstring and ``EFFECT``;
+2. add one line here: import the module and append its ``EFFECT`` to
+   :data:`BUILTIN_EFFECTS`.
+
+An effect module imports only :mod:`hybridtable.diagnosis.effects`,
+:mod:`hybridtable.diagnosis.library._common`, the standard library and numpy;
+never the registry. A package outside this repository provides effects
+through the entry-point group ``hybridtable.effects`` instead
+(:mod:`hybridtable.diagnosis.registry`).
+"""
+
+from __future__ import annotations
+
+from hybridtable.diagnosis.effects import Effect
+from hybridtable.diagnosis.library import (
+    contact_damping,
+    coulomb_friction,
+    extra_delay,
+    force_bias,
+    hunt_crossley,
+    mass_error,
+    nonlinear_stiffness,
+    sensor_filter,
+    series_compliance,
+    stiffness_error,
+    table_resonance,
+)
+
+__all__ = ["BUILTIN_EFFECTS", "builtin_effects"]
+
+
+#: The built-in effects, in registration order (ties of the ranking go to the first).
+BUILTIN_EFFECTS: tuple[Effect, ...] = (
+    contact_damping.EFFECT,
+    hunt_crossley.EFFECT,
+    nonlinear_stiffness.EFFECT,
+    stiffness_error.EFFECT,
+    series_compliance.EFFECT,
+    coulomb_friction.EFFECT,
+    sensor_filter.EFFECT,
+    extra_delay.EFFECT,
+    table_resonance.EFFECT,
+    force_bias.EFFECT,
+    mass_error.EFFECT,
+)
+
+
+def builtin_effects() -> list[Effect]:
+    """The built-in effects, in registration order (ties of the ranking go to the first)."""
+    return list(BUILTIN_EFFECTS)

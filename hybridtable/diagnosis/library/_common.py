@@ -1,0 +1,148 @@
+"""What the built-in effects share: residual channels, contact phases, the
+stiffness parameter, the bounds of a structural mode and extra fit starts.
+
+Every quantity is in SI units; a :class:`~hybridtable.diagnosis.effects.RigScale`
+gives the nominal magnitudes of the rig the bounds are relative to.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+
+from hybridtable.diagnosis.effects import EffectParameter, RigScale
+
+__all__ = [
+    "F_MEA",
+    "P_ACT",
+    "V_DES",
+    "CONTACT",
+    "stiffness_parameter",
+    "resonance_starts",
+    "delay_starts",
+    "mode_lower",
+    "mode_upper",
+]
+
+
+#: Residual channel of the measured contact force, N.
+F_MEA = "f_mea_n"
+#: Residual channel of the table's measured position, m.
+P_ACT = "p_act_m"
+#: Residual channel of the spacecraft model's velocity command, m/s (closed loop).
+V_DES = "v_des_m_per_s"
+#: The phases in contact: the deflection growing, then shrinking.
+CONTACT = ("compression", "restitution")
+
+
+def stiffness_parameter(name: str, description: str) -> EffectParameter:
+    """A stiffness parameter from 0.2 to 5 times the nominal, null at the nominal.
+
+    Parameters
+    ----------
+    name : str
+        Parameter name, ending in its unit (``..._n_per_m``).
+    description : str
+        What the stiffness is, for reports.
+
+    Returns
+    -------
+    EffectParameter
+        Unit N/m; bounds [0.2 k, 5 k], typical change 0.01 k, null k, with
+        ``k`` the rig's nominal contact stiffness (N/m).
+    """
+    return EffectParameter(
+        name,
+        "N/m",
+        description,
+        lower=lambda s: 0.2 * s.stiffness_n_per_m,
+        upper=lambda s: 5.0 * s.stiffness_n_per_m,
+        scale=lambda s: 0.01 * s.stiffness_n_per_m,
+        null=lambda s: s.stiffness_n_per_m,
+    )
+
+
+def resonance_starts(
+    scale: RigScale, residuals: Sequence[Mapping[str, np.ndarray]]
+) -> list[dict[str, float]]:
+    """Starts of the mode's fit: the peak of the position residual's spectrum
+    within the bounds, and a coarse grid.
+
+    Parameters
+    ----------
+    scale : RigScale
+        Nominal magnitudes of the rig (sample period, s; table frequency, Hz).
+    residuals : sequence of mapping
+        Nominal residuals of each run; ``"p_act_m"`` (m) is used.
+
+    Returns
+    -------
+    list of dict
+        ``{"frequency_hz": Hz, "damping_ratio": 1}``: three damping ratios at
+        the spectral peak (if any lies in [:func:`mode_lower`,
+        :func:`mode_upper`]), then four frequencies spaced geometrically
+        between the bounds at a damping ratio of 0.05.
+    """
+    lo = mode_lower(scale)
+    hi = mode_upper(scale)
+    starts = [
+        {"frequency_hz": f, "damping_ratio": 0.05} for f in np.geomspace(lo * 1.5, hi / 1.5, 4)
+    ]
+    power, freqs = None, None
+    for res in residuals:
+        e = np.asarray(res["p_act_m"], dtype=float)
+        if e.size < 16:
+            continue
+        e = (e - e.mean()) * np.hanning(e.size)
+        n = 1 << int(math.ceil(math.log2(4 * e.size)))
+        spec = np.abs(np.fft.rfft(e, n)) ** 2
+        f = np.fft.rfftfreq(n, scale.sample_period_s)
+        if power is None:
+            power, freqs = spec, f
+        elif len(spec) == len(power):
+            power = power + spec
+    if power is not None:
+        band = (freqs >= lo) & (freqs <= hi)
+        if band.any():
+            peak = float(freqs[band][np.argmax(power[band])])
+            starts = [
+                {"frequency_hz": peak, "damping_ratio": z} for z in (0.02, 0.08, 0.2)
+            ] + starts
+    return starts
+
+
+def delay_starts(scale: RigScale, residuals) -> list[dict[str, float]]:
+    """Starts of the delay's fit: whole ticks around the nominal delay.
+
+    Parameters
+    ----------
+    scale : RigScale
+        Nominal magnitudes of the rig (sample period ``h`` and sensor delay
+        ``T``, s).
+    residuals : sequence of mapping
+        Nominal residuals (unused; the signature of a ``starts`` callable).
+
+    Returns
+    -------
+    list of dict
+        ``{"extra_delay_s": j h}`` for ``j`` in -2, -1, 1, 2, 3 (s), those that
+        keep the total delay ``T + j h`` non-negative.
+    """
+    h = scale.sample_period_s
+    lo = -scale.sensor_delay_s
+    return [{"extra_delay_s": j * h} for j in (-2, -1, 1, 2, 3) if j * h >= lo]
+
+
+def mode_lower(scale: RigScale) -> float:
+    """Lowest frequency of a structural mode, Hz: half the table's servo
+    frequency, at least 1 Hz (1 Hz if the servo frequency is not finite)."""
+    f = scale.table_frequency_hz
+    return max(1.0, 0.5 * f) if math.isfinite(f) else 1.0
+
+
+def mode_upper(scale: RigScale) -> float:
+    """Highest frequency of a structural mode, Hz: 0.45 / h, just below the
+    Nyquist frequency of the sample period ``h`` (s)."""
+    return 0.45 / scale.sample_period_s

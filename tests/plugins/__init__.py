@@ -1,0 +1,1 @@
+"""Plug-ins of other packages, through real entry points."""
