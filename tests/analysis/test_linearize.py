@@ -14,7 +14,7 @@ from hybridtable.analysis.blockwise import ContactLoopLinearizer
 from hybridtable.analysis.interconnect import Interconnection, StateSpaceBlock
 from hybridtable.analysis.linearize import linearize_contact_loop, linearize_system
 from hybridtable.analysis.sampled import SampledLoopLinearizer
-from hybridtable.compensators.paper import Compensator
+from hybridtable.compensators.paper import COMPENSATORS, Compensator
 from hybridtable.errors import InterconnectionError, LinearizationError
 from hybridtable.loop.builder import build_hybrid_loop
 from hybridtable.loop.simulation import run_loop
@@ -23,21 +23,7 @@ from hybridtable.systems.contact import UnilateralSpringContact
 from hybridtable.systems.sensor import ForceSensorDelay, SensorParams
 from hybridtable.systems.spacecraft import Spacecraft, SpacecraftParams
 from hybridtable.systems.table import SecondOrderTable, TableParams, table_matrices
-
-COMPENSATORS = ("none", "SDC", "MDC", "SDMDC")
-
-
-@pytest.fixture(scope="module")
-def lin() -> ContactLoopLinearizer:
-    return ContactLoopLinearizer(3)
-
-
-def _damped(p, zeta):
-    return p.with_(
-        contact_damping_n_s_per_m=2
-        * zeta
-        * math.sqrt(p.contact_stiffness_n_per_m * p.spacecraft_mass_kg)
-    )
+from tests.analysis.support import damped
 
 
 @pytest.mark.parametrize("comp", COMPENSATORS)
@@ -47,7 +33,7 @@ def test_assembled_model_equals_direct_linearize_of_full_diagram(lin, comp):
     points = [
         paper_params(compensator=comp),
         paper_params(compensator=comp, sensor_delay_s=0.0137, table_response_hz=7.5),
-        _damped(paper_params(compensator=comp, sensor_delay_s=0.002, table_damping_ratio=0.3), 0.2),
+        damped(paper_params(compensator=comp, sensor_delay_s=0.002, table_damping_ratio=0.3), 0.2),
         paper_params(compensator=comp, sensor_delay_s=0.0, table_response_hz=180.0),
         paper_params(compensator=comp, table_response_hz=math.inf, lead_time_s=0.011),
     ]
@@ -64,7 +50,7 @@ def test_other_pade_orders_match_direct_linearize():
 
 def test_undelayed_ideal_loop_is_the_physical_contact(lin):
     # T = 0, ideal table, no compensation: G(s) = -(k + c s) / (m s^2) exactly.
-    p = _damped(paper_params(sensor_delay_s=0.0, table_response_hz=math.inf), 0.1)
+    p = damped(paper_params(sensor_delay_s=0.0, table_response_hz=math.inf), 0.1)
     m, k, c = p.spacecraft_mass_kg, p.contact_stiffness_n_per_m, p.contact_damping_n_s_per_m
     s = np.array([0.3j, 2j, 1 + 5j, 40j])
     np.testing.assert_allclose(lin.open_loop(p).transfer(s), -(k + c * s) / (m * s * s), rtol=1e-12)

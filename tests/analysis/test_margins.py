@@ -19,21 +19,10 @@ from hybridtable.analysis.margins import (
     phase_margin_at_contact,
 )
 from hybridtable.analysis.sampled import SampledLoopLinearizer
+from hybridtable.compensators.paper import COMPENSATORS
 from hybridtable.loop.simulation import simulate
 from hybridtable.studies.paper import load_tables, paper_params, table1_params
-
-COMPENSATORS = ("none", "SDC", "MDC", "SDMDC")
-
-
-@pytest.fixture(scope="module")
-def lin() -> ContactLoopLinearizer:
-    return ContactLoopLinearizer(3)
-
-
-def _damped(p, zeta):
-    c = 2 * zeta * math.sqrt(p.contact_stiffness_n_per_m * p.spacecraft_mass_kg)
-    return p.with_(contact_damping_n_s_per_m=c)
-
+from tests.analysis.support import damped
 
 # -- closed forms ------------------------------------------------------------------
 
@@ -51,7 +40,7 @@ def test_perfect_rig_undamped_contact_is_marginal(lin):
 
 @pytest.mark.parametrize("zeta", [0.05, 0.3])
 def test_perfect_rig_damped_contact_cor_is_the_oscillator_formula(lin, zeta):
-    p = _damped(paper_params(sensor_delay_s=0.0, table_response_hz=math.inf), zeta)
+    p = damped(paper_params(sensor_delay_s=0.0, table_response_hz=math.inf), zeta)
     m = loop_margins(lin.open_loop(p))
     assert m.damping_ratio == pytest.approx(zeta, rel=1e-9)
     assert m.predicted_cor == pytest.approx(
@@ -76,7 +65,7 @@ def test_undamped_uncompensated_loop_has_critical_delay_zero(lin, table_hz):
 def test_damped_contact_ideal_table_critical_delay_closed_form(lin, zeta):
     # m s^2 + (c s + k) e^{-sT}: at the crossover w_c (m w^2 = |k + i c w|)
     # the contact's phase lead atan(c w_c / k) is used up by w_c T.
-    p = _damped(paper_params(table_response_hz=math.inf), zeta)
+    p = damped(paper_params(table_response_hz=math.inf), zeta)
     k, c = p.contact_stiffness_n_per_m, p.contact_damping_n_s_per_m
     w = ideal_crossover_frequency(p)
     assert p.spacecraft_mass_kg * w**2 == pytest.approx(abs(k + 1j * c * w), rel=1e-12)
@@ -90,7 +79,7 @@ def test_damped_contact_ideal_table_critical_delay_closed_form(lin, zeta):
 
 
 def test_exact_root_solves_the_quasi_polynomial(lin):
-    p = _damped(paper_params(sensor_delay_s=0.03, table_response_hz=math.inf), 0.1)
+    p = damped(paper_params(sensor_delay_s=0.03, table_response_hz=math.inf), 0.1)
     m, k, c, T = (
         p.spacecraft_mass_kg,
         p.contact_stiffness_n_per_m,
@@ -126,7 +115,7 @@ def test_fast_phase_margin_equals_python_control(lin):
     for comp in COMPENSATORS:
         for p in (
             paper_params(compensator=comp, sensor_delay_s=0.011, table_response_hz=13.0),
-            _damped(paper_params(compensator=comp), 0.2),
+            damped(paper_params(compensator=comp), 0.2),
         ):
             a = phase_margin_at_contact(lin.open_loop(p), "python-control")
             b = phase_margin_at_contact(lin.open_loop(p), "fast")
@@ -138,7 +127,7 @@ def test_fast_phase_margin_equals_python_control(lin):
 
 
 def test_critical_table_frequency_separates_stable_from_unstable(lin):
-    p = _damped(paper_params(sensor_delay_s=0.005), 0.1)
+    p = damped(paper_params(sensor_delay_s=0.005), 0.1)
     f = critical_table_frequency(growth_of(lin.open_loop), p)
     assert 5.0 < f < 1000.0
     above = loop_margins(lin.open_loop(p.with_(table_response_hz=1.01 * f)), "fast")
@@ -152,7 +141,7 @@ def test_critical_table_frequency_separates_stable_from_unstable(lin):
 
 def test_sampled_critical_delay_is_whole_samples(lin):
     S = SampledLoopLinearizer(lin)
-    p = _damped(paper_params(sample_rate_hz=1000.0, table_response_hz=math.inf), 0.1)
+    p = damped(paper_params(sample_rate_hz=1000.0, table_response_hz=math.inf), 0.1)
     T = critical_sensor_delay(growth_of(S.open_loop), p)
     n = round(T * 1000.0)
     assert T == pytest.approx(n * 1e-3, abs=1e-12)

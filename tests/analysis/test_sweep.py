@@ -20,15 +20,11 @@ from hybridtable.analysis.validation import (
 from hybridtable.errors import ParameterError
 from hybridtable.loop.simulation import simulate
 from hybridtable.studies.paper import paper_params
-
-
-def _damped(p, zeta):
-    c = 2 * zeta * math.sqrt(p.contact_stiffness_n_per_m * p.spacecraft_mass_kg)
-    return p.with_(contact_damping_n_s_per_m=c)
+from tests.analysis.support import damped
 
 
 def test_grid_values_are_the_point_analysis_and_curves_bound_the_stable_region():
-    base = _damped(paper_params(), 0.05)
+    base = damped(paper_params(), 0.05)
     delays = np.array([0.0, 0.004, 0.012])
     tables = np.array([10.0, 25.0, math.inf])
     r = sweep_margins(base, delays, tables, ("none", "MDC"))

@@ -14,17 +14,15 @@ import math
 
 import numpy as np
 import pytest
-from pydrake.systems.primitives import MatrixGain
 
 from hybridtable.cli import main
 from hybridtable.diagnosis.diagnose import diagnose
-from hybridtable.diagnosis.effects import Effect, EffectParameter, Signature
 from hybridtable.diagnosis.evaluate import prepare_runs
 from hybridtable.diagnosis.fit import fit_effect
 from hybridtable.diagnosis.registry import register_effect, unregister_effect
 from hybridtable.measurement.noise_model import NoiseModel, estimate_noise, whiten
 from hybridtable.measurement.run_format import Run, RunInfo
-from hybridtable.systems.blocks import chain_output
+from tests.diagnosis.support import sensor_gain_effect
 from tests.generators.effectsim import make_runs, simulate_hidden
 from tests.generators.rigsim import NOMINAL
 
@@ -158,20 +156,7 @@ def test_forward_selection_staircase_with_two_hidden_effects(tmp_path):
 
 
 def test_a_registered_user_effect_is_diagnosed(tmp_path):
-    gain = Effect(
-        name="sensor_gain",
-        description="the force sensor reads g times the force",
-        parameters=(
-            EffectParameter(
-                "gain", "1", "reading / force", lower=0.5, upper=2.0, scale=0.005, null=1.0
-            ),
-        ),
-        signature=Signature(("f_mea_n",), ("compression", "restitution"), "force scaled"),
-        apply=lambda spec, v, s: spec.wrap(
-            "sensor",
-            lambda p, sensor: chain_output(sensor, MatrixGain([[v["gain"]]]), "measured_force"),
-        ),
-    )
+    gain = sensor_gain_effect("sensor_gain", typical_change=0.005)
     register_effect(gain)
     try:
         runs = _runs(tmp_path, "sensor_gain", seed=9)

@@ -6,9 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from pydrake.systems.primitives import MatrixGain
 
-from hybridtable.diagnosis.effects import Effect, EffectParameter, ModelSpec, RigScale, Signature
+from hybridtable.diagnosis.effects import ModelSpec, RigScale
 from hybridtable.diagnosis.registry import (
     EFFECTS,
     build_spec,
@@ -22,7 +21,7 @@ from hybridtable.errors import ParameterError
 from hybridtable.measurement.replay import replay
 from hybridtable.measurement.rig import RigPhysics
 from hybridtable.measurement.run_reader import read_run
-from hybridtable.systems.blocks import chain_output
+from tests.diagnosis.support import sensor_gain_effect
 from tests.generators.effectsim import HIDDEN, simulate_hidden
 from tests.generators.rigsim import NOMINAL, write_run
 
@@ -133,20 +132,7 @@ def test_null_spec_gives_the_nominal_physics_and_effects_compose(tmp_path):
 def test_wrapped_backend_and_user_effect(tmp_path):
     run = _noiseless(tmp_path, "none")
     scale = RigScale.from_runs([run])
-    gain = Effect(
-        name="sensor_gain_test",
-        description="a gain error of the force sensor",
-        parameters=(
-            EffectParameter(
-                "gain", "1", "reading / force", lower=0.5, upper=2.0, scale=0.01, null=1.0
-            ),
-        ),
-        signature=Signature(("f_mea_n",), ("compression", "restitution"), "scaled force"),
-        apply=lambda spec, v, s: spec.wrap(
-            "sensor",
-            lambda p, sensor: chain_output(sensor, MatrixGain([[v["gain"]]]), "measured_force"),
-        ),
-    )
+    gain = sensor_gain_effect("sensor_gain_test", typical_change=0.01)
     register_effect(gain)
     try:
         assert "sensor_gain_test" in effect_names()
