@@ -14,40 +14,41 @@
   curves, Bode plot; Markdown summary.
 """
 
-from hybridtable.analysis.blockwise import ContactLoopLinearizer
-from hybridtable.analysis.exact_delay import ExactDelayMargins, exact_contact_root, exact_margins
-from hybridtable.analysis.linearize import LinearLoop, add_contact_loop, linearize_contact_loop
-from hybridtable.analysis.margins import (
-    LoopMargins,
-    critical_sensor_delay,
-    critical_table_frequency,
-    growth_of,
-    loop_margins,
-)
-from hybridtable.analysis.sampled import SampledLoopLinearizer
-from hybridtable.analysis.sweep import CompensatorSweep, SweepResult, sweep_margins
-from hybridtable.analysis.validation import ValidationPoint, validate_point, validate_sweep
-from hybridtable.errors import LinearizationError
+from hybridtable._lazy import lazy_exports
+from hybridtable.errors import LinearizationError as LinearizationError
 
-__all__ = [
-    "CompensatorSweep",
-    "ContactLoopLinearizer",
-    "ExactDelayMargins",
-    "LinearLoop",
-    "LinearizationError",
-    "LoopMargins",
-    "SampledLoopLinearizer",
-    "SweepResult",
-    "ValidationPoint",
-    "add_contact_loop",
-    "critical_sensor_delay",
-    "critical_table_frequency",
-    "exact_contact_root",
-    "exact_margins",
-    "growth_of",
-    "linearize_contact_loop",
-    "loop_margins",
-    "sweep_margins",
-    "validate_point",
-    "validate_sweep",
-]
+__all__, __getattr__, __dir__ = lazy_exports(
+    __name__,
+    {
+        "blockwise": ("ContactLoopLinearizer",),
+        "exact_delay": (
+            "ExactDelayMargins",
+            "exact_contact_root",
+            "exact_margins",
+        ),
+        "linearize": (
+            "LinearLoop",
+            "add_contact_loop",
+            "linearize_contact_loop",
+        ),
+        "margins": (
+            "LoopMargins",
+            "critical_sensor_delay",
+            "critical_table_frequency",
+            "growth_of",
+            "loop_margins",
+        ),
+        "sampled": ("SampledLoopLinearizer",),
+        "sweep": (
+            "CompensatorSweep",
+            "SweepResult",
+            "sweep_margins",
+        ),
+        "validation": (
+            "ValidationPoint",
+            "validate_point",
+            "validate_sweep",
+        ),
+    },
+)
+__all__ = sorted([*__all__, "LinearizationError"])

@@ -22,40 +22,37 @@ registry's ``BUILTIN``, or, outside this repository, an entry point of the
 group ``hybridtable.compensators``.
 """
 
-from hybridtable.compensators.online import make_online_sdmdc
-from hybridtable.compensators.paper import (
-    COMPENSATORS,
-    CONTACT_GATES,
-    Compensator,
-    CompensatorParams,
-)
-from hybridtable.compensators.passivity import PassivityGuard, PassivityParams, passivity_guarded
-from hybridtable.compensators.polynomial import PolynomialExtrapolator, PolynomialParams
-from hybridtable.compensators.registry import (
-    CompensatorFactory,
-    compensator_factory,
-    compensator_names,
-    make_compensator,
-    register_compensator,
-)
-from hybridtable.compensators.smith import SmithParams, SmithPredictor
+from hybridtable._lazy import lazy_exports
 
-__all__ = [
-    "COMPENSATORS",
-    "CONTACT_GATES",
-    "Compensator",
-    "CompensatorFactory",
-    "CompensatorParams",
-    "PassivityGuard",
-    "PassivityParams",
-    "PolynomialExtrapolator",
-    "PolynomialParams",
-    "SmithParams",
-    "SmithPredictor",
-    "compensator_factory",
-    "compensator_names",
-    "make_compensator",
-    "make_online_sdmdc",
-    "passivity_guarded",
-    "register_compensator",
-]
+__all__, __getattr__, __dir__ = lazy_exports(
+    __name__,
+    {
+        "online": ("make_online_sdmdc",),
+        "paper": (
+            "COMPENSATORS",
+            "CONTACT_GATES",
+            "Compensator",
+            "CompensatorParams",
+        ),
+        "passivity": (
+            "PassivityGuard",
+            "PassivityParams",
+            "passivity_guarded",
+        ),
+        "polynomial": (
+            "PolynomialExtrapolator",
+            "PolynomialParams",
+        ),
+        "registry": (
+            "CompensatorFactory",
+            "compensator_factory",
+            "compensator_names",
+            "make_compensator",
+            "register_compensator",
+        ),
+        "smith": (
+            "SmithParams",
+            "SmithPredictor",
+        ),
+    },
+)

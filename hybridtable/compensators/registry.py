@@ -10,7 +10,6 @@ group ``hybridtable.compensators`` (loaded on first use), a script through
 from __future__ import annotations
 
 from collections.abc import Callable
-from importlib.metadata import entry_points
 from typing import Any
 
 from pydrake.systems.framework import System
@@ -18,7 +17,6 @@ from pydrake.systems.framework import System
 from hybridtable._validation import check_choice
 from hybridtable.compensators.online import make_online_sdmdc
 from hybridtable.compensators.paper import COMPENSATORS, paper_compensator
-from hybridtable.compensators.passivity import passivity_guarded
 from hybridtable.compensators.polynomial import make_polynomial
 from hybridtable.compensators.smith import make_smith, make_smith_online
 from hybridtable.errors import ParameterError
@@ -65,6 +63,8 @@ def _load_entry_points() -> None:
     if _entry_points_loaded:
         return
     _entry_points_loaded = True
+    from importlib.metadata import entry_points  # 25 ms: only when names are asked for
+
     for ep in entry_points(group=ENTRY_POINT_GROUP):
         if ep.name in _REGISTRY:
             raise ParameterError(
@@ -109,5 +109,8 @@ def make_compensator(
     if system is None:
         system = compensator_factory(params.compensator)(params, derivative_period_s)
     if getattr(params, "passivity", False):
+        # Imported here, not at the top: a loop without the guard never pays for it.
+        from hybridtable.compensators.passivity import passivity_guarded
+
         system = passivity_guarded(system, params, derivative_period_s)
     return system

@@ -15,31 +15,30 @@
 - :mod:`~hybridtable.diagnosis.settings`: thresholds.
 """
 
-from hybridtable.diagnosis.add_effect import compare_with_effect
-from hybridtable.diagnosis.candidates import Candidate, Diagnosis
-from hybridtable.diagnosis.diagnose import diagnose
-from hybridtable.diagnosis.effects import Effect, EffectParameter, ModelSpec, RigScale, Signature
-from hybridtable.diagnosis.fit import fit_effect
-from hybridtable.diagnosis.registry import (
-    effect_names,
-    get_effect,
-    parse_effect_spec,
-    register_effect,
-)
+from hybridtable._lazy import lazy_exports
 
-__all__ = [
-    "Candidate",
-    "Diagnosis",
-    "Effect",
-    "EffectParameter",
-    "ModelSpec",
-    "RigScale",
-    "Signature",
-    "compare_with_effect",
-    "diagnose",
-    "effect_names",
-    "fit_effect",
-    "get_effect",
-    "parse_effect_spec",
-    "register_effect",
-]
+__all__, __getattr__, __dir__ = lazy_exports(
+    __name__,
+    {
+        "add_effect": ("compare_with_effect",),
+        "candidates": (
+            "Candidate",
+            "Diagnosis",
+        ),
+        "diagnose": ("diagnose",),
+        "effects": (
+            "Effect",
+            "EffectParameter",
+            "ModelSpec",
+            "RigScale",
+            "Signature",
+        ),
+        "fit": ("fit_effect",),
+        "registry": (
+            "effect_names",
+            "get_effect",
+            "parse_effect_spec",
+            "register_effect",
+        ),
+    },
+)

@@ -9,7 +9,6 @@ use), a script through :func:`register_effect`.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from importlib.metadata import entry_points
 
 from hybridtable.diagnosis.effects import Effect, ModelSpec, RigScale
 from hybridtable.diagnosis.library import builtin_effects
@@ -51,6 +50,8 @@ def _load_entry_points() -> None:
     if _entry_points_loaded:
         return
     _entry_points_loaded = True
+    from importlib.metadata import entry_points  # 25 ms: only when names are asked for
+
     for ep in entry_points(group=ENTRY_POINT_GROUP):
         effect = ep.load()
         if not isinstance(effect, Effect):

@@ -13,27 +13,37 @@
   :mod:`~hybridtable.measurement.noise_model` (AR(1) noise models, prewhitening).
 """
 
-from hybridtable.measurement.comparison import RunComparison, check_comparable, compare_run
-from hybridtable.measurement.noise_model import NoiseModel, estimate_noise, whiten
-from hybridtable.measurement.replay import ReplayResult, replay
-from hybridtable.measurement.rig import RigPhysics, rig_params, simulate_rig
-from hybridtable.measurement.run_format import Run, RunInfo
-from hybridtable.measurement.run_reader import read_run, read_runs
+from hybridtable._lazy import lazy_exports
 
-__all__ = [
-    "NoiseModel",
-    "ReplayResult",
-    "RigPhysics",
-    "Run",
-    "RunComparison",
-    "RunInfo",
-    "check_comparable",
-    "compare_run",
-    "estimate_noise",
-    "read_run",
-    "read_runs",
-    "replay",
-    "rig_params",
-    "simulate_rig",
-    "whiten",
-]
+__all__, __getattr__, __dir__ = lazy_exports(
+    __name__,
+    {
+        "comparison": (
+            "RunComparison",
+            "check_comparable",
+            "compare_run",
+        ),
+        "noise_model": (
+            "NoiseModel",
+            "estimate_noise",
+            "whiten",
+        ),
+        "replay": (
+            "ReplayResult",
+            "replay",
+        ),
+        "rig": (
+            "RigPhysics",
+            "rig_params",
+            "simulate_rig",
+        ),
+        "run_format": (
+            "Run",
+            "RunInfo",
+        ),
+        "run_reader": (
+            "read_run",
+            "read_runs",
+        ),
+    },
+)

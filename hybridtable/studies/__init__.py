@@ -6,15 +6,21 @@ the compensator sweep.
   Table 2 grid under stiffness mismatch, noise and damping.
 """
 
-from hybridtable.studies.compensator_sweep import SweepResult, SweepSettings, run_sweep
-from hybridtable.studies.paper import load_tables, paper_params, table1_params, table2_params
+from hybridtable._lazy import lazy_exports
 
-__all__ = [
-    "SweepResult",
-    "SweepSettings",
-    "load_tables",
-    "paper_params",
-    "run_sweep",
-    "table1_params",
-    "table2_params",
-]
+__all__, __getattr__, __dir__ = lazy_exports(
+    __name__,
+    {
+        "compensator_sweep": (
+            "SweepResult",
+            "SweepSettings",
+            "run_sweep",
+        ),
+        "paper": (
+            "load_tables",
+            "paper_params",
+            "table1_params",
+            "table2_params",
+        ),
+    },
+)

@@ -23,40 +23,49 @@ contact: in ``motion``, out ``force``, ``force_rate``); the loop takes it
 through ``add_hybrid_loop(builder, params, table=..., contact=...)``.
 """
 
-from hybridtable.systems.blocks import ChainedOutput, RecordedOffset, chain_output
-from hybridtable.systems.contact import ContactParams, UnilateralSpringContact
-from hybridtable.systems.contact_law import ContactLaw, ContactLawParams
-from hybridtable.systems.measurement_chain import MeasurementChain, MeasurementChainParams
-from hybridtable.systems.noise import (
-    MeasurementNoise,
-    MeasurementNoiseParams,
-    with_measurement_noise,
-)
-from hybridtable.systems.resonant_table import ResonantTable, StructuralModeParams
-from hybridtable.systems.sensor import ForceSensorDelay, SensorParams, delay_samples
-from hybridtable.systems.spacecraft import Spacecraft, SpacecraftParams
-from hybridtable.systems.table import SecondOrderTable, TableParams
+from hybridtable._lazy import lazy_exports
 
-__all__ = [
-    "ChainedOutput",
-    "ContactLaw",
-    "ContactLawParams",
-    "ContactParams",
-    "ForceSensorDelay",
-    "MeasurementChain",
-    "MeasurementChainParams",
-    "MeasurementNoise",
-    "MeasurementNoiseParams",
-    "RecordedOffset",
-    "ResonantTable",
-    "SecondOrderTable",
-    "SensorParams",
-    "Spacecraft",
-    "SpacecraftParams",
-    "StructuralModeParams",
-    "TableParams",
-    "UnilateralSpringContact",
-    "chain_output",
-    "delay_samples",
-    "with_measurement_noise",
-]
+__all__, __getattr__, __dir__ = lazy_exports(
+    __name__,
+    {
+        "blocks": (
+            "ChainedOutput",
+            "RecordedOffset",
+            "chain_output",
+        ),
+        "contact": (
+            "ContactParams",
+            "UnilateralSpringContact",
+        ),
+        "contact_law": (
+            "ContactLaw",
+            "ContactLawParams",
+        ),
+        "measurement_chain": (
+            "MeasurementChain",
+            "MeasurementChainParams",
+        ),
+        "noise": (
+            "MeasurementNoise",
+            "MeasurementNoiseParams",
+            "with_measurement_noise",
+        ),
+        "resonant_table": (
+            "ResonantTable",
+            "StructuralModeParams",
+        ),
+        "sensor": (
+            "ForceSensorDelay",
+            "SensorParams",
+            "delay_samples",
+        ),
+        "spacecraft": (
+            "Spacecraft",
+            "SpacecraftParams",
+        ),
+        "table": (
+            "SecondOrderTable",
+            "TableParams",
+        ),
+    },
+)
