@@ -26,8 +26,8 @@ import numpy as np
 from hybridtable.analysis.interconnect import Interconnection, StateSpaceBlock, state_slices
 from hybridtable.analysis.linearize import (
     LinearLoop,
-    _check_pade_order,
-    _notes,
+    check_pade_order,
+    linearization_notes,
     linearize_contact_loop,
     linearize_system,
 )
@@ -86,7 +86,7 @@ class ContactLoopLinearizer:
     """
 
     def __init__(self, pade_order: int = 3) -> None:
-        self.pade_order = _check_pade_order(pade_order)
+        self.pade_order = check_pade_order(pade_order)
         self._cache: dict = {}
         names = CONTACT_LOOP_BLOCKS
         self._wiring_names = names
@@ -247,7 +247,9 @@ class ContactLoopLinearizer:
         :func:`~hybridtable.analysis.linearize.linearize_contact_loop`, in another
         state basis)."""
         m = self._open.assemble(self.blocks(params), "open_loop")
-        return LinearLoop(m.A, m.B, m.C, m.D, 0.0, params, self.pade_order, _notes(params))
+        return LinearLoop(
+            m.A, m.B, m.C, m.D, 0.0, params, self.pade_order, linearization_notes(params)
+        )
 
     def blocks(self, params: HybridLoopParams) -> list[StateSpaceBlock]:
         """The linearized blocks at ``params``, in :data:`CONTACT_LOOP_BLOCKS`

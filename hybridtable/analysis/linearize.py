@@ -52,6 +52,8 @@ __all__ = [
     "add_contact_loop",
     "linearize_system",
     "linearize_contact_loop",
+    "check_pade_order",
+    "linearization_notes",
 ]
 
 
@@ -207,7 +209,8 @@ class ContactLoop:
     compensator: System
 
 
-def _check_pade_order(pade_order: int) -> int:
+def check_pade_order(pade_order: int) -> int:
+    """``pade_order`` as an int >= 1, or a ParameterError naming it."""
     if int(pade_order) != pade_order or pade_order < 1:
         raise ParameterError(f"pade_order must be an integer >= 1 (got {pade_order})")
     return int(pade_order)
@@ -224,7 +227,7 @@ def add_contact_loop(
     them to close it). The contact is bilateral, the sensor a Pade delay of
     ``[f, df/dt]``, the compensator ungated and reading ``df_mea/dt``.
     """
-    order = _check_pade_order(pade_order)
+    order = check_pade_order(pade_order)
     sc = builder.AddNamedSystem("spacecraft", Spacecraft(params.spacecraft()))
     table = builder.AddNamedSystem("table", SecondOrderTable(params.table()))
     contact = builder.AddNamedSystem(
@@ -260,7 +263,8 @@ def add_contact_loop(
     return ContactLoop(params, sc, table, contact, mux, sensor, demux, comp)
 
 
-def _notes(params: HybridLoopParams) -> tuple[str, ...]:
+def linearization_notes(params: HybridLoopParams) -> tuple[str, ...]:
+    """Caveats of the linear model at ``params``, in words (empty when none)."""
     cp = params.compensator_params()
     if params.table().is_ideal and params.contact_damping_n_s_per_m > 0 and cp.uses_lead:
         return (
@@ -292,6 +296,6 @@ def linearize_contact_loop(params: HybridLoopParams, pade_order: int = 3) -> Lin
         np.asarray(lin.D()).reshape(1, 1),
         0.0,
         params,
-        _check_pade_order(pade_order),
-        _notes(params),
+        check_pade_order(pade_order),
+        linearization_notes(params),
     )

@@ -1,4 +1,6 @@
-"""Helpers every command uses: number parsing, JSON output."""
+"""Helpers every command uses: number parsing, JSON output (atomic), the run
+inputs of the commands that read recorded runs, and the checks that no output
+replaces an input or a user's folder."""
 
 from __future__ import annotations
 

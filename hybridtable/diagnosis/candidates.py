@@ -15,12 +15,12 @@ from hybridtable.diagnosis.evaluate import Evaluation, Evaluator, RunData
 from hybridtable.diagnosis.fit import (
     Fit,
     HeldOut,
-    _heldout,
-    _model_spec,
-    _starts_for,
     delta_bic,
     fit_effects,
+    heldout,
+    model_spec,
     pooled_error,
+    starts_for,
 )
 from hybridtable.diagnosis.registry import EFFECTS, get_effect
 from hybridtable.diagnosis.settings import (
@@ -33,6 +33,11 @@ from hybridtable.diagnosis.settings import (
 __all__ = [
     "Candidate",
     "Diagnosis",
+    "evaluate_candidate",
+    "velocity_error",
+    "mark_lookalikes",
+    "closed_loop_summary",
+    "rank_candidates",
 ]
 
 
@@ -107,7 +112,7 @@ class Diagnosis:
         return list(first) + list(self.closed_loop_candidates)
 
     def final_spec(self) -> ModelSpec:
-        return _model_spec(self.selected, self.selected_values, self.scale)
+        return model_spec(self.selected, self.selected_values, self.scale)
 
     def to_json(self) -> dict:
         return {
@@ -143,7 +148,7 @@ class Diagnosis:
         }
 
 
-def _evaluate_candidate(
+def evaluate_candidate(
     ev: Evaluator,
     base_fit: Fit,
     base_error: tuple[float, dict[str, float]],
@@ -154,7 +159,7 @@ def _evaluate_candidate(
 ) -> Candidate:
     names = [*base_fit.effects, effect.name]
     start = {**base_fit.values, effect.name: effect.start(ev.scale)}
-    starts = _starts_for(effect, ev.scale, residuals)
+    starts = starts_for(effect, ev.scale, residuals)
     if base_fit.effects:
         # The new effect alone on the fixed base first; jointly only if it helps.
         fit = fit_effects(ev, names, start=start, fixed=base_fit.values, starts=starts, stage=stage)
@@ -170,12 +175,12 @@ def _evaluate_candidate(
     if stage == "replay":
         err_after, chan_after = pooled_error(ev.data, fit.evaluations)
     else:
-        err_after, chan_after = _velocity_error(fit.evaluations)
+        err_after, chan_after = velocity_error(fit.evaluations)
     notes = []
     if fit.failed:
         notes.append("a model run failed during the fit")
     if dbic > BIC_THRESHOLD or always_heldout:
-        held = _heldout(ev, base_fit.evaluations, names, fit.values, stage)
+        held = heldout(ev, base_fit.evaluations, names, fit.values, stage)
     else:
         held = HeldOut(math.nan, math.nan, [])
     if stage != "replay" and len(ev.data) > 1:
@@ -207,13 +212,16 @@ def _evaluate_candidate(
     )
 
 
-def _velocity_error(evaluations: Mapping[int, Evaluation]) -> tuple[float, dict[str, float]]:
+def velocity_error(evaluations: Mapping[int, Evaluation]) -> tuple[float, dict[str, float]]:
+    """RMS closed-loop ``v_des`` residual (m/s) over the runs, and per channel."""
     sq = [float(np.mean(ev.residual["v_des_m_per_s"] ** 2)) for ev in evaluations.values()]
     rms = math.sqrt(float(np.mean(sq)))
     return rms, {"v_des_m_per_s": rms}
 
 
-def _mark_lookalikes(candidates: list[Candidate]) -> None:
+def mark_lookalikes(candidates: list[Candidate]) -> None:
+    """Name, on each significant candidate, the others whose ``delta_bic`` is within
+    :data:`~hybridtable.diagnosis.settings.INDISTINGUISHABLE_BIC` (the data cannot tell them apart)."""
     sig = [c for c in candidates if c.significant]
     for c in sig:
         c.indistinguishable_from = [
@@ -231,7 +239,7 @@ def _cor_of(v_des: np.ndarray, f_comp: np.ndarray, v0: float) -> float:
     return abs(float(v_des[-1])) / abs(v_in)
 
 
-def _closed_loop_summary(ev: Evaluator, spec: ModelSpec) -> dict:
+def closed_loop_summary(ev: Evaluator, spec: ModelSpec) -> dict:
     """Closed-loop v_des RMS error and CoR error of a model (noise-free, as
     ``hybridtable compare``), per run."""
     rows = []
@@ -263,7 +271,7 @@ def _closed_loop_summary(ev: Evaluator, spec: ModelSpec) -> dict:
     return {"runs": rows}
 
 
-def _rank(cands: list[Candidate]) -> None:
+def rank_candidates(cands: list[Candidate]) -> None:
     """Sort by ``delta_bic``, ties (:data:`TIE_BIC`) broken by fewer
     parameters, then registration order (a tie between, e.g., a stiffness
     error and a series compliance, which predict the same, is numerical)."""

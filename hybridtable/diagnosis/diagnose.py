@@ -1,13 +1,14 @@
 """Which physical effect is the rig model missing? Fit, rank, select.
 
-:func:`diagnose` fits every candidate of :mod:`hybridtable.diagnosis.effects` to a set
-of recorded runs and ranks them:
+:func:`diagnose` fits every registered candidate effect (the library of
+:mod:`hybridtable.diagnosis.library`, plug-ins of :mod:`hybridtable.diagnosis.registry`)
+to a set of recorded runs and ranks them:
 
 1. **Residuals.** The replay (:mod:`hybridtable.measurement.replay`: the recorded command
    through table, contact and force sensor) predicts ``f_mea`` and ``p_act``;
    the residuals of each run and channel are *prewhitened* with an AR(1) noise
    model estimated without any model from the no-contact ticks
-   (:func:`estimate_noise`) and divided by the innovations' standard
+   (:func:`~hybridtable.measurement.noise_model.estimate_noise`) and divided by the innovations' standard
    deviation, so that under a right model they are white with unit variance.
 2. **Fit.** ``scipy.optimize.least_squares`` (bounded, in units of each
    parameter's typical change) on the stacked whitened residuals of all runs,
@@ -15,13 +16,13 @@ of recorded runs and ranks them:
 3. **Criterion.** ``delta_bic = sum_b N_b ln(RSS_b,before / RSS_b,after) -
    dp ln N`` over the blocks ``b`` (run x channel), each with its own noise
    level (profiled out), ``N`` the whitened samples: > 0 favours the effect,
-   and :data:`BIC_THRESHOLD` (10) is very strong evidence.
+   and :data:`~hybridtable.diagnosis.settings.BIC_THRESHOLD` (10) is very strong evidence.
 4. **Held-out check.** Leave-one-run-out: the effect fitted on the other runs
    predicts the held-out run; ``z = sum dSSE / (2 sqrt(sum |dy|^2))`` with
    ``dSSE`` the fall of the held-out run's whitened squared error and ``dy``
    the change of its prediction. Without the effect in the data ``z`` is
    normal with mean ``-|dy|/2 <= 0`` and unit variance; significant needs
-   ``z >`` :data:`Z_THRESHOLD` (3) as well as the BIC test (one run: BIC only).
+   ``z >`` :data:`~hybridtable.diagnosis.settings.Z_THRESHOLD` (3) as well as the BIC test (one run: BIC only).
 5. **Verdict and forward selection.** The significant effect with the largest
    ``delta_bic`` is the verdict (``none`` without one); it joins the model and
    the remaining effects (those not touching the same part) are fitted again
@@ -29,8 +30,8 @@ of recorded runs and ranks them:
    Effects seen only in the closed loop (``mass_error``) are tested last, on
    the closed loop's spacecraft velocity with the physics selected so far.
 6. **Look-alikes.** Two significant effects whose ``delta_bic`` differ by less
-   than :data:`INDISTINGUISHABLE_BIC` (6) are indistinguishable on the data;
-   :func:`separating_run` simulates candidate runs (other approach velocity,
+   than :data:`~hybridtable.diagnosis.settings.INDISTINGUISHABLE_BIC` (6) are indistinguishable on the data;
+   :func:`~hybridtable.diagnosis.design.separating_run` simulates candidate runs (other approach velocity,
    other spacecraft mass) with both fitted models and names the one whose
    predictions differ most.
 
@@ -49,23 +50,23 @@ from collections.abc import Sequence
 from hybridtable.diagnosis.candidates import (
     Candidate,
     Diagnosis,
-    _closed_loop_summary,
-    _evaluate_candidate,
-    _mark_lookalikes,
-    _rank,
-    _velocity_error,
+    closed_loop_summary,
+    evaluate_candidate,
+    mark_lookalikes,
+    rank_candidates,
+    velocity_error,
 )
 from hybridtable.diagnosis.design import separating_run
 from hybridtable.diagnosis.effects import ModelSpec, RigScale
 from hybridtable.diagnosis.evaluate import Evaluator, prepare_runs
 from hybridtable.diagnosis.fit import (
     HeldOut,
-    _heldout,
-    _model_spec,
-    _residual_probe,
     delta_bic,
     fit_effects,
+    heldout,
+    model_spec,
     pooled_error,
+    residual_probe,
 )
 from hybridtable.diagnosis.registry import effect_names, get_effect
 from hybridtable.diagnosis.settings import BIC_THRESHOLD, FIT_ACCURACY, Z_THRESHOLD
@@ -100,12 +101,12 @@ def _candidate_job(job):
     )
     name, always, stage = job
     sims = ev.simulations
-    c = _evaluate_candidate(ev, base_fit, base_error, get_effect(name), residuals, always, stage)
+    c = evaluate_candidate(ev, base_fit, base_error, get_effect(name), residuals, always, stage)
     return c, ev.simulations - sims
 
 
 def _run_round(ev, base_fit, base_error, names, always_heldout, stage, workers, progress):
-    residuals = _residual_probe(ev.data, base_fit.evaluations) if stage == "replay" else []
+    residuals = residual_probe(ev.data, base_fit.evaluations) if stage == "replay" else []
     _STATE.update(ev=ev, base_fit=base_fit, base_error=base_error, residuals=residuals)
     jobs = [(n, always_heldout, stage) for n in names]
     # Expensive effects first, so two workers finish together.
@@ -129,8 +130,8 @@ def _run_round(ev, base_fit, base_error, names, always_heldout, stage, workers, 
         for job in iterator:
             cands.append(_candidate_job(job)[0])
     _STATE.clear()
-    _rank(cands)
-    _mark_lookalikes(cands)
+    rank_candidates(cands)
+    mark_lookalikes(cands)
     return cands
 
 
@@ -240,7 +241,7 @@ def diagnose(
             fixed=physics_values,
             stage="closed_loop",
         )
-        loop_error = _velocity_error(loop_base.evaluations)
+        loop_error = velocity_error(loop_base.evaluations)
         for n in loop_names:
             effect = get_effect(n)
             names_n = [*base_fit.effects, n]
@@ -253,7 +254,7 @@ def diagnose(
             )
             dbic = delta_bic(loop_base, fit)
             held = (
-                _heldout(
+                heldout(
                     ev,
                     loop_base.evaluations,
                     names_n,
@@ -264,7 +265,7 @@ def diagnose(
                 if dbic > BIC_THRESHOLD
                 else HeldOut(math.nan, math.nan, [])
             )
-            err_after = _velocity_error(fit.evaluations)
+            err_after = velocity_error(fit.evaluations)
             significant = bool(
                 dbic > BIC_THRESHOLD
                 and not fit.failed
@@ -290,8 +291,8 @@ def diagnose(
                     fit=fit,
                 )
             )
-        _rank(loop_cands)
-        _mark_lookalikes(loop_cands)
+        rank_candidates(loop_cands)
+        mark_lookalikes(loop_cands)
         for c in loop_cands:
             if c.significant and len(selected) < max_effects:
                 selected.append(c.effect)
@@ -319,10 +320,10 @@ def diagnose(
     if separate:
         for c in first + loop_cands:
             if c.effect == verdict and c.indistinguishable_from:
-                spec_a = _model_spec([c.effect], {c.effect: c.parameters}, scale)
+                spec_a = model_spec([c.effect], {c.effect: c.parameters}, scale)
                 for other in c.indistinguishable_from:
                     o = next(x for x in first + loop_cands if x.effect == other)
-                    spec_b = _model_spec([o.effect], {o.effect: o.parameters}, scale)
+                    spec_b = model_spec([o.effect], {o.effect: o.parameters}, scale)
                     sep = separating_run(ev, spec_a, spec_b)
                     if sep is not None:
                         sep["effects"] = [c.effect, o.effect]
@@ -331,11 +332,11 @@ def diagnose(
                         o.separation = sep
                         c.separation = c.separation or sep
 
-    final_spec = _model_spec(selected, selected_values, scale)
+    final_spec = model_spec(selected, selected_values, scale)
     final = {i: ev.evaluate(final_spec, i) for i in range(len(data))}
     closed = {
-        "before": _closed_loop_summary(ev, ModelSpec()),
-        "after": _closed_loop_summary(ev, final_spec),
+        "before": closed_loop_summary(ev, ModelSpec()),
+        "after": closed_loop_summary(ev, final_spec),
     }
     notes = []
     if len(data) < 2:

@@ -21,6 +21,13 @@ __all__ = [
     "Fit",
     "fit_effects",
     "fit_effect",
+    "delta_bic",
+    "pooled_error",
+    "HeldOut",
+    "heldout",
+    "model_spec",
+    "starts_for",
+    "residual_probe",
 ]
 
 
@@ -49,9 +56,10 @@ class Fit:
         return build_spec([(get_effect(n), self.values[n]) for n in self.effects], scale)
 
 
-def _model_spec(
+def model_spec(
     names: Sequence[str], values: Mapping[str, Mapping[str, float]], scale: RigScale
 ) -> ModelSpec:
+    """The model with the effects ``names`` at ``values`` (effect -> parameter -> value, SI units)."""
     return build_spec([(get_effect(n), values[n]) for n in names], scale)
 
 
@@ -99,7 +107,7 @@ def fit_effects(
         return vals
 
     def evaluate(vals) -> dict[int, Evaluation]:
-        spec = _model_spec(names, vals, scale)
+        spec = model_spec(names, vals, scale)
         return {i: ev.evaluate(spec, i, stage) for i in indices}
 
     def stack(evs: dict[int, Evaluation]) -> np.ndarray:
@@ -165,7 +173,7 @@ def fit_effects(
 def delta_bic(before: Fit, after: Fit) -> float:
     """``sum_b N_b ln(s2_b,before / s2_b,after) - dp ln N`` over shared blocks,
     ``s2_b = max(RSS_b / N_b, floor_b)``: no model is credited with
-    residuals below a numerical floor (:attr:`Evaluation.floor`)."""
+    residuals below a numerical floor (:attr:`~hybridtable.diagnosis.evaluate.Evaluation.floor`)."""
     rb, ra = before.rss_blocks(), after.rss_blocks()
     total = 0.0
     n_total = 0
@@ -207,7 +215,7 @@ class HeldOut:
     folds: list[dict[str, float]]
 
 
-def _heldout(
+def heldout(
     ev: Evaluator,
     base: Mapping[int, Evaluation],
     names: Sequence[str],
@@ -226,7 +234,7 @@ def _heldout(
         fit = fit_effects(
             ev, names, start=start, indices=train, fixed=fixed, stage=stage, max_nfev=8
         )
-        spec = _model_spec(names, fit.values, ev.scale)
+        spec = model_spec(names, fit.values, ev.scale)
         held = ev.evaluate(spec, k, stage)
         b = base[k]
         d_sse = dy2 = 0.0
@@ -281,18 +289,20 @@ def fit_effect(
         fit = fit_effects(ev, [name], fixed=fixed, stage="closed_loop")
     else:
         base = fit_effects(ev, [])
-        residuals = _residual_probe(data, base.evaluations)
-        fit = fit_effects(ev, [name], fixed=fixed, starts=_starts_for(effect, scale, residuals))
+        residuals = residual_probe(data, base.evaluations)
+        fit = fit_effects(ev, [name], fixed=fixed, starts=starts_for(effect, scale, residuals))
     return dict(fit.values[name])
 
 
-def _starts_for(effect: Effect, scale: RigScale, residuals) -> list[dict[str, dict[str, float]]]:
+def starts_for(effect: Effect, scale: RigScale, residuals) -> list[dict[str, dict[str, float]]]:
+    """Extra starting points of ``effect``'s fit (its ``starts``, from the residuals), as fit starts."""
     if effect.starts is None:
         return []
     return [{effect.name: s} for s in effect.starts(scale, residuals)]
 
 
-def _residual_probe(data: Sequence[RunData], evaluations: Mapping[int, Evaluation]):
+def residual_probe(data: Sequence[RunData], evaluations: Mapping[int, Evaluation]):
+    """Per run: the time (s) and the replay residuals (f_mea N, p_act m) an effect's ``starts`` reads."""
     return [
         {
             "time_s": data[i].run.time_s,

@@ -7,6 +7,11 @@ __all__ = [
     "Z_THRESHOLD",
     "INDISTINGUISHABLE_BIC",
     "CHANNELS",
+    "FIT_ACCURACY",
+    "NUMERICAL_FLOOR",
+    "CLOSED_LOOP_FLOOR",
+    "FAILED_RESIDUAL",
+    "TIE_BIC",
 ]
 
 

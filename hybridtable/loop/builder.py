@@ -37,6 +37,7 @@ __all__ = [
     "add_hybrid_loop",
     "build_hybrid_loop",
     "LOGGED",
+    "LOG_ROWS",
 ]
 
 

@@ -59,11 +59,11 @@ from hybridtable.errors import MeasurementError
 from hybridtable.loop.simulation import SimulationResult
 from hybridtable.measurement.phases import (
     PHASES,
-    _dilate,
     contact_duration,
     contact_mask,
     cor_from_record,
     delayed_labels,
+    dilate,
     loop_energy,
     phase_breakdown,
     phase_labels,
@@ -262,7 +262,7 @@ def compare_run(
     # Noise floor from the no-contact ticks.
     on = contact_mask(run.p_act_m)
     guard = 2
-    quiet_phys = ~_dilate(on, guard, guard)
+    quiet_phys = ~dilate(on, guard, guard)
     quiet_f = delayed_labels(quiet_phys.astype(int), m).astype(bool)
     noise_f, offset_f, n_f = force_noise_rms(run.f_mea_n, quiet_f)
     table = rep.params.table()
@@ -270,11 +270,11 @@ def compare_run(
         0 if table.is_ideal else math.ceil(5.0 / (table.damping_ratio * table.omega_rad_per_s) / h)
     )
     settle = max(settle, guard)
-    quiet_p = ~_dilate(on, guard, settle)
+    quiet_p = ~dilate(on, guard, settle)
     quiet_p[: min(settle, len(quiet_p))] = False  # start-up transient of the table
     noise_p, n_p = position_noise_rms(run.p_act_m, quiet_p)
     if n_p < 8:
-        quiet_p = ~_dilate(on, guard, guard)
+        quiet_p = ~dilate(on, guard, guard)
         noise_p, n_p = position_noise_rms(run.p_act_m, quiet_p)
         notes.append("p_act noise from short quiet segments (table transients not skipped)")
     if n_f < 8:

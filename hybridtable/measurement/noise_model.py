@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hybridtable.measurement.phases import _dilate, _runs, contact_mask, delayed_labels
+from hybridtable.measurement.phases import contact_mask, delayed_labels, dilate, true_runs
 from hybridtable.measurement.run_format import Run
 
 __all__ = [
@@ -105,16 +105,16 @@ def estimate_noise(run: Run, delay_ticks: int, settle_ticks: int) -> dict[str, N
     """
     on = contact_mask(run.p_act_m)
     guard = 2
-    quiet = ~_dilate(on, guard, guard)
+    quiet = ~dilate(on, guard, guard)
     quiet_f = delayed_labels(quiet.astype(int), delay_ticks).astype(bool)
     quiet_f[: min(delay_ticks, len(quiet_f))] = True
     out: dict[str, NoiseModel] = {}
-    f_noise = ar1_from_segments([run.f_mea_n[a : b + 1] for a, b in _runs(quiet_f)], 0)
+    f_noise = ar1_from_segments([run.f_mea_n[a : b + 1] for a, b in true_runs(quiet_f)], 0)
     if f_noise is not None:
         out["f_mea_n"] = f_noise
-    quiet_p = ~_dilate(on, guard, settle_ticks)
+    quiet_p = ~dilate(on, guard, settle_ticks)
     quiet_p[: min(settle_ticks, len(quiet_p))] = False
-    p_noise = ar1_from_segments([run.p_act_m[a : b + 1] for a, b in _runs(quiet_p)], 1)
+    p_noise = ar1_from_segments([run.p_act_m[a : b + 1] for a, b in true_runs(quiet_p)], 1)
     if p_noise is not None:
         out["p_act_m"] = p_noise
     return out

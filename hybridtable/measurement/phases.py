@@ -17,6 +17,8 @@ __all__ = [
     "cor_from_record",
     "contact_duration",
     "loop_energy",
+    "true_runs",
+    "dilate",
 ]
 
 
@@ -33,7 +35,7 @@ MERGE_GAP_TICKS = 3
 
 
 # -- phases --------------------------------------------------------------------
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+def true_runs(mask: np.ndarray) -> list[tuple[int, int]]:
     """Inclusive index ranges of the True runs of ``mask``."""
     m = np.asarray(mask, dtype=bool)
     edges = np.diff(np.concatenate([[0], m.astype(np.int8), [0]]))
@@ -44,7 +46,7 @@ def contact_mask(p_act_m: np.ndarray, merge_gap_ticks: int = MERGE_GAP_TICKS) ->
     """Ticks of contact (penetration ``p_act > 0``), with gaps of at most
     ``merge_gap_ticks`` inside a contact filled."""
     on = np.asarray(p_act_m, dtype=float) > 0.0
-    runs = _runs(on)
+    runs = true_runs(on)
     for (_, b), (c, _) in zip(runs[:-1], runs[1:], strict=True):
         if c - b - 1 <= merge_gap_ticks:
             on[b + 1 : c] = True
@@ -61,7 +63,7 @@ def phase_labels(p_act_m: np.ndarray) -> np.ndarray:
     """
     p = np.asarray(p_act_m, dtype=float)
     on = contact_mask(p)
-    runs = _runs(on)
+    runs = true_runs(on)
     if not runs:
         raise ValueError("no contact in the record (p_act never > 0)")
     labels = np.full(len(p), _FREE, dtype=int)
@@ -101,9 +103,10 @@ def phase_breakdown(residual: np.ndarray, labels: np.ndarray) -> dict[str, dict[
     return out
 
 
-def _dilate(mask: np.ndarray, before: int, after: int) -> np.ndarray:
+def dilate(mask: np.ndarray, before: int, after: int) -> np.ndarray:
+    """``mask`` with each True run widened by ``before`` and ``after`` ticks."""
     out = mask.copy()
-    for a, b in _runs(mask):
+    for a, b in true_runs(mask):
         out[max(a - before, 0) : b + after + 1] = True
     return out
 
@@ -139,7 +142,7 @@ def contact_duration(time_s: np.ndarray, p_act_m: np.ndarray) -> float:
     crossings of the penetration (NaN without a contact)."""
     t = np.asarray(time_s, dtype=float)
     p = np.asarray(p_act_m, dtype=float)
-    runs = _runs(contact_mask(p))
+    runs = true_runs(contact_mask(p))
     if not runs:
         return math.nan
     a, b = runs[0]

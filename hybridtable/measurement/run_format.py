@@ -21,6 +21,7 @@ __all__ = [
     "SAMPLE_RATE_TOLERANCE",
     "RunInfo",
     "Run",
+    "MIN_ROWS",
 ]
 
 

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hybridtable.measurement.phases import _runs
+from hybridtable.measurement.phases import true_runs
 
 __all__ = [
     "CONFIDENCE_Z",
@@ -65,7 +65,7 @@ def force_noise_rms(f_mea_n: np.ndarray, quiet: np.ndarray) -> tuple[float, floa
     """
     f = np.asarray(f_mea_n, dtype=float)
     sq, dof, total, count = 0.0, 0, 0.0, 0
-    for a, b in _runs(quiet):
+    for a, b in true_runs(quiet):
         seg = f[a : b + 1]
         if len(seg) < 2:
             continue
@@ -83,7 +83,7 @@ def position_noise_rms(p_act_m: np.ndarray, quiet: np.ndarray) -> tuple[float, i
     segments: ``sqrt(mean(diff3^2) / 20)`` (white noise); returns it and the
     number of differences used."""
     p = np.asarray(p_act_m, dtype=float)
-    d3 = [np.diff(p[a : b + 1], 3) for a, b in _runs(quiet) if b - a + 1 >= 4]
+    d3 = [np.diff(p[a : b + 1], 3) for a, b in true_runs(quiet) if b - a + 1 >= 4]
     d3 = np.concatenate(d3) if d3 else np.empty(0)
     if d3.size == 0:
         return math.nan, 0

@@ -56,6 +56,8 @@ __all__ = [
     "summarize",
     "acceptance",
     "default_jobs",
+    "ONLINE_COR_TOLERANCE",
+    "PASSIVITY_MAX_COR",
 ]
 
 

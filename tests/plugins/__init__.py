@@ -1,1 +1,0 @@
-"""Plug-ins of other packages, through real entry points."""
