@@ -1,4 +1,4 @@
-"""The closed hybrid loop: CoR facts and the paper's Table 1."""
+"""The closed hybrid loop: energy, momentum, the sampled rig computer, bad input."""
 
 import math
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from hybridtable import HybridLoopParams, ParameterError, simulate
-from hybridtable.studies.paper import cor_estimate, load_tables, paper_params, table1_params
+from hybridtable.studies.paper import cor_estimate, paper_params, table1_params
 
 
 def test_ideal_loop_conserves_energy():
@@ -19,25 +19,6 @@ def test_ideal_loop_conserves_energy():
     assert r.metrics.peak_force_n == pytest.approx(v0 * math.sqrt(k * m), rel=1e-4)
 
 
-@pytest.mark.parametrize(
-    "delay_s, table_hz, contact_hz",
-    [
-        (0.005, 25.0, 1.0),
-        (0.001, 100.0, 1.0),
-        (0.003, 50.0, 2.0),
-        (0.0, 25.0, 1.0),
-        (0.005, math.inf, 1.0),
-    ],
-)
-def test_uncompensated_cor_matches_effective_delay_estimate(delay_s, table_hz, contact_hz):
-    p = paper_params(
-        sensor_delay_s=delay_s, table_response_hz=table_hz, contact_frequency_hz=contact_hz
-    )
-    r = simulate(p)
-    assert r.metrics.cor == pytest.approx(cor_estimate(p), abs=0.005)
-    assert r.metrics.cor > 1.0 or delay_s == 0.0 and math.isinf(table_hz)
-
-
 def test_energy_gain_matches_cor():
     r = simulate(table1_params("none"))
     m, v_in = r.params.spacecraft_mass_kg, r.metrics.v_in_m_per_s
@@ -45,37 +26,6 @@ def test_energy_gain_matches_cor():
         0.5 * m * v_in**2 * (r.metrics.cor**2 - 1), rel=1e-9
     )
     assert r.metrics.energy_gain_j > 0
-
-
-@pytest.fixture(scope="module")
-def table1():
-    paper = load_tables()["table1_simulation"]["cor"]
-    runs = {}
-    for c in ("none", "SDC", "MDC", "SDMDC"):
-        p = table1_params(c)
-        runs[c] = (
-            simulate(p).metrics.cor,
-            simulate(p.with_(time_step_s=p.step_s / 2)).metrics.cor,
-        )
-    return paper, runs
-
-
-@pytest.mark.parametrize("compensator", ["none", "SDC", "MDC", "SDMDC"])
-def test_table1_within_0p003_of_paper(table1, compensator):
-    paper, runs = table1
-    assert runs[compensator][0] == pytest.approx(paper[compensator], abs=0.003)
-
-
-@pytest.mark.parametrize("compensator", ["none", "SDC", "MDC", "SDMDC"])
-def test_halving_the_step_changes_cor_by_less_than_0p0005(table1, compensator):
-    _, runs = table1
-    assert abs(runs[compensator][0] - runs[compensator][1]) < 5e-4
-
-
-def test_compensation_ordering_of_table1(table1):
-    _, runs = table1
-    cor = {c: v[0] for c, v in runs.items()}
-    assert cor["none"] > cor["SDC"] > cor["MDC"] > cor["SDMDC"]
 
 
 def test_sampled_loop_momentum_equals_impulse_of_fed_force():
