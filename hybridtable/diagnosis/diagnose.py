@@ -60,6 +60,7 @@ from hybridtable.diagnosis.design import separating_run
 from hybridtable.diagnosis.effects import ModelSpec, RigScale
 from hybridtable.diagnosis.evaluate import Evaluator, prepare_runs
 from hybridtable.diagnosis.fit import (
+    Fit,
     HeldOut,
     delta_bic,
     fit_effects,
@@ -226,21 +227,21 @@ def diagnose(
     loop_cands: list[Candidate] = []
     if loop_names:
         ev.inject_noise(base_fit.evaluations)
-        loop_base = fit_effects(
-            ev,
-            list(base_fit.effects),
-            start=physics_values,
-            fixed=physics_values,
-            stage="closed_loop",
-        )
-        ev.calibrate_closed_loop(loop_base.evaluations)
-        loop_base = fit_effects(
-            ev,
-            list(base_fit.effects),
-            start=physics_values,
-            fixed=physics_values,
-            stage="closed_loop",
-        )
+
+        def closed_loop_base() -> Fit:
+            # The selected physics, every value held: the closed loop's residuals.
+            return fit_effects(
+                ev,
+                list(base_fit.effects),
+                start=physics_values,
+                fixed=physics_values,
+                stage="closed_loop",
+            )
+
+        # Twice: the first residuals calibrate the closed loop's whitening, the
+        # second evaluation is whitened with it.
+        ev.calibrate_closed_loop(closed_loop_base().evaluations)
+        loop_base = closed_loop_base()
         loop_error = velocity_error(loop_base.evaluations)
         for n in loop_names:
             effect = get_effect(n)
