@@ -11,7 +11,6 @@ per contact tells them apart. Built only from library calls.
 """
 
 import argparse
-import math
 
 from hybridtable.analysis import (
     critical_sensor_delay,
@@ -34,13 +33,9 @@ def main() -> None:
         f" {'T_crit [ms]':>12} {'f_crit [Hz]':>12}"
     )
     for name in COMPENSATORS:
-        p = table1_params(name, sample_rate_hz=args.sample_rate_hz)
-        c = (
-            2.0
-            * args.contact_damping_ratio
-            * math.sqrt(p.contact_stiffness_n_per_m * p.spacecraft_mass_kg)
+        p = table1_params(name, sample_rate_hz=args.sample_rate_hz).with_contact_damping_ratio(
+            args.contact_damping_ratio
         )
-        p = p.with_(contact_damping_n_s_per_m=c)
         model, _ = model_function(p)
         m = loop_margins(model(p))
         growth = growth_of(model)

@@ -82,7 +82,6 @@ def check_outputs(
         file, holds an input, or is a non-empty folder not written by an
         earlier ``command --report``.
     """
-    marker = report_marker
     if json_path and json_path != "-":
         target = Path(json_path).resolve()
         if target in inputs:
@@ -95,7 +94,7 @@ def check_outputs(
             raise CommandError(f"--report {report_dir} is a file, not a folder")
         if any(d == p.parent or d in p.parents for p in inputs):
             raise CommandError(f"--report {report_dir} holds input runs; choose another folder")
-        if d.is_dir() and any(d.iterdir()) and not (d / marker).is_file():
+        if d.is_dir() and any(d.iterdir()) and not (d / report_marker).is_file():
             raise CommandError(
                 f"--report {report_dir} is not empty and not an earlier {command} report; "
                 "choose a new or empty folder"

@@ -148,12 +148,7 @@ def _base_params(args: argparse.Namespace):
     if args.contact_damping_ratio is not None:
         if not (math.isfinite(args.contact_damping_ratio) and args.contact_damping_ratio >= 0):
             raise CommandError("--contact-damping-ratio must be >= 0")
-        c = (
-            2.0
-            * args.contact_damping_ratio
-            * math.sqrt(base.contact_stiffness_n_per_m * base.spacecraft_mass_kg)
-        )
-        base = base.with_(contact_damping_n_s_per_m=c)
+        base = base.with_contact_damping_ratio(args.contact_damping_ratio)
     elif args.contact_damping_n_s_per_m is not None:
         base = base.with_(contact_damping_n_s_per_m=args.contact_damping_n_s_per_m)
     return base

@@ -174,6 +174,13 @@ class HybridLoopParams:
         """A copy with some fields changed (validated again)."""
         return replace(self, **changes)
 
+    def with_contact_damping_ratio(self, damping_ratio: float) -> HybridLoopParams:
+        """A copy whose contact damping is ``damping_ratio`` of the critical one:
+        ``c = 2 zeta sqrt(k m)`` (N s/m), ``zeta >= 0``."""
+        zeta = check_nonnegative("contact_damping_ratio", damping_ratio)
+        c = 2.0 * zeta * math.sqrt(self.contact_stiffness_n_per_m * self.spacecraft_mass_kg)
+        return self.with_(contact_damping_n_s_per_m=c)
+
     def spacecraft(self) -> SpacecraftParams:
         return SpacecraftParams(mass_kg=self.spacecraft_mass_kg)
 

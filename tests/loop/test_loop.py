@@ -86,3 +86,11 @@ def test_bad_parameters_name_the_field(kwargs, field):
     base = dict(spacecraft_mass_kg=100.0, contact_stiffness_n_per_m=1e5)
     with pytest.raises(ParameterError, match=field):
         HybridLoopParams(**{**base, **kwargs})
+
+
+def test_contact_damping_ratio_is_of_the_critical_damping():
+    p = HybridLoopParams(spacecraft_mass_kg=4.0, contact_stiffness_n_per_m=100.0)
+    assert p.with_contact_damping_ratio(0.25).contact_damping_n_s_per_m == 2.0 * 0.25 * 20.0
+    assert p.with_contact_damping_ratio(0.0).contact_damping_n_s_per_m == 0.0
+    with pytest.raises(ParameterError, match="contact_damping_ratio"):
+        p.with_contact_damping_ratio(-0.1)
