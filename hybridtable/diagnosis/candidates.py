@@ -22,18 +22,23 @@ from hybridtable.diagnosis.fit import (
     pooled_error,
     starts_for,
 )
+from hybridtable.diagnosis.goodness import FALSE_ALARM_RATE, GoodnessOfFit
 from hybridtable.diagnosis.registry import EFFECTS, get_effect
 from hybridtable.diagnosis.settings import (
     BIC_THRESHOLD,
+    EXPLAINED_MAX_ERROR,
     INDISTINGUISHABLE_BIC,
+    MIN_EXCESS_REMOVED,
     TIE_BIC,
     Z_THRESHOLD,
 )
+from hybridtable.measurement.audit_findings import Audit
 
 __all__ = [
     "Candidate",
     "Diagnosis",
     "evaluate_candidate",
+    "judge",
     "velocity_error",
     "mark_lookalikes",
     "closed_loop_summary",
@@ -64,6 +69,14 @@ class Candidate:
     nfev: int = 0
     notes: list[str] = field(default_factory=list)
     fit: Fit | None = None
+    #: Held-out error of the model without the effect (noise units).
+    heldout_error_before: float = math.nan
+    #: Fraction of the held-out excess error (error - 1) the effect removes.
+    excess_removed: float = math.nan
+    #: Significant and practically relevant: may enter the model.
+    accepted: bool = False
+    #: Why it was accepted or rejected, in words.
+    reason: str = ""
 
     def to_json(self) -> dict:
         return {
@@ -77,6 +90,10 @@ class Candidate:
             "delta_bic": self.delta_bic,
             "heldout_z": self.heldout_z,
             "significant": self.significant,
+            "heldout_error_before": self.heldout_error_before,
+            "excess_removed": self.excess_removed,
+            "accepted": self.accepted,
+            "reason": self.reason,
             "indistinguishable_from": list(self.indistinguishable_from),
             "separating_run": self.separation,
             "channel_error_before": dict(self.channel_error_before),
@@ -87,7 +104,14 @@ class Candidate:
 
 @dataclass
 class Diagnosis:
-    """Everything :func:`diagnose` found."""
+    """Everything :func:`~hybridtable.diagnosis.diagnose.diagnose` found.
+
+    ``selected`` holds the physical effects fitted (``selected_values`` their
+    values); the audit's findings about the rig computer are in ``audit``;
+    :attr:`named` is both. ``explained`` says the final model passed the end
+    test (``goodness``) with a held-out error at most
+    :data:`~hybridtable.diagnosis.settings.EXPLAINED_MAX_ERROR`.
+    """
 
     data: list[RunData]
     scale: RigScale
@@ -96,32 +120,77 @@ class Diagnosis:
     selected_values: dict[str, dict[str, float]]
     rounds: list[list[Candidate]]
     staircase: list[dict]
-    closed_loop_candidates: list[Candidate]
     nominal: dict[int, Evaluation]
     final: dict[int, Evaluation]
     closed_loop: dict[str, dict]
     simulations: int
+    audit: Audit
+    goodness: GoodnessOfFit
+    explained: bool
+    search: list[dict] = field(default_factory=list)
+    lookalikes: dict[str, list[str]] = field(default_factory=dict)
     wall_time_s: float = math.nan
     notes: list[str] = field(default_factory=list)
 
     @property
     def ranking(self) -> list[Candidate]:
-        """The first round (every effect against the nominal model; the
-        closed-loop effects against the physics selected) by ``delta_bic``."""
-        first = self.rounds[0] if self.rounds else []
-        return list(first) + list(self.closed_loop_candidates)
+        """The first round: every effect against the nominal model, by ``delta_bic``."""
+        return list(self.rounds[0]) if self.rounds else []
+
+    @property
+    def named(self) -> list[str]:
+        """The audit's findings (``mass_error``, ...) then the physical effects selected."""
+        return [*self.audit.effects, *self.selected]
+
+    @property
+    def heldout_error(self) -> float:
+        """Held-out error of the final model (noise units)."""
+        return float(self.staircase[-1]["heldout_error"])
 
     def final_spec(self) -> ModelSpec:
         return model_spec(self.selected, self.selected_values, self.scale)
 
+    def computer_values(self) -> dict[str, dict[str, float]]:
+        """The audit's findings as verdict parameters (``mass_error``: ``mass_ratio``)."""
+        out: dict[str, dict[str, float]] = {}
+        for f in self.audit.findings:
+            vals = out.setdefault(f.effect, {})
+            if f.key == "spacecraft_mass_kg":
+                vals["mass_ratio"] = f.used_value / f.json_value
+            vals[f.key] = f.used_value
+        return out
+
+    def remaining(self) -> dict:
+        """What the final model leaves: held-out error, the end test, where it misfits."""
+        g = self.goodness
+        return {
+            "heldout_error": self.heldout_error,
+            "error": float(self.staircase[-1]["error"]),
+            "channel_error": dict(self.staircase[-1]["channel_error"]),
+            "test_passed": g.passed,
+            "p_value": g.p_value,
+            "false_alarm_rate": g.false_alarm_rate,
+            "tests": g.tests,
+            "where": g.where.to_json() if g.where else None,
+            "goodness_of_fit": g.to_json(),
+        }
+
     def to_json(self) -> dict:
+        named_values = {**self.computer_values(), **self.selected_values}
         return {
             "verdict": self.verdict,
-            "selected": list(self.selected),
-            "parameters": {n: dict(v) for n, v in self.selected_values.items()},
+            "explained": self.explained,
+            "selected": self.named,
+            "physical": list(self.selected),
+            "computer": list(self.audit.effects),
+            "parameters": {n: dict(v) for n, v in named_values.items()},
+            "lookalikes": {k: list(v) for k, v in self.lookalikes.items()},
+            "remaining": self.remaining(),
+            "audit": self.audit.to_json(),
             "ranking": [c.to_json() for c in self.ranking],
             "staircase": list(self.staircase),
             "rounds": [[c.to_json() for c in r] for r in self.rounds],
+            "search": list(self.search),
             "closed_loop": self.closed_loop,
             "runs": [
                 {
@@ -129,7 +198,12 @@ class Diagnosis:
                     "compensator": d.run.info.compensator,
                     "initial_velocity_m_per_s": d.run.info.initial_velocity_m_per_s,
                     "noise": {
-                        c: {"rms": m.sigma, "ar1": m.phi, "samples": m.samples}
+                        c: {
+                            "rms": m.sigma,
+                            "ar1": m.phi,
+                            "ar": list(m.coefficients),
+                            "samples": m.samples,
+                        }
                         for c, m in d.noise.items()
                     },
                     "notes": list(d.notes),
@@ -139,6 +213,9 @@ class Diagnosis:
             "criteria": {
                 "bic_threshold": BIC_THRESHOLD,
                 "z_threshold": Z_THRESHOLD,
+                "min_excess_removed": MIN_EXCESS_REMOVED,
+                "explained_max_error": EXPLAINED_MAX_ERROR,
+                "false_alarm_rate": FALSE_ALARM_RATE,
                 "indistinguishable_bic": INDISTINGUISHABLE_BIC,
                 "error_unit": "RMS residual / noise RMS, pooled over runs, f_mea and p_act",
             },
@@ -156,7 +233,14 @@ def evaluate_candidate(
     residuals,
     always_heldout: bool,
     stage: str,
+    base_heldout: float = math.nan,
 ) -> Candidate:
+    """Fit ``effect`` on top of ``base_fit`` and judge it (:func:`judge`).
+
+    ``base_heldout`` is the held-out error of the base model (noise units;
+    NaN: its in-sample error), against which the effect's practical
+    significance is measured.
+    """
     names = [*base_fit.effects, effect.name]
     start = {**base_fit.values, effect.name: effect.start(ev.scale)}
     starts = starts_for(effect, ev.scale, residuals)
@@ -171,28 +255,11 @@ def evaluate_candidate(
                 fit = joint
     else:
         fit = fit_effects(ev, names, start=start, starts=starts, stage=stage)
-    dbic = delta_bic(base_fit, fit)
     if stage == "replay":
         err_after, chan_after = pooled_error(ev.data, fit.evaluations)
     else:
         err_after, chan_after = velocity_error(fit.evaluations)
-    notes = []
-    if fit.failed:
-        notes.append("a model run failed during the fit")
-    if dbic > BIC_THRESHOLD or always_heldout:
-        held = heldout(ev, base_fit.evaluations, names, fit.values, stage)
-    else:
-        held = HeldOut(math.nan, math.nan, [])
-    if stage != "replay" and len(ev.data) > 1:
-        held.error = math.nan
-    if len(ev.data) < 2:
-        notes.append("one run: no leave-one-run-out check")
-    significant = bool(
-        dbic > BIC_THRESHOLD
-        and not fit.failed
-        and (len(ev.data) < 2 or (math.isfinite(held.z) and held.z > Z_THRESHOLD))
-    )
-    return Candidate(
+    c = Candidate(
         effect=effect.name,
         stage=stage,
         parameters=dict(fit.values[effect.name]),
@@ -200,16 +267,84 @@ def evaluate_candidate(
         model_values={n: dict(v) for n, v in fit.values.items()},
         error_before=base_error[0],
         error_after=err_after,
-        heldout_error_after=held.error,
-        delta_bic=dbic,
-        heldout_z=held.z,
-        significant=significant,
+        heldout_error_after=math.nan,
+        delta_bic=math.nan,
+        heldout_z=math.nan,
+        significant=False,
         channel_error_before=base_error[1],
         channel_error_after=chan_after,
         nfev=fit.nfev,
-        notes=notes,
         fit=fit,
+        heldout_error_before=base_heldout if math.isfinite(base_heldout) else base_error[0],
     )
+    judge(ev, base_fit, c, always_heldout)
+    return c
+
+
+def judge(ev: Evaluator, base_fit: Fit, c: Candidate, always_heldout: bool = False) -> None:
+    """Decide whether the fitted candidate ``c`` (its :attr:`Candidate.fit`) may
+    enter the model ``base_fit``, and say why.
+
+    It must be *significant*: ``delta_bic >`` :data:`BIC_THRESHOLD` and, with
+    two runs or more, a leave-one-run-out ``z >`` :data:`Z_THRESHOLD` (a
+    one-sided false-alarm rate of 0.13 % per candidate); and *practically
+    relevant*: remove at least :data:`MIN_EXCESS_REMOVED` of the held-out
+    excess error ``e_before - 1`` (noise units; in-sample with one run).
+    """
+    fit = c.fit
+    names = list(fit.effects)
+    dbic = delta_bic(base_fit, fit)
+    c.delta_bic = dbic
+    if fit.failed:
+        c.notes.append("a model run failed during the fit")
+    if dbic > BIC_THRESHOLD or always_heldout:
+        held = heldout(ev, base_fit.evaluations, names, fit.values, c.stage)
+    else:
+        held = HeldOut(math.nan, math.nan, [])
+    if c.stage != "replay" and len(ev.data) > 1:
+        held.error = math.nan
+    c.heldout_z = held.z
+    c.heldout_error_after = held.error
+    one_run = len(ev.data) < 2
+    if one_run and "one run: no leave-one-run-out check" not in c.notes:
+        c.notes.append("one run: no leave-one-run-out check")
+    c.significant = bool(
+        dbic > BIC_THRESHOLD
+        and not fit.failed
+        and (one_run or (math.isfinite(held.z) and held.z > Z_THRESHOLD))
+    )
+    after = c.error_after if one_run else held.error
+    excess = c.heldout_error_before - 1.0
+    if math.isfinite(after) and excess > 0.0:
+        c.excess_removed = (c.heldout_error_before - after) / excess
+    if fit.failed:
+        c.reason = "a model run failed during the fit"
+    elif not dbic > BIC_THRESHOLD:
+        c.reason = f"not significant: delta_bic {dbic:.1f} <= {BIC_THRESHOLD:g}"
+    elif not c.significant:
+        c.reason = (
+            f"not significant on held-out runs: z {held.z:.1f} <= {Z_THRESHOLD:g} "
+            "(fitted on the other runs, it does not predict the held-out run better)"
+        )
+    elif not excess > 0.0:
+        c.reason = (
+            f"the model is at the noise floor already (held-out error "
+            f"{c.heldout_error_before:.3f}x the noise)"
+        )
+    elif not c.excess_removed >= MIN_EXCESS_REMOVED:
+        c.reason = (
+            f"significant but removes only {c.excess_removed:.0%} of the held-out excess "
+            f"error ({c.heldout_error_before:.3f} -> {after:.3f}x the noise; needs "
+            f"{MIN_EXCESS_REMOVED:.0%})"
+        )
+    else:
+        c.accepted = True
+        c.reason = (
+            f"significant (delta_bic {dbic:.1f}"
+            + ("" if one_run else f", held-out z {held.z:.1f}")
+            + f") and removes {c.excess_removed:.0%} of the held-out excess error "
+            f"({c.heldout_error_before:.3f} -> {after:.3f}x the noise)"
+        )
 
 
 def velocity_error(evaluations: Mapping[int, Evaluation]) -> tuple[float, dict[str, float]]:
@@ -220,9 +355,9 @@ def velocity_error(evaluations: Mapping[int, Evaluation]) -> tuple[float, dict[s
 
 
 def mark_lookalikes(candidates: list[Candidate]) -> None:
-    """Name, on each significant candidate, the others whose ``delta_bic`` is within
+    """Name, on each accepted candidate, the other accepted ones whose ``delta_bic`` is within
     :data:`~hybridtable.diagnosis.settings.INDISTINGUISHABLE_BIC` (the data cannot tell them apart)."""
-    sig = [c for c in candidates if c.significant]
+    sig = [c for c in candidates if c.accepted]
     for c in sig:
         c.indistinguishable_from = [
             o.effect

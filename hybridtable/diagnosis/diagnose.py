@@ -1,39 +1,51 @@
-"""Which physical effect is the rig model missing? Fit, rank, select.
+"""Which physical effect is the rig model missing, if any, and is that all?
 
-:func:`diagnose` fits every registered candidate effect (the library of
-:mod:`hybridtable.diagnosis.library`, plug-ins of :mod:`hybridtable.diagnosis.registry`)
-to a set of recorded runs and ranks them:
+:func:`diagnose` answers one of three ways: ``none`` (the nominal model
+explains the runs), the named effect(s), or ``unexplained`` (the model misses
+something no effect of the library explains); with named effects,
+``explained`` says whether they account for everything.
 
+0. **Audit of the rig computer** (:mod:`hybridtable.measurement.audit`): the
+   mass, lead time, MDC stiffness and deadband the computer used are solved
+   from the record by arithmetic; every mismatch with the JSON is named
+   (``mass_error``, ``lead_time_error``, ...), never fitted.
 1. **Residuals.** The replay (:mod:`hybridtable.measurement.replay`: the recorded command
    through table, contact and force sensor) predicts ``f_mea`` and ``p_act``;
-   the residuals of each run and channel are *prewhitened* with an AR(1) noise
-   model estimated without any model from the no-contact ticks
-   (:func:`~hybridtable.measurement.noise_model.estimate_noise`) and divided by the innovations' standard
-   deviation, so that under a right model they are white with unit variance.
+   the residuals of each run and channel are *prewhitened* with an AR(p)
+   noise model estimated without any model from the no-contact ticks
+   (:func:`~hybridtable.measurement.noise_model.estimate_noise`), so that
+   under a right model they are white with unit variance.
 2. **Fit.** ``scipy.optimize.least_squares`` (bounded, in units of each
    parameter's typical change) on the stacked whitened residuals of all runs,
    from the effect's start values and its data-driven starts.
-3. **Criterion.** ``delta_bic = sum_b N_b ln(RSS_b,before / RSS_b,after) -
-   dp ln N`` over the blocks ``b`` (run x channel), each with its own noise
-   level (profiled out), ``N`` the whitened samples: > 0 favours the effect,
-   and :data:`~hybridtable.diagnosis.settings.BIC_THRESHOLD` (10) is very strong evidence.
-4. **Held-out check.** Leave-one-run-out: the effect fitted on the other runs
-   predicts the held-out run; ``z = sum dSSE / (2 sqrt(sum |dy|^2))`` with
-   ``dSSE`` the fall of the held-out run's whitened squared error and ``dy``
-   the change of its prediction. Without the effect in the data ``z`` is
-   normal with mean ``-|dy|/2 <= 0`` and unit variance; significant needs
-   ``z >`` :data:`~hybridtable.diagnosis.settings.Z_THRESHOLD` (3) as well as the BIC test (one run: BIC only).
-5. **Verdict and forward selection.** The significant effect with the largest
-   ``delta_bic`` is the verdict (``none`` without one); it joins the model and
-   the remaining effects (those not touching the same part) are fitted again
-   jointly with it, until nothing significant is left: the *staircase*.
-   Effects seen only in the closed loop (``mass_error``) are tested last, on
-   the closed loop's spacecraft velocity with the physics selected so far.
-6. **Look-alikes.** Two significant effects whose ``delta_bic`` differ by less
-   than :data:`~hybridtable.diagnosis.settings.INDISTINGUISHABLE_BIC` (6) are indistinguishable on the data;
-   :func:`~hybridtable.diagnosis.design.separating_run` simulates candidate runs (other approach velocity,
-   other spacecraft mass) with both fitted models and names the one whose
-   predictions differ most.
+3. **Significance.** ``delta_bic = sum_b N_b ln(RSS_b,before / RSS_b,after) -
+   dp ln N`` over the blocks ``b`` (run x channel) must exceed
+   :data:`~hybridtable.diagnosis.settings.BIC_THRESHOLD` (10), and the
+   leave-one-run-out ``z`` (the effect fitted on the other runs predicting the
+   held-out one) :data:`~hybridtable.diagnosis.settings.Z_THRESHOLD` (3: a
+   false-alarm rate of 0.13 % per candidate).
+4. **Practical significance.** The effect must also remove at least
+   :data:`~hybridtable.diagnosis.settings.MIN_EXCESS_REMOVED` (25 %) of the
+   held-out excess error (held-out error minus the noise floor, 1). Every
+   rejected candidate says why.
+5. **Forward selection.** The accepted effect with the largest ``delta_bic``
+   joins the model and the others are fitted again on top of it, until none is
+   accepted (the *staircase*).
+6. **End test** (:mod:`hybridtable.diagnosis.goodness`): the final model's
+   whitened residuals against the noise, per run, channel, contact phase and
+   time scale, at a false-alarm rate of 1 % per set.
+7. **Pairs and swaps.** If the end test fails, the first round's best
+   candidates are fitted in pairs, and each selected effect is swapped for
+   each other candidate; a model with a better BIC whose every effect is
+   accepted given the others (drop-one tests) replaces the selection. Two
+   effects whose influence on the CoR cancels are found this way.
+8. **Verdict.** ``explained`` = the end test passes and the held-out error is
+   at most :data:`~hybridtable.diagnosis.settings.EXPLAINED_MAX_ERROR`; with
+   nothing named the verdict is ``none`` if explained, else ``unexplained``.
+9. **Look-alikes.** Accepted effects whose ``delta_bic`` differ by less than
+   :data:`~hybridtable.diagnosis.settings.INDISTINGUISHABLE_BIC` (6) cannot be
+   told apart on the data; :func:`~hybridtable.diagnosis.design.separating_run`
+   names the run that would.
 
 "Error" in the results is the RMS residual in units of the noise (pooled over
 runs and both channels, each divided by its model-free noise RMS): 1.0 is the
@@ -44,7 +56,7 @@ from __future__ import annotations
 
 import math
 import os
-import sys
+import time
 from collections.abc import Sequence
 
 from hybridtable.diagnosis.candidates import (
@@ -54,23 +66,17 @@ from hybridtable.diagnosis.candidates import (
     evaluate_candidate,
     mark_lookalikes,
     rank_candidates,
-    velocity_error,
 )
 from hybridtable.diagnosis.design import separating_run
 from hybridtable.diagnosis.effects import ModelSpec, RigScale
 from hybridtable.diagnosis.evaluate import Evaluator, prepare_runs
-from hybridtable.diagnosis.fit import (
-    Fit,
-    HeldOut,
-    delta_bic,
-    fit_effects,
-    heldout,
-    model_spec,
-    pooled_error,
-    residual_probe,
-)
+from hybridtable.diagnosis.fit import Fit, fit_effects, model_spec, pooled_error, residual_probe
+from hybridtable.diagnosis.goodness import goodness_of_fit
 from hybridtable.diagnosis.registry import effect_names, get_effect
-from hybridtable.diagnosis.settings import BIC_THRESHOLD, FIT_ACCURACY, Z_THRESHOLD
+from hybridtable.diagnosis.search import pairs_and_swaps
+from hybridtable.diagnosis.settings import EXPLAINED_MAX_ERROR, FIT_ACCURACY
+from hybridtable.diagnosis.workers import pool_map
+from hybridtable.measurement.audit import audit_runs
 from hybridtable.measurement.run_format import Run
 
 __all__ = [
@@ -78,62 +84,105 @@ __all__ = [
 ]
 
 
-# -- the procedure -------------------------------------------------------------
-def _pool_map(func, jobs, workers: int):
-    if workers <= 1 or len(jobs) <= 1:
-        return [func(j) for j in jobs]
-    import multiprocessing as mp
-    from concurrent.futures import ProcessPoolExecutor
-
-    ctx = mp.get_context("fork")
-    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
-        return list(pool.map(func, jobs))
-
-
+# -- one round of candidates ----------------------------------------------------
 _STATE: dict = {}
 
 
 def _candidate_job(job):
-    ev, base_fit, base_error, residuals = (
-        _STATE["ev"],
+    ev = _STATE["ev"]
+    name, always = job
+    sims = ev.simulations
+    c = evaluate_candidate(
+        ev,
         _STATE["base_fit"],
         _STATE["base_error"],
+        get_effect(name),
         _STATE["residuals"],
+        always,
+        "replay",
+        _STATE["base_heldout"],
     )
-    name, always, stage = job
-    sims = ev.simulations
-    c = evaluate_candidate(ev, base_fit, base_error, get_effect(name), residuals, always, stage)
     return c, ev.simulations - sims
 
 
-def _run_round(ev, base_fit, base_error, names, always_heldout, stage, workers, progress):
-    residuals = residual_probe(ev.data, base_fit.evaluations) if stage == "replay" else []
-    _STATE.update(ev=ev, base_fit=base_fit, base_error=base_error, residuals=residuals)
-    jobs = [(n, always_heldout, stage) for n in names]
+def _run_round(ev, base_fit, base_error, base_heldout, names, always_heldout, workers, progress):
+    residuals = residual_probe(ev.data, base_fit.evaluations)
+    _STATE.update(
+        ev=ev,
+        base_fit=base_fit,
+        base_error=base_error,
+        base_heldout=base_heldout,
+        residuals=residuals,
+    )
+    jobs = [(n, always_heldout) for n in names]
     # Expensive effects first, so two workers finish together.
     jobs.sort(key=lambda j: -len(get_effect(j[0]).parameters))
-    if workers > 1 and len(jobs) > 1:
-        if progress:
-            print(
-                f"fitting {len(jobs)} effect(s) ({stage}) in {workers} processes...",
-                file=sys.stderr,
-            )
-        out = _pool_map(_candidate_job, jobs, workers)
-        ev.simulations += sum(s for _, s in out)
-        cands = [c for c, _ in out]
-    else:
-        cands = []
-        iterator = jobs
-        if progress:
-            from tqdm import tqdm
-
-            iterator = tqdm(jobs, desc=f"fit {stage}", unit="effect", file=sys.stderr, leave=False)
-        for job in iterator:
-            cands.append(_candidate_job(job)[0])
+    out = pool_map(_candidate_job, jobs, workers, progress, f"fit {len(jobs)} effect(s)")
+    ev.simulations += sum(s for _, s in out)
     _STATE.clear()
+    cands = [c for c, _ in out]
     rank_candidates(cands)
     mark_lookalikes(cands)
     return cands
+
+
+def _step(effects: list[str], fit: Fit, error, heldout_error: float, dbic: float, how: str) -> dict:
+    return {
+        "effects": list(effects),
+        "parameters": {n: dict(fit.values[n]) for n in effects},
+        "error": error[0],
+        "heldout_error": heldout_error,
+        "channel_error": error[1],
+        "delta_bic": dbic,
+        "how": how,
+    }
+
+
+def _forward(ev, names, selected, base_fit, staircase, rounds, max_effects, workers, progress):
+    """Forward selection from ``selected`` (fitted as ``base_fit``): add the
+    accepted candidate with the largest ``delta_bic`` until none is accepted."""
+    while len(selected) < max_effects:
+        pool = [
+            n
+            for n in names
+            if n not in selected
+            and not any(get_effect(n).conflicts_with(get_effect(s)) for s in selected)
+        ]
+        if not pool:
+            break
+        base_error = (staircase[-1]["error"], staircase[-1]["channel_error"])
+        cands = _run_round(
+            ev,
+            base_fit,
+            base_error,
+            staircase[-1]["heldout_error"],
+            pool,
+            False,
+            workers,
+            progress,
+        )
+        rounds.append(cands)
+        best = next((c for c in cands if c.accepted), None)
+        if best is None:
+            break
+        selected.append(best.effect)
+        base_fit = best.fit
+        held = (
+            best.heldout_error_after
+            if math.isfinite(best.heldout_error_after)
+            else best.error_after
+        )
+        staircase.append(
+            _step(
+                selected,
+                best.fit,
+                (best.error_after, best.channel_error_after),
+                held,
+                best.delta_bic,
+                "forward selection",
+            )
+        )
+    return base_fit
 
 
 def diagnose(
@@ -145,30 +194,35 @@ def diagnose(
     progress: bool = False,
     accuracy: float = FIT_ACCURACY,
 ) -> Diagnosis:
-    """Name the physical effect the rig model is missing (see the module doc).
+    """Name what the rig model misses, or say that nothing is, or that nothing
+    in the library explains it (see the module doc).
 
     Parameters
     ----------
     runs : sequence of Run
         Runs of one rig (same sample rate), each with a contact.
     effects : sequence of str, optional
-        Candidate effects (default: every registered one).
+        Candidate effects (default: every registered one). Effects of the
+        rig computer (``mass_error``) are decided by the audit, not fitted.
     max_effects : int
-        Most effects the forward selection adds.
+        Most physical effects the model may gain.
     workers : int, optional
         Processes fitting candidates in parallel (default: up to 2).
     separate : bool
         Look for a run separating look-alikes of the verdict.
+    progress : bool
+        Progress bars on standard error.
+    accuracy : float
+        Integrator accuracy of the model runs.
 
     Raises
     ------
     MeasurementError
-        If a run cannot be diagnosed (:func:`prepare_runs`).
+        If a run cannot be diagnosed (:func:`~hybridtable.diagnosis.evaluate.prepare_runs`).
     """
-    import time
-
     t0 = time.perf_counter()
     data = prepare_runs(runs)
+    audit = audit_runs(runs)
     scale = RigScale.from_runs(runs)
     names = list(effects) if effects is not None else list(effect_names())
     for n in names:
@@ -176,170 +230,83 @@ def diagnose(
     if workers is None:
         workers = min(2, os.cpu_count() or 1)
     ev = Evaluator(data, scale, accuracy)
+    ev.computer = {d.run_id: audit.computer_changes(d.run_id) for d in data}
+    notes = []
+    computer_effects = [n for n in names if get_effect(n).stage != "replay"]
+    if computer_effects:
+        notes.append(
+            f"{', '.join(computer_effects)}: decided by the audit of the rig computer, not fitted"
+        )
     replay_names = [n for n in names if get_effect(n).stage == "replay"]
-    loop_names = [n for n in names if get_effect(n).stage == "closed_loop"]
 
     nominal = fit_effects(ev, [], stage="replay")
-    base_fit = nominal
     base_error = pooled_error(data, nominal.evaluations)
-    staircase = [
-        {
-            "effects": [],
-            "parameters": {},
-            "error": base_error[0],
-            "heldout_error": base_error[0],
-            "channel_error": base_error[1],
-            "delta_bic": 0.0,
-        }
-    ]
+    staircase = [_step([], nominal, base_error, base_error[0], 0.0, "nominal")]
     rounds: list[list[Candidate]] = []
     selected: list[str] = []
-    while len(selected) < max_effects:
-        pool = [
-            n
-            for n in replay_names
-            if n not in selected
-            and not any(get_effect(n).conflicts_with(get_effect(s)) for s in selected)
-        ]
-        if not pool:
-            break
-        cands = _run_round(ev, base_fit, base_error, pool, not rounds, "replay", workers, progress)
-        rounds.append(cands)
-        best = next((c for c in cands if c.significant), None)
-        if best is None:
-            break
-        selected.append(best.effect)
-        base_fit = best.fit
-        base_error = (best.error_after, best.channel_error_after)
-        staircase.append(
-            {
-                "effects": list(selected),
-                "parameters": {n: dict(v) for n, v in best.model_values.items()},
-                "error": best.error_after,
-                "heldout_error": best.heldout_error_after,
-                "channel_error": best.channel_error_after,
-                "delta_bic": best.delta_bic,
-            }
+    final_fit = _forward(
+        ev, replay_names, selected, nominal, staircase, rounds, max_effects, workers, progress
+    )
+    goodness = goodness_of_fit(data, final_fit.evaluations)
+
+    # Pairs and swaps, when forward selection leaves a misfit.
+    search: list[dict] = []
+    if not goodness.passed and rounds and len(replay_names) > 1:
+        found = pairs_and_swaps(
+            ev, nominal, rounds[0], selected, final_fit, max_effects, workers, progress, search
         )
-
-    # Closed-loop effects, on top of the physics selected.
-    physics_values = dict(base_fit.values)
-    loop_cands: list[Candidate] = []
-    if loop_names:
-        ev.inject_noise(base_fit.evaluations)
-
-        def closed_loop_base() -> Fit:
-            # The selected physics, every value held: the closed loop's residuals.
-            return fit_effects(
-                ev,
-                list(base_fit.effects),
-                start=physics_values,
-                fixed=physics_values,
-                stage="closed_loop",
-            )
-
-        # Twice: the first residuals calibrate the closed loop's whitening, the
-        # second evaluation is whitened with it.
-        ev.calibrate_closed_loop(closed_loop_base().evaluations)
-        loop_base = closed_loop_base()
-        loop_error = velocity_error(loop_base.evaluations)
-        for n in loop_names:
-            effect = get_effect(n)
-            names_n = [*base_fit.effects, n]
-            fit = fit_effects(
-                ev,
-                names_n,
-                start={**physics_values, n: effect.start(scale)},
-                fixed=physics_values,
-                stage="closed_loop",
-            )
-            dbic = delta_bic(loop_base, fit)
-            held = (
-                heldout(
-                    ev,
-                    loop_base.evaluations,
-                    names_n,
-                    fit.values,
-                    "closed_loop",
-                    fixed=physics_values,
-                )
-                if dbic > BIC_THRESHOLD
-                else HeldOut(math.nan, math.nan, [])
-            )
-            err_after = velocity_error(fit.evaluations)
-            significant = bool(
-                dbic > BIC_THRESHOLD
-                and not fit.failed
-                and (len(data) < 2 or (math.isfinite(held.z) and held.z > Z_THRESHOLD))
-            )
-            loop_cands.append(
-                Candidate(
-                    effect=n,
-                    stage="closed_loop",
-                    parameters=dict(fit.values[n]),
-                    model=names_n,
-                    model_values={k: dict(v) for k, v in fit.values.items()},
-                    error_before=loop_error[0],
-                    error_after=err_after[0],
-                    heldout_error_after=math.nan,
-                    delta_bic=dbic,
-                    heldout_z=held.z,
-                    significant=significant,
-                    channel_error_before=loop_error[1],
-                    channel_error_after=err_after[1],
-                    nfev=fit.nfev,
-                    notes=["closed loop: errors are v_des RMS in m/s"],
-                    fit=fit,
+        if found is not None:
+            fit, held, dbic = found
+            selected[:] = list(fit.effects)
+            staircase.append(
+                _step(
+                    selected,
+                    fit,
+                    pooled_error(data, fit.evaluations),
+                    held,
+                    dbic,
+                    "pair and swap search",
                 )
             )
-        rank_candidates(loop_cands)
-        mark_lookalikes(loop_cands)
-        for c in loop_cands:
-            if c.significant and len(selected) < max_effects:
-                selected.append(c.effect)
-                physics_values[c.effect] = dict(c.parameters)
-                staircase.append(
-                    {
-                        "effects": list(selected),
-                        "parameters": {n: dict(v) for n, v in physics_values.items()},
-                        "error": staircase[-1]["error"],
-                        "heldout_error": staircase[-1]["heldout_error"],
-                        "channel_error": {
-                            **staircase[-1]["channel_error"],
-                            **c.channel_error_after,
-                        },
-                        "delta_bic": c.delta_bic,
-                        "stage": "closed_loop",
-                    }
-                )
-                break
-    selected_values = {n: dict(physics_values[n]) for n in selected}
-    verdict = selected[0] if selected else "none"
+            final_fit = _forward(
+                ev, replay_names, selected, fit, staircase, rounds, max_effects, workers, progress
+            )
+            goodness = goodness_of_fit(data, final_fit.evaluations)
 
-    # Look-alikes of the verdict: what run would separate them.
+    selected_values = {n: dict(final_fit.values[n]) for n in selected}
+    heldout_error = staircase[-1]["heldout_error"]
+    explained = bool(goodness.passed and heldout_error <= EXPLAINED_MAX_ERROR)
+    named = [*audit.effects, *selected]
+    verdict = " + ".join(named) if named else ("none" if explained else "unexplained")
+
+    # Look-alikes of each selected effect, from the round it entered in.
+    lookalikes: dict[str, list[str]] = {}
+    for r in rounds:
+        for c in r:
+            if c.effect in selected and c.accepted and c.effect not in lookalikes:
+                lookalikes[c.effect] = list(c.indistinguishable_from)
     first = rounds[0] if rounds else []
-    if separate:
-        for c in first + loop_cands:
-            if c.effect == verdict and c.indistinguishable_from:
-                spec_a = model_spec([c.effect], {c.effect: c.parameters}, scale)
-                for other in c.indistinguishable_from:
-                    o = next(x for x in first + loop_cands if x.effect == other)
-                    spec_b = model_spec([o.effect], {o.effect: o.parameters}, scale)
-                    sep = separating_run(ev, spec_a, spec_b)
-                    if sep is not None:
-                        sep["effects"] = [c.effect, o.effect]
-                        hint = get_effect(o.effect).separation_hint
-                        sep["hint"] = hint
-                        o.separation = sep
-                        c.separation = c.separation or sep
+    if separate and selected:
+        lead = selected[0]
+        c = next((x for x in first if x.effect == lead), None)
+        if c is not None and c.indistinguishable_from:
+            spec_a = model_spec([c.effect], {c.effect: c.parameters}, scale)
+            for other in c.indistinguishable_from:
+                o = next(x for x in first if x.effect == other)
+                spec_b = model_spec([o.effect], {o.effect: o.parameters}, scale)
+                sep = separating_run(ev, spec_a, spec_b)
+                if sep is not None:
+                    sep["effects"] = [c.effect, o.effect]
+                    sep["hint"] = get_effect(o.effect).separation_hint
+                    o.separation = sep
+                    c.separation = c.separation or sep
 
     final_spec = model_spec(selected, selected_values, scale)
-    final = {i: ev.evaluate(final_spec, i) for i in range(len(data))}
-    closed = {
-        "before": closed_loop_summary(ev, ModelSpec()),
-        "after": closed_loop_summary(ev, final_spec),
-    }
-    notes = []
+    final = {i: final_fit.evaluations[i] for i in range(len(data))}
+    computer, ev.computer = ev.computer, {}
+    closed = {"before": closed_loop_summary(ev, ModelSpec())}
+    ev.computer = computer
+    closed["after"] = closed_loop_summary(ev, final_spec)
     if len(data) < 2:
         notes.append("one run: significance from the BIC alone (no held-out run)")
     return Diagnosis(
@@ -350,11 +317,15 @@ def diagnose(
         selected_values=selected_values,
         rounds=rounds,
         staircase=staircase,
-        closed_loop_candidates=loop_cands,
         nominal=nominal.evaluations,
         final=final,
         closed_loop=closed,
         simulations=ev.simulations,
+        audit=audit,
+        goodness=goodness,
+        explained=explained,
+        search=search,
+        lookalikes=lookalikes,
         wall_time_s=time.perf_counter() - t0,
         notes=notes,
     )

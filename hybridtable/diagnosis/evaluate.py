@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -153,6 +153,10 @@ class Evaluator:
         #: Noise of the closed loop's differenced v_des residual, per run
         #: (:meth:`calibrate_closed_loop`).
         self.closed_loop_noise: list[NoiseModel] = [NoiseModel(1.0, 0.0, 0)] * len(self.data)
+        #: What each run's computer used where its JSON differs (run_id ->
+        #: :data:`~hybridtable.measurement.rig.COMPUTER_PARAMS` values, from an
+        #: audit): the closed loop's computer does the same.
+        self.computer: dict[str, dict] = {}
         self.simulations = 0
 
     def evaluate(self, spec: ModelSpec, i: int, stage: str = "replay") -> Evaluation:
@@ -181,6 +185,8 @@ class Evaluator:
                 "sensor",
                 lambda p, sensor: chain_output(sensor, RecordedOffset(h, noise), "measured_force"),
             ).physics()
+        if self.computer.get(run.run_id):
+            physics = replace(physics, computer=self.computer[run.run_id])
         try:
             cl = simulate_rig(spec.closed_loop_run(run), physics, accuracy=self.accuracy)
         except SimulationError:

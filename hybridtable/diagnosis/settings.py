@@ -12,6 +12,9 @@ __all__ = [
     "CLOSED_LOOP_FLOOR",
     "FAILED_RESIDUAL",
     "TIE_BIC",
+    "MIN_EXCESS_REMOVED",
+    "EXPLAINED_MAX_ERROR",
+    "PAIR_POOL",
 ]
 
 
@@ -54,3 +57,18 @@ FAILED_RESIDUAL = 1e3
 
 #: ``delta_bic`` differences below this are ties (a likelihood ratio of 1.3).
 TIE_BIC = 0.5
+
+
+#: Smallest fraction of the held-out excess error (held-out error minus the
+#: noise floor, 1) an effect must remove to enter the model: a significant
+#: effect that leaves the error where it was does not explain the data.
+MIN_EXCESS_REMOVED = 0.25
+
+
+#: Largest held-out error (noise units) of a model called ``explained``.
+EXPLAINED_MAX_ERROR = 1.3
+
+
+#: First-round candidates (by ``delta_bic``) whose pairs are fitted jointly
+#: when forward selection leaves the end test failing.
+PAIR_POOL = 4

@@ -1,5 +1,6 @@
-"""Noise models of a recorded run: AR(1) fits of detrended quiet segments and
-prewhitening of residuals.
+"""Noise models of a recorded run: autoregressive fits of detrended quiet
+segments (AR(1), or AR(p) up to :data:`MAX_AR_ORDER` where the data demand it)
+and prewhitening of residuals.
 """
 
 from __future__ import annotations
@@ -14,29 +15,91 @@ from hybridtable.measurement.phases import contact_mask, delayed_labels, dilate,
 from hybridtable.measurement.run_format import Run
 
 __all__ = [
+    "MAX_AR_ORDER",
     "NoiseModel",
     "estimate_noise",
     "ar1_from_segments",
+    "ar_from_segments",
     "whiten",
 ]
+
+
+#: Highest order of an autoregressive noise model (AR(2) covers a resonant
+#: coloured noise; the order is chosen by BIC, AR(1) unless the data demand more).
+MAX_AR_ORDER = 3
 
 
 # -- noise ---------------------------------------------------------------------
 @dataclass(frozen=True)
 class NoiseModel:
-    """AR(1) noise of a channel: ``e[k] = phi e[k-1] + sigma sqrt(1 - phi^2) xi[k]``.
+    """Autoregressive noise of a channel.
 
-    ``sigma`` is the marginal standard deviation (the noise RMS), ``samples``
-    the ticks the estimate used.
+    AR(1) (``ar`` empty): ``e[k] = phi e[k-1] + sigma sqrt(1 - phi^2) xi[k]``.
+    AR(p): ``e[k] = sum_j ar[j-1] e[k-j] + innovation``, ``phi`` its lag-1
+    autocorrelation. ``sigma`` is the marginal standard deviation (the noise
+    RMS), ``samples`` the ticks the estimate used.
     """
 
     sigma: float
     phi: float
     samples: int
+    ar: tuple[float, ...] = ()
+
+    @property
+    def order(self) -> int:
+        return len(self.ar) if self.ar else 1
+
+    @property
+    def coefficients(self) -> tuple[float, ...]:
+        """The AR coefficients ``a_1 .. a_p``."""
+        return tuple(self.ar) if self.ar else (self.phi,)
 
     @property
     def innovation_sigma(self) -> float:
-        return self.sigma * math.sqrt(1.0 - self.phi * self.phi)
+        if not self.ar:
+            return self.sigma * math.sqrt(1.0 - self.phi * self.phi)
+        return self.sigma * math.sqrt(_levinson(_ar_acf(self.ar))[1][-1])
+
+    def describe(self) -> str:
+        """``"AR(1) +0.70"`` or ``"AR(2) +1.20 -0.50"``."""
+        return f"AR({self.order}) " + " ".join(f"{a:+.2f}" for a in self.coefficients)
+
+
+def _ar_acf(a: Sequence[float]) -> np.ndarray:
+    """Autocorrelations ``rho_0 .. rho_p`` of a stationary AR(p) (Yule-Walker solved for rho)."""
+    a = np.asarray(a, dtype=float)
+    p = len(a)
+    # rho_k = sum_j a_j rho_|k-j| for k = 1..p, rho_0 = 1.
+    m = np.eye(p)
+    rhs = np.zeros(p)
+    for k in range(1, p + 1):
+        for j in range(1, p + 1):
+            lag = abs(k - j)
+            if lag == 0:
+                rhs[k - 1] += a[j - 1]
+            else:
+                m[k - 1, lag - 1] -= a[j - 1]
+    rho = np.linalg.solve(m, rhs)
+    return np.concatenate([[1.0], rho])
+
+
+def _levinson(rho: np.ndarray) -> tuple[list[np.ndarray], list[float]]:
+    """Levinson-Durbin: the order-k predictors (k = 0..p) of a process with
+    autocorrelations ``rho`` and their prediction-error variances (over the
+    marginal variance)."""
+    p = len(rho) - 1
+    preds = [np.zeros(0)]
+    var = [1.0]
+    a = np.zeros(0)
+    v = 1.0
+    for k in range(1, p + 1):
+        acc = rho[k] - (a @ rho[1:k][::-1] if k > 1 else 0.0)
+        kappa = acc / v
+        a = np.concatenate([a - kappa * a[::-1], [kappa]])
+        v = v * (1.0 - kappa * kappa)
+        preds.append(a.copy())
+        var.append(max(v, 1e-12))
+    return preds, var
 
 
 def _ar1_apply(x: np.ndarray, phi: float) -> np.ndarray:
@@ -92,8 +155,65 @@ def ar1_from_segments(segments: Sequence[np.ndarray], degree: int) -> NoiseModel
     return NoiseModel(math.sqrt(s0 / dof), phi, total)
 
 
+def ar_from_segments(
+    segments: Sequence[np.ndarray], degree: int, max_order: int = MAX_AR_ORDER
+) -> NoiseModel | None:
+    """AR(p) noise of segments holding noise plus a polynomial of ``degree``,
+    the order ``p <= max_order`` chosen by BIC over the pooled conditional
+    least-squares fits of the detrended segments.
+
+    AR(1) is :func:`ar1_from_segments` (its bias corrections); a higher order
+    is kept only if its BIC is lower, with coefficients from the least squares
+    and the marginal variance ``sum x^2 / (N - q S)`` (``S`` segments).
+    Returns None with fewer than 20 degrees of freedom.
+    """
+    base = ar1_from_segments(segments, degree)
+    if base is None or base.sigma == 0.0 or max_order < 2:
+        return base
+    q = degree + 1
+    xs = []
+    for seg in segments:
+        seg = np.asarray(seg, dtype=float)
+        if len(seg) < q + 4:
+            continue
+        t = np.linspace(-1.0, 1.0, len(seg))
+        basis, _ = np.linalg.qr(np.vander(t, q, increasing=True))
+        xs.append(seg - basis @ (basis.T @ seg))
+    best: tuple[float, int, np.ndarray] | None = None
+    for p in range(1, max_order + 1):
+        rows, target = [], []
+        for x in xs:
+            if len(x) <= p + 2:
+                continue
+            rows.append(np.column_stack([x[p - j : len(x) - j] for j in range(1, p + 1)]))
+            target.append(x[p:])
+        if not rows:
+            break
+        a_mat, y = np.vstack(rows), np.concatenate(target)
+        if len(y) < 20 + p:
+            break
+        coef, *_ = np.linalg.lstsq(a_mat, y, rcond=None)
+        r = y - a_mat @ coef
+        n = len(y)
+        bic = n * math.log(max(float(r @ r), 1e-300) / n) + p * math.log(n)
+        if best is None or bic < best[0] - 1e-9:
+            best = (bic, p, coef)
+    if best is None or best[1] == 1:
+        return base
+    coef = best[2]
+    roots = np.roots(np.concatenate([[1.0], -coef]))
+    if np.any(np.abs(roots) >= 0.99):
+        return base
+    total = sum(len(x) for x in xs)
+    s0 = sum(float(x @ x) for x in xs)
+    sigma = math.sqrt(s0 / max(total - q * len(xs), 0.25 * total))
+    rho1 = float(_ar_acf(coef)[1])
+    return NoiseModel(sigma, rho1, total, tuple(float(c) for c in coef))
+
+
 def estimate_noise(run: Run, delay_ticks: int, settle_ticks: int) -> dict[str, NoiseModel]:
-    """Model-free AR(1) noise of ``f_mea`` and ``p_act`` from the no-contact ticks.
+    """Model-free autoregressive noise of ``f_mea`` and ``p_act`` from the
+    no-contact ticks (:func:`ar_from_segments`).
 
     ``f_mea``: the true force is zero away from contact (2 ticks of guard,
     the readings shifted by the sensor delay), so the readings about each
@@ -109,21 +229,33 @@ def estimate_noise(run: Run, delay_ticks: int, settle_ticks: int) -> dict[str, N
     quiet_f = delayed_labels(quiet.astype(int), delay_ticks).astype(bool)
     quiet_f[: min(delay_ticks, len(quiet_f))] = True
     out: dict[str, NoiseModel] = {}
-    f_noise = ar1_from_segments([run.f_mea_n[a : b + 1] for a, b in true_runs(quiet_f)], 0)
+    f_noise = ar_from_segments([run.f_mea_n[a : b + 1] for a, b in true_runs(quiet_f)], 0)
     if f_noise is not None:
         out["f_mea_n"] = f_noise
     quiet_p = ~dilate(on, guard, settle_ticks)
     quiet_p[: min(settle_ticks, len(quiet_p))] = False
-    p_noise = ar1_from_segments([run.p_act_m[a : b + 1] for a, b in true_runs(quiet_p)], 1)
+    p_noise = ar_from_segments([run.p_act_m[a : b + 1] for a, b in true_runs(quiet_p)], 1)
     if p_noise is not None:
         out["p_act_m"] = p_noise
     return out
 
 
 def whiten(e: np.ndarray, noise: NoiseModel) -> np.ndarray:
-    """Innovations of an AR(1) residual over their standard deviation
-    (unit-variance white noise if ``e`` is the noise)."""
+    """Innovations of an autoregressive residual over their standard deviation
+    (unit-variance white noise if ``e`` is the noise). The first ``p`` samples
+    of an AR(p) use the exact lower-order predictors (Levinson-Durbin)."""
     e = np.asarray(e, dtype=float)
+    if noise.ar:
+        a = np.asarray(noise.ar, dtype=float)
+        p = len(a)
+        preds, var = _levinson(_ar_acf(a))
+        w = e.copy()
+        for j in range(1, p + 1):
+            w[p:] -= a[j - 1] * e[p - j : len(e) - j]
+        for k in range(min(p, len(e))):
+            pk = preds[k]
+            w[k] = (e[k] - (pk @ e[:k][::-1] if k else 0.0)) * math.sqrt(var[-1] / var[k])
+        return w / noise.innovation_sigma
     phi = noise.phi
     w = np.empty_like(e)
     w[0] = e[0] * math.sqrt(1.0 - phi * phi)

@@ -36,6 +36,7 @@ from hybridtable.systems.table import SecondOrderTable
 
 __all__ = [
     "PHYSICS_PARAMS",
+    "COMPUTER_PARAMS",
     "RigPhysics",
     "PhysicalPart",
     "rig_params",
@@ -54,6 +55,16 @@ PHYSICS_PARAMS: tuple[str, ...] = (
     "table_response_hz",
     "table_damping_ratio",
     "table_initial_state",
+)
+
+#: HybridLoopParams fields of the rig computer that :class:`RigPhysics` may
+#: set to what an audit (:mod:`hybridtable.measurement.audit`) found it used.
+COMPUTER_PARAMS: tuple[str, ...] = (
+    "spacecraft_mass_kg",
+    "compensator",
+    "lead_time_s",
+    "compensator_stiffness_n_per_m",
+    "force_deadband_n",
 )
 
 SystemFactory = Callable[[HybridLoopParams], System]
@@ -86,6 +97,7 @@ class RigPhysics:
     sensor: SystemFactory | None = None
     changes: Mapping[str, Any] = field(default_factory=dict)
     name: str = "nominal"
+    computer: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         bad = [k for k in self.changes if k not in PHYSICS_PARAMS]
@@ -94,18 +106,24 @@ class RigPhysics:
                 f"RigPhysics.changes: {', '.join(bad)} not physical parameters "
                 f"(one of {', '.join(PHYSICS_PARAMS)})"
             )
+        bad = [k for k in self.computer if k not in COMPUTER_PARAMS]
+        if bad:
+            raise ParameterError(
+                f"RigPhysics.computer: {', '.join(bad)} not rig-computer parameters "
+                f"(one of {', '.join(COMPUTER_PARAMS)})"
+            )
 
     def apply(self, params: HybridLoopParams) -> HybridLoopParams:
         """``params`` with :attr:`changes` applied (the compensator's beliefs
-        pinned to their values before the change)."""
-        if not self.changes:
+        pinned to their values before the change), then :attr:`computer`."""
+        if not self.changes and not self.computer:
             return params
         pinned = params.with_(
             lead_time_s=params.compensator_params().lead_time_s,
             compensator_stiffness_n_per_m=params.compensator_params().stiffness_n_per_m,
             compensator_damping_n_s_per_m=params.compensator_params().damping_n_s_per_m,
         )
-        return pinned.with_(**dict(self.changes))
+        return pinned.with_(**dict(self.changes)).with_(**dict(self.computer))
 
     def make_table(self, params: HybridLoopParams) -> System:
         return self.table(params) if self.table else SecondOrderTable(params.table())

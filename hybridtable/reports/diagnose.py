@@ -25,6 +25,9 @@ from hybridtable.reports.compare import figure_stem  # noqa: E402
 
 __all__ = [
     "REPORT_MARKER",
+    "summary_sentence",
+    "format_audit",
+    "format_remaining",
     "format_ranking",
     "format_parameters",
     "separation_text",
@@ -55,45 +58,146 @@ def _rows(cands: list[Candidate]) -> list[str]:
     out = []
     for c in cands:
         alike = ",".join(c.indistinguishable_from) or "-"
-        unit = " m/s" if c.stage == "closed_loop" else ""
         out.append(
             f"{c.effect:<20} {_fmt(c.delta_bic, '10.1f')} {_fmt(c.heldout_z, '7.1f')} "
             f"{_fmt(c.error_before, '9.4g')} {_fmt(c.error_after, '9.4g')} "
-            f"{_fmt(c.heldout_error_after, '9.4g')}{unit:<4} {'yes' if c.significant else 'no':<4} "
+            f"{_fmt(c.heldout_error_after, '9.4g')} {_fmt(c.excess_removed * 100, '7.0f')}% "
+            f"{'yes' if c.accepted else 'no':<4} "
             f"{alike:<22} {format_parameters(c.effect, c.parameters)}"
         )
     return out
 
 
+_CHANNEL_WORDS = {"f_mea_n": "force", "p_act_m": "table position"}
+_PHASE_WORDS = {
+    "approach": "before the touch",
+    "compression": "in compression",
+    "restitution": "in restitution",
+    "free_flight": "after separation",
+}
+
+
+def _where_words(w) -> str:
+    phase = _PHASE_WORDS.get(w.phase, w.phase)
+    if w.phase == "compression" and w.misfit_start_s <= w.start_s + 0.1 * (w.end_s - w.start_s):
+        phase = "at the touch"
+    return (
+        f"the {_CHANNEL_WORDS.get(w.channel, w.channel)} error {phase} of {w.run_id} "
+        f"({w.misfit_start_s:.3f}-{w.misfit_end_s:.3f} s, {w.band_hz[0]:.3g}-{w.band_hz[1]:.3g} Hz) "
+        f"is {w.error:.3g}x the noise"
+    )
+
+
+def summary_sentence(d: Diagnosis) -> str:
+    """The verdict in one plain sentence, with its evidence."""
+    g = d.goodness
+    held = d.heldout_error
+    computer = "; ".join(f.text for f in d.audit.findings)
+    if d.explained and not d.named:
+        return (
+            f"Nothing is missing: the nominal model explains the runs to the noise "
+            f"(held-out error {held:.3g}x the noise; the residuals pass the end test, "
+            f"p = {g.p_value:.2g} at a false-alarm rate of {g.false_alarm_rate:.0%})."
+        )
+    if not d.named:
+        w = g.where
+        near = d.ranking[0] if d.ranking else None
+        tail = (
+            f"; the nearest effect, {near.effect}, is not accepted: {near.reason}"
+            if near is not None
+            else ""
+        )
+        return (
+            "The model misses something no effect of the library explains: "
+            + (_where_words(w) if w else f"the held-out error is {held:.3g}x the noise")
+            + f" (end test p = {g.p_value:.2g}){tail}."
+        )
+    parts = []
+    if d.audit.findings:
+        parts.append(f"The rig computer did not do what its JSON says: {computer}")
+    if d.selected:
+        nominal = d.staircase[0]["heldout_error"]
+        params = "; ".join(
+            f"{n} ({format_parameters(n, d.selected_values[n])})" for n in d.selected
+        )
+        parts.append(
+            f"The model misses {params}: with it the held-out error falls from "
+            f"{nominal:.3g} to {held:.3g}x the noise"
+        )
+    if d.explained:
+        parts.append(
+            f"With {' + '.join(d.named)} the residuals pass the end test (p = {g.p_value:.2g})"
+        )
+    else:
+        w = g.where
+        parts.insert(
+            0,
+            f"The model still misses something: with {' + '.join(d.named)} added, "
+            + (_where_words(w) if w else f"the held-out error is {held:.3g}x the noise"),
+        )
+    return ". ".join(parts) + "."
+
+
+def format_audit(d: Diagnosis) -> str:
+    """The audit of the rig computer, as text."""
+    a = d.audit
+    if a.ok:
+        return (
+            "audit of the rig computer: it did what the JSON says (mass, lead time, MDC "
+            "stiffness, deadband, clamp, time step, initial state)"
+        )
+    return "\n".join(
+        ["audit of the rig computer (solved from the record, not fitted):"]
+        + [f"  {f.effect:<28} {f.text}" for f in a.findings]
+    )
+
+
+def format_remaining(d: Diagnosis) -> str:
+    """What the final model leaves, as text."""
+    g = d.goodness
+    lines = [
+        f"remaining: held-out error {d.heldout_error:.4g}x the noise; end test "
+        f"{'passed' if g.passed else 'FAILED'} (p = {g.p_value:.3g} over {g.tests} tests, "
+        f"false-alarm rate {g.false_alarm_rate:.0%})"
+    ]
+    for w in g.worst:
+        lines.append(
+            f"  {w.run_id} {w.channel} {w.phase:<12} {w.start_s:.3f}-{w.end_s:.3f} s: error "
+            f"{w.error:.3g}x noise, p = {w.p_value:.3g} (scale {w.scale_ticks} ticks, band "
+            f"{w.band_hz[0]:.3g}-{w.band_hz[1]:.3g} Hz)"
+        )
+    return "\n".join(lines)
+
+
 def format_ranking(d: Diagnosis) -> str:
-    """The verdict, the first round's ranking and the staircase, as text."""
+    """The verdict, the audit, the first round's ranking, the staircase and what remains, as text."""
     head = (
         f"{'effect':<20} {'delta_bic':>10} {'z_held':>7} {'err_bef':>9} {'err_aft':>9} "
-        f"{'held_aft':>9}{'':<4} {'sig':<4} {'look-alikes':<22} parameters"
+        f"{'held_aft':>9} {'excess-':>8} {'acc':<4} {'look-alikes':<22} parameters"
     )
     lines = [
-        f"verdict: {d.verdict}"
-        + (f"  (selected: {', '.join(d.selected)})" if len(d.selected) > 1 else ""),
+        f"verdict: {d.verdict}  (explained: {'yes' if d.explained else 'no'})",
+        "",
+        format_audit(d),
         "",
         "ranking (each effect fitted to all runs on top of the nominal model; "
-        "errors in noise RMS units):",
+        "errors in noise RMS units; excess-: share of the held-out excess error removed):",
         head,
         "-" * len(head),
         *_rows(d.rounds[0] if d.rounds else []),
+        "",
+        "why:",
+        *[f"  {c.effect:<20} {c.reason}" for c in (d.rounds[0] if d.rounds else [])],
     ]
-    if d.closed_loop_candidates:
-        lines += [
-            "closed loop (on top of the physics selected; errors: v_des RMS in m/s):",
-            *_rows(d.closed_loop_candidates),
-        ]
     lines += ["", "staircase:"]
     for s in d.staircase:
         label = " + ".join(s["effects"]) or "nominal"
         lines.append(
             f"  {label:<48} error {_fmt(s['error'], '.4g')}  held-out {_fmt(s['heldout_error'], '.4g')}"
         )
+    lines += ["", format_remaining(d)]
     for c in d.ranking:
-        if c.separation and c.significant and c.effect == d.verdict:
+        if c.separation and c.accepted and c.effect in d.selected[:1]:
             lines += ["", separation_text(c)]
     return "\n".join(lines)
 
@@ -265,7 +369,9 @@ def write_report(d: Diagnosis, folder: str | Path) -> list[Path]:
     md = [
         "# Which physical effect is missing",
         "",
-        f"Verdict: **{d.verdict}**"
+        summary_sentence(d),
+        "",
+        f"Verdict: **{d.verdict}** (explained: {'yes' if d.explained else 'no'})"
         + (f"; model selected: {' + '.join(d.selected)}" if d.selected else "")
         + ". Definitions: `docs/diagnose.md`.",
         "",
@@ -276,22 +382,34 @@ def write_report(d: Diagnosis, folder: str | Path) -> list[Path]:
         "## Ranking",
         "",
         "| effect | delta BIC | held-out z | error before | error after | held-out error after "
-        "| significant | indistinguishable from | parameters |",
-        "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+        "| excess removed | accepted | why | indistinguishable from | parameters |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     for c in d.ranking:
         md.append(
-            f"| {c.effect} ({c.stage}) | {_fmt(c.delta_bic, '.1f')} | {_fmt(c.heldout_z, '.1f')} "
+            f"| {c.effect} | {_fmt(c.delta_bic, '.1f')} | {_fmt(c.heldout_z, '.1f')} "
             f"| {_fmt(c.error_before, '.4g')} | {_fmt(c.error_after, '.4g')} "
-            f"| {_fmt(c.heldout_error_after, '.4g')} | {'yes' if c.significant else 'no'} "
+            f"| {_fmt(c.heldout_error_after, '.4g')} | {_fmt(c.excess_removed * 100, '.0f')} % "
+            f"| {'yes' if c.accepted else 'no'} | {c.reason} "
             f"| {', '.join(c.indistinguishable_from) or '-'} "
             f"| {format_parameters(c.effect, c.parameters)} |"
         )
     md += ["", *[separation_text(c) for c in d.ranking if c.separation and c.effect in d.selected]]
     md += [
         "",
-        "Errors of replay effects: RMS residual / noise RMS over the runs and both channels "
-        "(1 = noise floor); of closed-loop effects: v_des RMS error in m/s.",
+        "Errors: RMS residual / noise RMS over the runs and both channels (1 = noise floor).",
+        "",
+        "## Audit of the rig computer",
+        "",
+        "```",
+        format_audit(d),
+        "```",
+        "",
+        "## What remains",
+        "",
+        "```",
+        format_remaining(d),
+        "```",
         "",
         "## Staircase",
         "",
@@ -331,8 +449,8 @@ def write_report(d: Diagnosis, folder: str | Path) -> list[Path]:
             "",
             f"`{rd.run.csv_path}`, compensator {rd.run.info.compensator}, approach "
             f"{rd.run.info.initial_velocity_m_per_s:g} m/s. Noise: f_mea "
-            f"{nz['f_mea_n'].sigma:.3g} N (AR(1) {nz['f_mea_n'].phi:+.2f}), p_act "
-            f"{nz['p_act_m'].sigma * 1e6:.3g} um (AR(1) {nz['p_act_m'].phi:+.2f}).",
+            f"{nz['f_mea_n'].sigma:.3g} N ({nz['f_mea_n'].describe()}), p_act "
+            f"{nz['p_act_m'].sigma * 1e6:.3g} um ({nz['p_act_m'].describe()}).",
             "",
         ]
         md += [f"Note: {n}" for n in rd.notes]

@@ -115,16 +115,23 @@ def test_hidden_effect_is_named_and_error_falls_to_the_noise(tmp_path, hidden, p
     assert top.significant and top.delta_bic > 100 and top.heldout_z > 3
 
 
-def test_mass_error_is_found_in_the_closed_loop(tmp_path):
+def test_mass_error_is_decided_by_the_audit_not_by_a_fit(tmp_path):
     d = diagnose(
         _runs(tmp_path, "mass_error", seed=2),
         effects=["contact_damping", "force_bias", "mass_error"],
     )
-    assert d.verdict == "mass_error"
-    (mass,) = d.closed_loop_candidates
-    assert mass.parameters["mass_ratio"] == pytest.approx(1.05, rel=2e-3)
+    assert d.verdict == "mass_error" and d.explained
+    (finding,) = d.audit.findings
+    assert finding.key == "spacecraft_mass_kg"
+    # arithmetic on the record: exact up to the CSV's 10 digits, not a fit's 0.2 %
+    assert finding.used_value / finding.json_value == pytest.approx(1.05, rel=1e-6)
+    assert d.to_json()["parameters"]["mass_error"]["mass_ratio"] == pytest.approx(1.05, rel=1e-6)
     # the replay saw nothing: no physics effect was selected
-    assert not any(c.significant for c in d.rounds[0])
+    assert d.selected == [] and not any(c.accepted for c in d.rounds[0])
+    # with the mass the computer used, the closed loop reproduces the record
+    before, after = (d.closed_loop[k]["runs"] for k in ("before", "after"))
+    for b, a in zip(before, after, strict=True):
+        assert a["v_des_rms_error_m_per_s"] < 0.2 * b["v_des_rms_error_m_per_s"]
 
 
 def test_series_compliance_is_reported_indistinguishable_from_a_softer_contact(tmp_path):
