@@ -187,22 +187,45 @@ class PhysicalPart:
     table: System
     contact: System
     sensor: System
+    #: The table is a :class:`~hybridtable.systems.table.SampledTable`: its
+    #: ``commanded_state`` takes the command sent at each tick, unheld.
+    table_is_sampled: bool = False
 
 
 def add_physical_part(
-    builder: DiagramBuilder, params: HybridLoopParams, physics: RigPhysics | None = None
+    builder: DiagramBuilder,
+    params: HybridLoopParams,
+    physics: RigPhysics | None = None,
+    sampled_table_period_s: float | None = None,
 ) -> PhysicalPart:
     """Add the rig's physical part (table -> contact -> force sensor) and wire it.
 
     The table's ``commanded_state`` input is left for the caller to connect.
+    With ``sampled_table_period_s``, a table with a ``sampled(h)`` method is
+    replaced by its exact discretization when the contact and the sensor have
+    no continuous state (they only see the table at the ticks then);
+    :attr:`PhysicalPart.table_is_sampled` says whether it was.
     """
     physics = physics or RigPhysics()
-    table = builder.AddNamedSystem("table", physics.make_table(params))
-    contact = builder.AddNamedSystem("contact", physics.make_contact(params))
-    sensor = builder.AddNamedSystem("force_sensor", physics.make_sensor(params))
+    table_system = physics.make_table(params)
+    contact_system = physics.make_contact(params)
+    sensor_system = physics.make_sensor(params)
+    sampled = False
+    if (
+        sampled_table_period_s is not None
+        and hasattr(table_system, "sampled")
+        and contact_system.num_continuous_states() == 0
+        and sensor_system.num_continuous_states() == 0
+    ):
+        discrete = table_system.sampled(sampled_table_period_s)
+        if discrete is not None:
+            table_system, sampled = discrete, True
+    table = builder.AddNamedSystem("table", table_system)
+    contact = builder.AddNamedSystem("contact", contact_system)
+    sensor = builder.AddNamedSystem("force_sensor", sensor_system)
     builder.Connect(table.GetOutputPort("motion"), contact.GetInputPort("motion"))
     builder.Connect(contact.GetOutputPort("force"), sensor.GetInputPort("force"))
-    return PhysicalPart(params, table, contact, sensor)
+    return PhysicalPart(params, table, contact, sensor, sampled)
 
 
 def set_table_initial_state(table: System, context, params: HybridLoopParams) -> None:

@@ -14,7 +14,7 @@ from pydrake.systems.primitives import (
 )
 
 from hybridtable._validation import check_positive
-from hybridtable.systems.table import TableParams, table_matrices
+from hybridtable.systems.table import SampledTable, TableParams, table_matrices
 
 __all__ = [
     "StructuralModeParams",
@@ -102,6 +102,10 @@ class ResonantTable(Diagram):
         builder.ExportInput(self._linear.get_input_port(), "commanded_state")
         builder.ExportOutput(self._linear.get_output_port(), "motion")
         builder.BuildInto(self)
+
+    def sampled(self, period_s: float) -> SampledTable:
+        """This table at the ticks of a held command (exact, :class:`SampledTable`)."""
+        return SampledTable(resonant_table_matrices(self.params, self.mode), period_s)
 
     def set_initial_state(self, context, position_m: float, velocity_m_per_s: float) -> None:
         """Servo and mode at ``position_m`` moving with ``velocity_m_per_s``

@@ -13,12 +13,19 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from pydrake.systems.analysis import DiscreteTimeApproximation
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import LinearSystem, MatrixGain
 
 from hybridtable._validation import check_nonnegative, check_positive_or_inf
 
-__all__ = ["TableParams", "SecondOrderTable", "table_matrices", "table_step_response"]
+__all__ = [
+    "TableParams",
+    "SecondOrderTable",
+    "SampledTable",
+    "table_matrices",
+    "table_step_response",
+]
 
 
 @dataclass(frozen=True)
@@ -132,8 +139,60 @@ class SecondOrderTable(Diagram):
         builder.ExportOutput(inner.get_output_port(), "motion")
         builder.BuildInto(self)
 
+    def sampled(self, period_s: float) -> SampledTable | None:
+        """This table at the ticks of a held command (:class:`SampledTable`);
+        None for the ideal table (no state to discretize)."""
+        if self._linear is None:
+            return None
+        return SampledTable(table_matrices(self.params), period_s)
+
     def set_initial_state(self, context, position_m: float, velocity_m_per_s: float) -> None:
         """Set ``[p_act, v_act]`` (no-op for the ideal table)."""
         if self._linear is not None:
             sub = self.GetSubsystemContext(self._linear, context)
             sub.SetContinuousState(np.array([position_m, velocity_m_per_s]))
+
+
+class SampledTable(Diagram):
+    """A linear table's exact response to a command held over ticks, at the ticks.
+
+    The continuous ``LinearSystem`` (A, B, C, D) is discretized with Drake's
+    ``DiscreteTimeApproximation`` (the zero-order-hold exact solution:
+    ``x[k+1] = e^{A h} x[k] + int_0^h e^{A s} ds B u[k]``), so a replay needs no
+    integrator and has no integration error.
+
+    Ports
+    -----
+    Input ``commanded_state`` (size 2: m, m/s)
+        The command *sent at* each tick: the discrete update at tick ``k``
+        reads it and holds it to tick ``k + 1``. Connect the command itself,
+        not a ``ZeroOrderHold`` (whose output at ``t_k`` is still the previous
+        command).
+    Output ``motion`` (size 3: m, m/s, m/s^2)
+        ``C x[k] + D u[k]`` at tick ``k``, as the continuous table's at ``t_k``.
+
+    Parameters
+    ----------
+    linear : (A, B, C, D)
+        The continuous table; its state is ``pairs`` copies of ``[p, v]``.
+    period_s : float
+        Tick period ``h`` (s).
+    """
+
+    def __init__(self, linear, period_s: float) -> None:
+        Diagram.__init__(self)
+        A, B, C, D = (np.asarray(m, dtype=float) for m in linear)
+        self._pairs = A.shape[0] // 2
+        builder = DiagramBuilder()
+        self._linear = builder.AddNamedSystem(
+            "sampled_table",
+            DiscreteTimeApproximation(LinearSystem(A, B, C, D), period_s),
+        )
+        builder.ExportInput(self._linear.get_input_port(), "commanded_state")
+        builder.ExportOutput(self._linear.get_output_port(), "motion")
+        builder.BuildInto(self)
+
+    def set_initial_state(self, context, position_m: float, velocity_m_per_s: float) -> None:
+        """Every ``[p, v]`` pair of the state at ``position_m``, ``velocity_m_per_s``."""
+        x = np.tile([position_m, velocity_m_per_s], self._pairs)
+        self.GetSubsystemContext(self._linear, context).SetDiscreteState(x)

@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 import pytest
+from pydrake.systems.framework import Diagram, DiagramBuilder
 
 from hybridtable.errors import ParameterError
 from hybridtable.measurement.replay import replay, replay_command
@@ -15,7 +16,8 @@ from hybridtable.measurement.rig import RigPhysics, rig_params, simulate_rig
 from hybridtable.measurement.run_format import RunInfo
 from hybridtable.measurement.run_reader import read_run
 from hybridtable.systems.contact import ContactParams, UnilateralSpringContact
-from hybridtable.systems.table import TableParams, table_step_response
+from hybridtable.systems.resonant_table import ResonantTable, StructuralModeParams
+from hybridtable.systems.table import SecondOrderTable, TableParams, table_step_response
 from tests.generators.rigsim import NOMINAL, damped_spring, simulate_record, write_run
 
 #: A rig unlike the examples: 500 Hz, 3-tick delay, slower and less damped table, MDC.
@@ -119,3 +121,37 @@ def test_rig_params_follow_the_format():
     cp = p.compensator_params()
     assert (cp.kind, cp.lead_time_s, cp.force_deadband_n) == ("SDMDC", 0.004, 6.0)
     assert math.isclose(cp.stiffness_n_per_m, NOMINAL["contact_stiffness_n_per_m"])
+
+
+class _ContinuousOnly(Diagram):
+    """A linear table hidden in a diagram without ``sampled()``: the replay
+    must integrate it (the continuous path)."""
+
+    def __init__(self, table) -> None:
+        Diagram.__init__(self)
+        builder = DiagramBuilder()
+        self._table = builder.AddSystem(table)
+        builder.ExportInput(self._table.GetInputPort("commanded_state"), "commanded_state")
+        builder.ExportOutput(self._table.GetOutputPort("motion"), "motion")
+        builder.BuildInto(self)
+
+    def set_initial_state(self, context, p, v):
+        self._table.set_initial_state(self.GetSubsystemContext(self._table, context), p, v)
+
+
+@pytest.mark.parametrize("mode", [None, StructuralModeParams(70.0, 0.05)])
+def test_the_sampled_table_is_the_integrated_one_at_the_ticks(tmp_path, mode):
+    run, _ = _noiseless_run(tmp_path, OTHER_RIG, damped_spring(40000.0, 300.0))
+
+    def table(params):
+        if mode is None:
+            return SecondOrderTable(params.table())
+        return ResonantTable(params.table(), mode)
+
+    fast = replay(run, RigPhysics(table=table))
+    slow = replay(run, RigPhysics(table=lambda p: _ContinuousOnly(table(p))), accuracy=1e-11)
+    assert fast.steps < slow.steps  # no integrator: one event per tick
+    peak = float(np.max(np.abs(slow.f_mea_n)))
+    assert np.max(np.abs(fast.f_mea_n - slow.f_mea_n)) < 1e-8 * peak
+    assert np.max(np.abs(fast.p_act_m - slow.p_act_m)) < 1e-11
+    assert np.max(np.abs(fast.v_act_m_per_s - slow.v_act_m_per_s)) < 1e-9
