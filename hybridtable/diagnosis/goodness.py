@@ -16,7 +16,8 @@ lag) that a variance test dilutes, the whole window its mean.
 The family of tests is held to one false-alarm rate per set of runs
 (:data:`FALSE_ALARM_RATE`) by Bonferroni: the test fails if a p-value times
 the number of tests is below it in a window whose error is at least
-:data:`WINDOW_ERROR_FLOOR` times the noise (a statistically sure but tiny
+:data:`WINDOW_ERROR_FLOOR` times the noise, with two standard errors of the
+window's noise power to spare (a statistically sure but tiny
 misfit, e.g. of a JSON value rounded to 0.1 %, is not one a user can act on;
 such windows are still listed). The worst window says where the
 misfit sits: run, channel, phase, time window (the block with the largest
@@ -200,21 +201,26 @@ def goodness_of_fit(
         if ev.failed:
             continue
         for c in CHANNELS:
-            sigma = data[i].noise[c].sigma
+            noise = data[i].noise[c]
+            rho2 = noise.phi * noise.phi
             for t in _window_tests(data[i], ev, c):
                 a, b = t[3], t[4]
-                error = float(np.sqrt(np.mean(ev.residual[c][a : b + 1] ** 2)) / sigma)
-                rows.append((i, c, *t, error))
+                error = float(np.sqrt(np.mean(ev.residual[c][a : b + 1] ** 2)) / noise.sigma)
+                # The window's mean square holds the noise's too: two of its
+                # standard errors to spare before a misfit counts.
+                spare = 2.0 * np.sqrt(2.0 * (1.0 + rho2) / ((1.0 - rho2) * (b - a + 1)))
+                relevant = error * error - 1.0 - spare >= WINDOW_ERROR_FLOOR**2 - 1.0
+                rows.append((i, c, *t, error, relevant))
     m = len(rows)
     if m == 0:
         return GoodnessOfFit(False, 0.0, 0, false_alarm_rate)
     # Windows with a practically relevant error first, then by p-value.
-    rows.sort(key=lambda r: (r[-1] < WINDOW_ERROR_FLOOR, r[2]))
-    relevant = [r for r in rows if r[-1] >= WINDOW_ERROR_FLOOR]
-    p_family = min(1.0, relevant[0][2] * m) if relevant else 1.0
+    rows.sort(key=lambda r: (not r[-1], r[2]))
+    relevant_rows = [r for r in rows if r[-1]]
+    p_family = min(1.0, relevant_rows[0][2] * m) if relevant_rows else 1.0
     worst: list[WindowTest] = []
     seen = set()
-    for i, c, p, scale, stat, a, b, j, error in rows:
+    for i, c, p, scale, stat, a, b, j, error, _ in rows:
         d = data[i]
         labels = d.f_labels if c == "f_mea_n" else d.labels
         key = (i, c, int(labels[a]))

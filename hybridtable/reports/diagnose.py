@@ -117,12 +117,11 @@ def summary_sentence(d: Diagnosis) -> str:
         parts.append(f"The rig computer did not do what its JSON says: {computer}")
     if d.selected:
         nominal = d.staircase[0]["heldout_error"]
-        params = "; ".join(
-            f"{n} ({format_parameters(n, d.selected_values[n])})" for n in d.selected
-        )
+        named = [f"{n} ({format_parameters(n, d.selected_values[n])})" for n in d.selected]
+        params = " and ".join([", ".join(named[:-1]), named[-1]] if len(named) > 1 else named)
         parts.append(
-            f"The model misses {params}: with it the held-out error falls from "
-            f"{nominal:.3g} to {held:.3g}x the noise"
+            f"The model misses {params}: with {'them' if len(named) > 1 else 'it'} the "
+            f"held-out error falls from {nominal:.3g} to {held:.3g}x the noise"
         )
     if d.explained:
         parts.append(

@@ -89,9 +89,46 @@ def test_whitening_gives_unit_white_innovations():
 @pytest.mark.parametrize("phi", [0.0, 0.7], ids=["white", "ar1"])
 def test_no_hidden_effect_says_none(tmp_path, phi):
     d = diagnose(_runs(tmp_path, "none", phi=phi, seed=11))
-    assert d.verdict == "none" and d.selected == []
-    assert not any(c.significant for c in d.ranking)
+    assert d.verdict == "none" and d.selected == [] and d.explained
+    assert not any(c.accepted for c in d.ranking)
     assert d.staircase[-1]["error"] == pytest.approx(1.0, abs=0.1)
+    assert d.audit.ok and d.goodness.passed
+    doc = d.to_json()
+    assert doc["explained"] is True and doc["selected"] == []
+    assert doc["remaining"]["heldout_error"] == pytest.approx(1.0, abs=0.1)
+
+
+@pytest.mark.parametrize(
+    "hidden, library, channel",
+    [
+        ("table_resonance", ["contact_damping", "force_bias", "stiffness_error"], "p_act_m"),
+        ("contact_damping", ["force_bias", "table_resonance", "sensor_filter"], "f_mea_n"),
+    ],
+    ids=["resonance-unknown", "damping-unknown"],
+)
+def test_an_effect_outside_the_library_is_unexplained(tmp_path, hidden, library, channel):
+    d = diagnose(_runs(tmp_path, hidden, seed=5), effects=library)
+    assert not d.explained
+    assert d.verdict == "unexplained" or d.selected, d.verdict
+    doc = d.to_json()
+    assert doc["explained"] is False
+    where = doc["remaining"]["where"]
+    assert where["channel"] == channel and where["error"] > 1.5
+    assert doc["remaining"]["p_value"] < 0.01
+    # every candidate the library offered says why it was not taken, or it was
+    for c in d.ranking:
+        assert c.reason
+
+
+def test_a_significant_effect_that_leaves_the_error_is_rejected(tmp_path):
+    # force_bias fits a little of a damped contact's force, significantly, but
+    # removes far less than a quarter of the excess error: it must not be named
+    d = diagnose(_runs(tmp_path, "contact_damping", seed=5), effects=["force_bias"])
+    (bias,) = d.ranking
+    assert not bias.accepted
+    assert d.verdict == "unexplained" and not d.explained
+    if bias.significant:
+        assert bias.excess_removed < 0.25 and "excess error" in bias.reason
 
 
 @pytest.mark.parametrize(
@@ -160,6 +197,21 @@ def test_forward_selection_staircase_with_two_hidden_effects(tmp_path):
     assert errors[0] > errors[1] > errors[2] and errors[2] < 1.05
     assert d.selected_values["force_bias"]["bias_n"] == pytest.approx(-4.0, abs=0.4)
     assert d.selected_values["contact_damping"]["damping_n_s_per_m"] == pytest.approx(400, rel=0.05)
+
+
+def test_two_effects_whose_cor_changes_cancel_are_both_named(tmp_path):
+    # friction removes energy, an extra sensor delay adds it: the CoR barely
+    # moves, the time series does (a damping would not do: a delay d of a
+    # spring's reading is, to first order, a damping of -k d)
+    d = diagnose(
+        _runs(tmp_path, "coulomb_friction+extra_delay", seed=12, size={"F": 10.0, "d": 0.001}),
+        effects=["contact_damping", "coulomb_friction", "extra_delay", "force_bias"],
+    )
+    assert set(d.selected) == {"coulomb_friction", "extra_delay"}, d.verdict
+    assert d.explained
+    before, after = (d.closed_loop[k]["runs"] for k in ("before", "after"))
+    for b in before:
+        assert abs(b["cor_error"]) < 0.05  # the CoR alone hides them
 
 
 def test_a_registered_user_effect_is_diagnosed(tmp_path):
