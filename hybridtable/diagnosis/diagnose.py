@@ -165,6 +165,9 @@ def _forward(ev, names, selected, base_fit, staircase, rounds, max_effects, work
         best = next((c for c in cands if c.accepted), None)
         if best is None:
             break
+        for c in cands:
+            if c.accepted and c is not best:
+                c.reason += f"; outranked by {best.effect} (delta_bic {best.delta_bic:.1f})"
         selected.append(best.effect)
         base_fit = best.fit
         held = (
