@@ -107,6 +107,12 @@ class RigScale:
         return self.stiffness_n_per_m * self.peak_deflection_m
 
     @property
+    def contact_duration_s(self) -> float:
+        """Duration of an undamped contact, ``pi sqrt(m / k)`` (s): the time
+        scale of the contact's dynamics, which bounds sensor lags and delays."""
+        return math.pi * math.sqrt(self.mass_kg / self.stiffness_n_per_m)
+
+    @property
     def critical_damping_n_s_per_m(self) -> float:
         return 2.0 * math.sqrt(self.stiffness_n_per_m * self.mass_kg)
 

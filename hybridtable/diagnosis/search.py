@@ -6,10 +6,22 @@ enter alone, or the first effect chosen can be a look-alike that blocks the
 right one. When the end test fails after forward selection,
 :func:`pairs_and_swaps` fits
 
-- every pair of the first round's :data:`~hybridtable.diagnosis.settings.PAIR_POOL`
-  best candidates (by ``delta_bic`` against the nominal model), jointly, from
-  their single fits;
-- every *swap*: the selection with one effect replaced by one of those candidates.
+- every pair of the first round's candidates that do not change the same part,
+  jointly, from the best point of a grid crossing each member's single fit, its
+  data-driven starts and a few magnitudes (:func:`grid_values`): an effect that
+  is invisible alone (a friction whose steps a long extra delay misplaces) is
+  found with its partner;
+- every *swap*: the selection with one effect replaced by one of the
+  :data:`~hybridtable.diagnosis.settings.PAIR_POOL` best first-round candidates.
+
+Only pairs with a member that moves the other's signature in time (an effect
+with data-driven starts: a lag, a delay, a mode) or of two of the
+:data:`~hybridtable.diagnosis.settings.PAIR_POOL` best candidates are tried. The
+grids are screened on :data:`SCREENING_RUNS` runs (those the nominal model
+misses most):
+only the :data:`SCREENED_PAIRS` pairs whose best grid point fits it best are
+fitted to every run, shortly (:data:`PAIR_NFEV` evaluations); the best pair is
+fitted again in full before it is judged.
 
 The proposal with the largest ``delta_bic`` against the nominal model replaces
 the selection if it beats it by :data:`~hybridtable.diagnosis.settings.BIC_THRESHOLD`
@@ -26,12 +38,34 @@ from itertools import combinations
 
 from hybridtable.diagnosis.candidates import Candidate, judge
 from hybridtable.diagnosis.evaluate import Evaluator
-from hybridtable.diagnosis.fit import Fit, delta_bic, fit_effects, heldout, pooled_error
+from hybridtable.diagnosis.fit import (
+    Fit,
+    delta_bic,
+    fit_effects,
+    heldout,
+    model_spec,
+    pooled_error,
+    residual_probe,
+)
 from hybridtable.diagnosis.registry import get_effect
 from hybridtable.diagnosis.settings import BIC_THRESHOLD, PAIR_POOL
 from hybridtable.diagnosis.workers import pool_map
 
-__all__ = ["drop_one", "pairs_and_swaps"]
+__all__ = ["PAIR_NFEV", "grid_values", "drop_one", "pairs_and_swaps"]
+
+
+#: Least-squares evaluations of a pair's short fit to every run.
+PAIR_NFEV = 8
+
+#: Pairs fitted to every run after the screening.
+SCREENED_PAIRS = 6
+
+#: Runs the pairs' grids are screened on (those the nominal model misses most).
+SCREENING_RUNS = 2
+
+#: Magnitudes of a start grid, as fractions of the way from an effect's null
+#: value to its bounds.
+GRID_FRACTIONS = (0.05, 0.25, 0.6)
 
 
 _STATE: dict = {}
@@ -39,10 +73,48 @@ _STATE: dict = {}
 
 def _fit_job(job):
     ev = _STATE["ev"]
-    names, start = job
+    names, start, starts, nfev = job
     sims = ev.simulations
-    fit = fit_effects(ev, names, start=start)
+    fit = fit_effects(ev, names, start=start, starts=starts, max_nfev=nfev)
     return fit, ev.simulations - sims
+
+
+def _screen_job(job):
+    """The best grid point of a pair on runs ``ks``: (whitened RSS, values)."""
+    ev = _STATE["ev"]
+    names, starts, ks = job
+    sims = ev.simulations
+    best = (math.inf, None)
+    for values in starts:
+        spec = model_spec(names, values, ev.scale)
+        evs = [ev.evaluate(spec, k) for k in ks]
+        if any(e.failed for e in evs):
+            continue
+        cost = sum(sum(e.rss().values()) for e in evs)
+        if cost < best[0]:
+            best = (cost, values)
+    return best, ev.simulations - sims
+
+
+def grid_values(c: Candidate, scale, residuals) -> list[dict[str, float]]:
+    """Start values of candidate ``c``'s effect for a pair: its single fit and
+    its data-driven starts or, without those, per parameter with a null value,
+    magnitudes between the null and the bounds (:data:`GRID_FRACTIONS`)."""
+    effect = get_effect(c.effect)
+    out = [dict(c.parameters)]
+    if effect.starts is not None:
+        out += [dict(effect.start(scale), **v) for v in effect.starts(scale, residuals)]
+        return out
+    for p in effect.parameters:
+        null = p.null_value(scale)
+        if null is None:
+            continue
+        lo, hi = p.bounds(scale)
+        for f in GRID_FRACTIONS:
+            for bound in (hi, lo):
+                if bound != null:
+                    out.append(dict(effect.start(scale), **{p.name: null + f * (bound - null)}))
+    return out
 
 
 def _heldout_error(ev: Evaluator, nominal: Fit, fit: Fit) -> float:
@@ -102,19 +174,61 @@ def pairs_and_swaps(
     """The better model of the pair and swap search (see the module doc), as
     ``(fit, held-out error, delta_bic against the nominal model)``, or None.
     Every proposal and the decision are appended to ``log``."""
-    pool = [c for c in first_round if c.fit is not None and not c.fit.failed][:PAIR_POOL]
+    usable = [c for c in first_round if c.fit is not None and not c.fit.failed]
+    pool = usable[:PAIR_POOL]
     current_set = frozenset(selected)
-    proposals: dict[frozenset, tuple[list[str], dict]] = {}
+    proposals: dict[frozenset, tuple] = {}
+    residuals = residual_probe(ev.data, nominal.evaluations)
 
     def conflict_free(names: Sequence[str]) -> bool:
         effects = [get_effect(n) for n in names]
         return not any(a.conflicts_with(b) for a, b in combinations(effects, 2))
 
-    for a, b in combinations(pool, 2):
-        names = [a.effect, b.effect]
-        key = frozenset(names)
-        if key != current_set and conflict_free(names) and len(names) <= max_effects:
-            proposals[key] = (names, {a.effect: a.parameters, b.effect: b.parameters})
+    if max_effects >= 2:
+        grids = {c.effect: grid_values(c, ev.scale, residuals) for c in usable}
+        by_misfit = sorted(
+            range(len(ev.data)), key=lambda i: -sum(nominal.evaluations[i].rss().values())
+        )
+        worst = by_misfit[:SCREENING_RUNS]
+        # A pair can hide both its effects only if one of them moves the
+        # other's signature in time (a lag, a delay, a mode: effects with
+        # data-driven starts); other pairs come from the best candidates.
+        timing = {c.effect for c in usable if get_effect(c.effect).starts is not None}
+        best = {c.effect for c in pool}
+        screens = []
+        for a, b in combinations(usable, 2):
+            names = [a.effect, b.effect]
+            if frozenset(names) == current_set or not conflict_free(names):
+                continue
+            if not (set(names) & timing or set(names) <= best):
+                continue
+            starts = [
+                {a.effect: va, b.effect: vb} for va in grids[a.effect] for vb in grids[b.effect]
+            ]
+            screens.append((names, starts, worst))
+        _STATE.update(ev=ev)
+        screened = pool_map(
+            _screen_job, screens, workers, progress, f"screen {len(screens)} pair(s)"
+        )
+        _STATE.clear()
+        ev.simulations += sum(s for _, s in screened)
+        ranked = sorted(
+            (
+                (cost, job[0], values)
+                for ((cost, values), _), job in zip(screened, screens, strict=True)
+                if values is not None
+            ),
+            key=lambda r: r[0],
+        )
+        log.append(
+            {
+                "screening_runs": [ev.data[k].run_id for k in worst],
+                "pairs_screened": len(screens),
+                "best": [{"effects": n, "rss": c} for c, n, _ in ranked[:SCREENED_PAIRS]],
+            }
+        )
+        for _, names, values in ranked[:SCREENED_PAIRS]:
+            proposals[frozenset(names)] = (names, values, (), PAIR_NFEV)
     for s in selected:
         for c in pool:
             if c.effect in selected:
@@ -125,7 +239,7 @@ def pairs_and_swaps(
                 continue
             start = {n: current.values[n] for n in names if n in current.values}
             start[c.effect] = c.parameters
-            proposals[key] = (names, start)
+            proposals[key] = (names, start, (), PAIR_NFEV)
     if not proposals:
         return None
     jobs = list(proposals.values())
@@ -150,6 +264,10 @@ def pairs_and_swaps(
         log.append({"decision": "kept the forward selection: no pair or swap beats it"})
         return None
     dbic, fit = scored[0]
+    # The screening fit was short: fit the best proposal in full.
+    full = fit_effects(ev, fit.effects, start=fit.values)
+    if delta_bic(nominal, full) > dbic:
+        dbic, fit = delta_bic(nominal, full), full
     judged = drop_one(ev, nominal, fit)
     log.append(
         {

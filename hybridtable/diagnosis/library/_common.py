@@ -22,6 +22,8 @@ __all__ = [
     "stiffness_parameter",
     "resonance_starts",
     "delay_starts",
+    "lag_upper",
+    "lag_starts",
     "mode_lower",
     "mode_upper",
 ]
@@ -113,6 +115,22 @@ def resonance_starts(
     return starts
 
 
+def lag_upper(scale: RigScale, ticks: float) -> float:
+    """Largest sensor lag or extra delay of a fit, s: ``ticks`` sample periods
+    or a fifth of the contact's duration (:attr:`RigScale.contact_duration_s`),
+    whichever is longer (a slow contact can hide a long lag behind few ticks)."""
+    return max(ticks * scale.sample_period_s, 0.2 * scale.contact_duration_s)
+
+
+def _tick_grid(upper_ticks: float) -> list[int]:
+    """1, 2, 3, then Fibonacci-spaced whole ticks up to ``upper_ticks``."""
+    out, a, b = [1, 2, 3], 3, 5
+    while b <= upper_ticks:
+        out.append(b)
+        a, b = b, a + b
+    return [j for j in out if j <= upper_ticks]
+
+
 def delay_starts(scale: RigScale, residuals) -> list[dict[str, float]]:
     """Starts of the delay's fit: whole ticks around the nominal delay.
 
@@ -127,12 +145,22 @@ def delay_starts(scale: RigScale, residuals) -> list[dict[str, float]]:
     Returns
     -------
     list of dict
-        ``{"extra_delay_s": j h}`` for ``j`` in -2, -1, 1, 2, 3 (s), those that
-        keep the total delay ``T + j h`` non-negative.
+        ``{"extra_delay_s": j h}`` for ``j`` in -2, -1 (those that keep the
+        total delay ``T + j h`` non-negative), 1, 2, 3 and Fibonacci-spaced
+        ticks up to :func:`lag_upper` (s).
     """
     h = scale.sample_period_s
     lo = -scale.sensor_delay_s
-    return [{"extra_delay_s": j * h} for j in (-2, -1, 1, 2, 3) if j * h >= lo]
+    up = lag_upper(scale, 5.0) / h
+    ticks = [-2, -1, *_tick_grid(up)]
+    return [{"extra_delay_s": j * h} for j in ticks if j * h >= lo]
+
+
+def lag_starts(scale: RigScale, residuals) -> list[dict[str, float]]:
+    """Starts of a low pass's fit: time constants of whole ticks, Fibonacci-spaced
+    up to :func:`lag_upper` (``{"time_constant_s": s}``; residuals unused)."""
+    h = scale.sample_period_s
+    return [{"time_constant_s": j * h} for j in _tick_grid(lag_upper(scale, 10.0) / h)]
 
 
 def mode_lower(scale: RigScale) -> float:

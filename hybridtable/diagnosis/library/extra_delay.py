@@ -16,7 +16,7 @@ at the touch and negative at the release.
 from __future__ import annotations
 
 from hybridtable.diagnosis.effects import Effect, EffectParameter, Signature
-from hybridtable.diagnosis.library._common import CONTACT, F_MEA, delay_starts
+from hybridtable.diagnosis.library._common import CONTACT, F_MEA, delay_starts, lag_upper
 
 __all__ = ["EFFECT"]
 
@@ -31,7 +31,7 @@ EFFECT = Effect(
             "s",
             "true delay minus nominal delay",
             lower=lambda s: -s.sensor_delay_s,
-            upper=lambda s: 5.0 * s.sample_period_s,
+            upper=lambda s: lag_upper(s, 5.0),
             scale=lambda s: 0.5 * s.sample_period_s,
             null=0.0,
         ),

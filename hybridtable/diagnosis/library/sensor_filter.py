@@ -14,7 +14,7 @@ the reading lags and the touch is rounded, with a tail after the release.
 from __future__ import annotations
 
 from hybridtable.diagnosis.effects import Effect, EffectParameter, Signature
-from hybridtable.diagnosis.library._common import F_MEA
+from hybridtable.diagnosis.library._common import F_MEA, lag_starts, lag_upper
 
 __all__ = ["EFFECT"]
 
@@ -29,7 +29,7 @@ EFFECT = Effect(
             "s",
             "time constant tau of the low pass",
             lower=0.0,
-            upper=lambda s: 10.0 * s.sample_period_s,
+            upper=lambda s: lag_upper(s, 10.0),
             scale=lambda s: 0.5 * s.sample_period_s,
             null=0.0,
         ),
@@ -41,6 +41,7 @@ EFFECT = Effect(
     ),
     apply=lambda spec, v, s: spec.with_sensor(time_constant_s=v["time_constant_s"]),
     touches=("sensor.filter",),
+    starts=lag_starts,
     separation_hint="a faster or shorter contact (a larger approach velocity or a "
     "smaller spacecraft mass): a low pass rounds the touch, a delay only shifts it",
 )
