@@ -20,11 +20,12 @@ with data-driven starts: a lag, a delay, a mode) or of two of the
 grids are screened on :data:`SCREENING_RUNS` runs (those the nominal model
 misses most):
 only the :data:`SCREENED_PAIRS` pairs whose best grid point fits it best are
-fitted to every run, shortly (:data:`PAIR_NFEV` evaluations); the best pair is
-fitted again in full before it is judged.
+fitted to every run, shortly (:data:`PAIR_NFEV` evaluations); the best
+:data:`JUDGED_PROPOSALS` that beat the selection are fitted again in full and
+judged in turn, the first whose every effect is accepted replacing it.
 
-The proposal with the largest ``delta_bic`` against the nominal model replaces
-the selection if it beats it by :data:`~hybridtable.diagnosis.settings.BIC_THRESHOLD`
+A proposal replaces the selection if its ``delta_bic`` against the nominal
+model beats the selection's by :data:`~hybridtable.diagnosis.settings.BIC_THRESHOLD`
 and every one of its effects is accepted given the others (:func:`drop_one`:
 significant and removing :data:`~hybridtable.diagnosis.settings.MIN_EXCESS_REMOVED`
 of the held-out excess error of the model without it).
@@ -59,6 +60,9 @@ PAIR_NFEV = 8
 
 #: Pairs fitted to every run after the screening.
 SCREENED_PAIRS = 6
+
+#: Proposals beating the selection that are judged (drop-one tests), best first.
+JUDGED_PROPOSALS = 3
 
 #: Runs the pairs' grids are screened on (those the nominal model misses most).
 SCREENING_RUNS = 2
@@ -260,28 +264,29 @@ def pairs_and_swaps(
                 "beats_selection_by": dbic - current_bic,
             }
         )
-    if not scored or scored[0][0] <= current_bic + BIC_THRESHOLD:
+    better = [(d, f) for d, f in scored if d > current_bic + BIC_THRESHOLD][:JUDGED_PROPOSALS]
+    if not better:
         log.append({"decision": "kept the forward selection: no pair or swap beats it"})
         return None
-    dbic, fit = scored[0]
-    # The screening fit was short: fit the best proposal in full.
-    full = fit_effects(ev, fit.effects, start=fit.values)
-    if delta_bic(nominal, full) > dbic:
-        dbic, fit = delta_bic(nominal, full), full
-    judged = drop_one(ev, nominal, fit)
-    log.append(
-        {
-            "decision": "drop-one tests of " + " + ".join(fit.effects),
-            "members": [c.to_json() for c in judged],
-        }
-    )
-    if not all(c.accepted for c in judged):
+    for dbic, fit in better:
+        # The screening fit was short: fit the proposal in full.
+        full = fit_effects(ev, fit.effects, start=fit.values)
+        if delta_bic(nominal, full) > dbic:
+            dbic, fit = delta_bic(nominal, full), full
+        judged = drop_one(ev, nominal, fit)
         log.append(
-            {"decision": "kept the forward selection: an effect of the pair is not accepted"}
+            {
+                "decision": "drop-one tests of " + " + ".join(fit.effects),
+                "members": [c.to_json() for c in judged],
+            }
         )
-        return None
-    held = judged[0].heldout_error_after
-    if not math.isfinite(held):
-        held = judged[0].error_after
-    log.append({"decision": "replaced the selection with " + " + ".join(fit.effects)})
-    return fit, held, dbic
+        if all(c.accepted for c in judged):
+            held = judged[0].heldout_error_after
+            if not math.isfinite(held):
+                held = judged[0].error_after
+            log.append({"decision": "replaced the selection with " + " + ".join(fit.effects)})
+            return fit, held, dbic
+    log.append(
+        {"decision": "kept the forward selection: no better proposal has every effect accepted"}
+    )
+    return None
