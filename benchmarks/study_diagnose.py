@@ -70,6 +70,8 @@ COMPUTER_KEYS = {
     "compensator_stiffness_error": ("contact_stiffness_n_per_m", "k_used_n_per_m"),
 }
 EXPLAINED_LIMIT = 1.3
+#: A noise estimate this many times the true std is reported (signal absorbed).
+NOISE_RATIO_LIMIT = 1.5
 
 
 # --------------------------------------------------------------------------- #
@@ -214,7 +216,24 @@ def run_one(spec: rigzoo.SetSpec, root: Path, workers: int | None) -> dict:
     wall = time.perf_counter() - t1
     row = {"set": sized.to_json(), "generate_s": gen_s, "diagnose_s": wall}
     row.update(score(sized, j))
+    row["noise_ratio"] = noise_ratio(sized, j)
     return row
+
+
+def noise_ratio(spec: rigzoo.SetSpec, j: dict) -> dict:
+    """The diagnosis' noise estimate over the true noise std, per channel
+    (mean over runs): far above 1, the noise model has absorbed signal."""
+    true = {"f_mea_n": spec.noise.sigma_f, "p_act_m": spec.noise.sigma_p}
+    out = {}
+    for ch, sig in true.items():
+        vals = [
+            r["noise"][ch]["rms"]
+            for r in j.get("runs") or []
+            if ch in (r.get("noise") or {}) and r["noise"][ch].get("rms") is not None
+        ]
+        if vals:
+            out[ch] = sum(vals) / len(vals) / sig
+    return out
 
 
 def line(row: dict) -> str:
@@ -226,6 +245,13 @@ def line(row: dict) -> str:
     extra = ""
     if row.get("explained_true_above_1.3"):
         extra += f"  [explained:true at {row['heldout_error']:.2f}]"
+    big = {c: v for c, v in (row.get("noise_ratio") or {}).items() if v > NOISE_RATIO_LIMIT}
+    if big:
+        extra += (
+            "  [noise estimate "
+            + ", ".join(f"{c} {v:.1f}x" for c, v in big.items())
+            + " the truth]"
+        )
     aud = row.get("audit")
     if aud and aud.get("relative_error") is not None:
         extra += f"  [audit rel. err {aud['relative_error']:+.2e}]"
@@ -253,6 +279,10 @@ def summarise(rows: list[dict]) -> dict:
             "counts": {o: cnt.get(o, 0) for o in (*OUTCOMES[c], "error")},
             "rates": {o: cnt.get(o, 0) / len(rs) for o in (*OUTCOMES[c], "error")},
             "explained_true_above_1.3": sum(bool(r.get("explained_true_above_1.3")) for r in rs),
+            "noise_overestimated": sum(
+                any(v > NOISE_RATIO_LIMIT for v in (r.get("noise_ratio") or {}).values())
+                for r in rs
+            ),
         }
         if c == "outside":
             classes[c]["not_flagged_named"] = dict(
@@ -331,8 +361,8 @@ def markdown(summary: dict, rows: list[dict], args) -> str:
         "",
         "## Per class",
         "",
-        "| class | sets | outcomes | explained:true above 1.3 |",
-        "| --- | ---: | --- | ---: |",
+        "| class | sets | outcomes | explained:true above 1.3 | noise estimate > 1.5x truth |",
+        "| --- | ---: | --- | ---: | ---: |",
     ]
     for c, k in summary["classes"].items():
         oc = ", ".join(
@@ -340,7 +370,10 @@ def markdown(summary: dict, rows: list[dict], args) -> str:
             for o, n in k["counts"].items()
             if n or o != "error"
         )
-        out.append(f"| {c} | {k['n']} | {oc} | {k['explained_true_above_1.3']} |")
+        out.append(
+            f"| {c} | {k['n']} | {oc} | {k['explained_true_above_1.3']} | "
+            f"{k.get('noise_overestimated', 0)} |"
+        )
     out += ["", "## Per hidden effect", "", "| class | effect | outcomes |", "| --- | --- | --- |"]
     for lab, cells in summary.get("by_effect", {}).items():
         for name, cnt in sorted(cells.items()):
@@ -407,6 +440,8 @@ def print_summary(summary: dict) -> None:
         extra = ""
         if k["explained_true_above_1.3"]:
             extra += f"  explained:true>1.3: {k['explained_true_above_1.3']}"
+        if k.get("noise_overestimated"):
+            extra += f"  noise estimate >{NOISE_RATIO_LIMIT}x truth: {k['noise_overestimated']}"
         if k.get("not_flagged_named"):
             extra += f"  not flagged named: {k['not_flagged_named']}"
         if k.get("audit_abs_relative_error_max") is not None:
