@@ -117,6 +117,21 @@ def _ar1_apply(x: np.ndarray, phi: float) -> np.ndarray:
     return fwd + bwd - x
 
 
+def _detrended(segments: Sequence[np.ndarray], degree: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Each segment long enough (``degree + 5`` samples) without its least-squares
+    polynomial of ``degree``, with the trend's orthonormal basis."""
+    q = degree + 1
+    out = []
+    for seg in segments:
+        seg = np.asarray(seg, dtype=float)
+        if len(seg) < q + 4:
+            continue
+        t = np.linspace(-1.0, 1.0, len(seg))
+        basis, _ = np.linalg.qr(np.vander(t, q, increasing=True))
+        out.append((seg - basis @ (basis.T @ seg), basis))
+    return out
+
+
 def ar1_from_segments(segments: Sequence[np.ndarray], degree: int) -> NoiseModel | None:
     """AR(1) noise of segments that hold noise plus a polynomial of ``degree``.
 
@@ -131,13 +146,7 @@ def ar1_from_segments(segments: Sequence[np.ndarray], degree: int) -> NoiseModel
     q = degree + 1
     s0 = s1 = 0.0
     kept = []
-    for seg in segments:
-        seg = np.asarray(seg, dtype=float)
-        if len(seg) < q + 4:
-            continue
-        t = np.linspace(-1.0, 1.0, len(seg))
-        basis, _ = np.linalg.qr(np.vander(t, q, increasing=True))
-        x = seg - basis @ (basis.T @ seg)
+    for x, basis in _detrended(segments, degree):
         s0 += float(x @ x)
         s1 += float(x[1:] @ x[:-1])
         kept.append(basis)
@@ -171,14 +180,7 @@ def ar_from_segments(
     if base is None or base.sigma == 0.0 or max_order < 2:
         return base
     q = degree + 1
-    xs = []
-    for seg in segments:
-        seg = np.asarray(seg, dtype=float)
-        if len(seg) < q + 4:
-            continue
-        t = np.linspace(-1.0, 1.0, len(seg))
-        basis, _ = np.linalg.qr(np.vander(t, q, increasing=True))
-        xs.append(seg - basis @ (basis.T @ seg))
+    xs = [x for x, _ in _detrended(segments, degree)]
     best: tuple[float, int, np.ndarray] | None = None
     for p in range(1, max_order + 1):
         rows, target = [], []
