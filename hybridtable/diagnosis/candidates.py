@@ -5,7 +5,6 @@ look-alikes, and the :class:`Diagnosis` result.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -39,7 +38,6 @@ __all__ = [
     "Diagnosis",
     "evaluate_candidate",
     "judge",
-    "velocity_error",
     "mark_lookalikes",
     "closed_loop_summary",
     "rank_candidates",
@@ -231,11 +229,9 @@ def evaluate_candidate(
     base_error: tuple[float, dict[str, float]],
     effect: Effect,
     residuals,
-    always_heldout: bool,
-    stage: str,
     base_heldout: float = math.nan,
 ) -> Candidate:
-    """Fit ``effect`` on top of ``base_fit`` and judge it (:func:`judge`).
+    """Fit the replay effect ``effect`` on top of ``base_fit`` and judge it (:func:`judge`).
 
     ``base_heldout`` is the held-out error of the base model (noise units;
     NaN: its in-sample error), against which the effect's practical
@@ -246,22 +242,19 @@ def evaluate_candidate(
     starts = starts_for(effect, ev.scale, residuals)
     if base_fit.effects:
         # The new effect alone on the fixed base first; jointly only if it helps.
-        fit = fit_effects(ev, names, start=start, fixed=base_fit.values, starts=starts, stage=stage)
+        fit = fit_effects(ev, names, start=start, fixed=base_fit.values, starts=starts)
         fit.n_parameters += base_fit.n_parameters
         if delta_bic(base_fit, fit) > 0.0:
-            joint = fit_effects(ev, names, start=fit.values, stage=stage)
+            joint = fit_effects(ev, names, start=fit.values)
             if delta_bic(base_fit, joint) > delta_bic(base_fit, fit):
                 joint.nfev += fit.nfev
                 fit = joint
     else:
-        fit = fit_effects(ev, names, start=start, starts=starts, stage=stage)
-    if stage == "replay":
-        err_after, chan_after = pooled_error(ev.data, fit.evaluations)
-    else:
-        err_after, chan_after = velocity_error(fit.evaluations)
+        fit = fit_effects(ev, names, start=start, starts=starts)
+    err_after, chan_after = pooled_error(ev.data, fit.evaluations)
     c = Candidate(
         effect=effect.name,
-        stage=stage,
+        stage="replay",
         parameters=dict(fit.values[effect.name]),
         model=names,
         model_values={n: dict(v) for n, v in fit.values.items()},
@@ -277,11 +270,11 @@ def evaluate_candidate(
         fit=fit,
         heldout_error_before=base_heldout if math.isfinite(base_heldout) else base_error[0],
     )
-    judge(ev, base_fit, c, always_heldout)
+    judge(ev, base_fit, c)
     return c
 
 
-def judge(ev: Evaluator, base_fit: Fit, c: Candidate, always_heldout: bool = False) -> None:
+def judge(ev: Evaluator, base_fit: Fit, c: Candidate) -> None:
     """Decide whether the fitted candidate ``c`` (its :attr:`Candidate.fit`) may
     enter the model ``base_fit``, and say why.
 
@@ -297,12 +290,10 @@ def judge(ev: Evaluator, base_fit: Fit, c: Candidate, always_heldout: bool = Fal
     c.delta_bic = dbic
     if fit.failed:
         c.notes.append("a model run failed during the fit")
-    if dbic > BIC_THRESHOLD or always_heldout:
+    if dbic > BIC_THRESHOLD:
         held = heldout(ev, base_fit.evaluations, names, fit.values, c.stage)
     else:
         held = HeldOut(math.nan, math.nan, [])
-    if c.stage != "replay" and len(ev.data) > 1:
-        held.error = math.nan
     c.heldout_z = held.z
     c.heldout_error_after = held.error
     one_run = len(ev.data) < 2
@@ -345,13 +336,6 @@ def judge(ev: Evaluator, base_fit: Fit, c: Candidate, always_heldout: bool = Fal
             + f") and removes {c.excess_removed:.0%} of the held-out excess error "
             f"({c.heldout_error_before:.3f} -> {after:.3f}x the noise)"
         )
-
-
-def velocity_error(evaluations: Mapping[int, Evaluation]) -> tuple[float, dict[str, float]]:
-    """RMS closed-loop ``v_des`` residual (m/s) over the runs, and per channel."""
-    sq = [float(np.mean(ev.residual["v_des_m_per_s"] ** 2)) for ev in evaluations.values()]
-    rms = math.sqrt(float(np.mean(sq)))
-    return rms, {"v_des_m_per_s": rms}
 
 
 def mark_lookalikes(candidates: list[Candidate]) -> None:

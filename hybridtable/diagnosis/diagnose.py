@@ -90,7 +90,7 @@ _STATE: dict = {}
 
 def _candidate_job(job):
     ev = _STATE["ev"]
-    name, always = job
+    name = job
     sims = ev.simulations
     c = evaluate_candidate(
         ev,
@@ -98,14 +98,12 @@ def _candidate_job(job):
         _STATE["base_error"],
         get_effect(name),
         _STATE["residuals"],
-        always,
-        "replay",
         _STATE["base_heldout"],
     )
     return c, ev.simulations - sims
 
 
-def _run_round(ev, base_fit, base_error, base_heldout, names, always_heldout, workers, progress):
+def _run_round(ev, base_fit, base_error, base_heldout, names, workers, progress):
     residuals = residual_probe(ev.data, base_fit.evaluations)
     _STATE.update(
         ev=ev,
@@ -114,9 +112,8 @@ def _run_round(ev, base_fit, base_error, base_heldout, names, always_heldout, wo
         base_heldout=base_heldout,
         residuals=residuals,
     )
-    jobs = [(n, always_heldout) for n in names]
     # Expensive effects first, so two workers finish together.
-    jobs.sort(key=lambda j: -len(get_effect(j[0]).parameters))
+    jobs = sorted(names, key=lambda n: -len(get_effect(n).parameters))
     out = pool_map(_candidate_job, jobs, workers, progress, f"fit {len(jobs)} effect(s)")
     ev.simulations += sum(s for _, s in out)
     _STATE.clear()
@@ -157,7 +154,6 @@ def _forward(ev, names, selected, base_fit, staircase, rounds, max_effects, work
             base_error,
             staircase[-1]["heldout_error"],
             pool,
-            False,
             workers,
             progress,
         )
