@@ -1036,6 +1036,18 @@ def _computer_flags(compensator: str) -> tuple[bool, bool]:
     return compensator in ("SDC", "SDMDC"), compensator in ("MDC", "SDMDC")
 
 
+def _compensate(f_mea, f_prev, p_act, u_prev, db, sdc, mdc, lead, kc, h) -> float:
+    """Step 2 of the format: deadband, lead (SDC), stiffness (MDC), clamp at 0."""
+    if f_mea <= db:
+        return 0.0
+    fc = f_mea
+    if sdc:
+        fc += lead * (f_mea - f_prev) / h
+    if mdc:
+        fc += kc * (u_prev - p_act)
+    return fc if fc > 0.0 else 0.0
+
+
 def _loop_fast(ph: _Physics, v0: float, comp: str, n: int, nf, npos) -> dict:
     rig = ph.rig
     h = rig.h
@@ -1088,16 +1100,7 @@ def _loop_fast(ph: _Physics, v0: float, comp: str, n: int, nf, npos) -> dict:
         p_act = p + ph.pos_bias + npl[k]
         if f_prev is None:
             f_prev = f_mea
-        if f_mea <= db:
-            fc = 0.0
-        else:
-            fc = f_mea
-            if sdc:
-                fc += lead * (f_mea - f_prev) / h
-            if mdc:
-                fc += kc * (u_prev - p_act)
-            if fc < 0.0:
-                fc = 0.0
+        fc = _compensate(f_mea, f_prev, p_act, u_prev, db, sdc, mdc, lead, kc, h)
         v += -fc / m * h
         x += v * h
         out_p_des[k] = x
@@ -1214,16 +1217,7 @@ def _loop_fine(ph: _Physics, v0: float, comp: str, n: int, nf, npos) -> dict:
         p_act = pe + ph.pos_bias + npos[k]
         if f_prev is None:
             f_prev = f_mea
-        if f_mea <= db:
-            fc = 0.0
-        else:
-            fc = f_mea
-            if sdc:
-                fc += lead * (f_mea - f_prev) / h
-            if mdc:
-                fc += kc * (u_prev - p_act)
-            if fc < 0.0:
-                fc = 0.0
+        fc = _compensate(f_mea, f_prev, p_act, u_prev, db, sdc, mdc, lead, kc, h)
         v += -fc / m * h
         x += v * h
         res["p_des"][k] = x
