@@ -10,6 +10,12 @@ __all__ = ["register", "run"]
 
 def register(sub) -> None:
     from hybridtable.commands._common import add_run_arguments, parse_float
+    from hybridtable.commands._model_options import (
+        add_effect_argument,
+        add_model_argument,
+        add_plugin_argument,
+        add_save_model_arguments,
+    )
 
     p = sub.add_parser(
         "compare",
@@ -27,18 +33,31 @@ def register(sub) -> None:
         default=None,
         help="longest lag of the whiteness tests (default: 50 ticks)",
     )
-    p.add_argument(
-        "--add",
-        metavar="EFFECT[:param=value,...]",
-        help="also compare a model with this effect added (hybridtable diagnose's "
-        "effects) and show the error fall; parameters not given are fitted to the runs",
+    add_effect_argument(
+        p,
+        ": compare the model with these effects too and show the error fall; "
+        "parameters not given are fitted to the runs, jointly",
     )
+    add_model_argument(
+        p,
+        "compare the runs with this model (its effects and rig computer) too; "
+        "with --add, the added effects are fitted on top of it",
+    )
+    add_plugin_argument(p)
+    add_save_model_arguments(p)
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     from hybridtable.commands._common import check_outputs, input_paths, write_json_atomic
+    from hybridtable.commands._model_options import (
+        check_model_output,
+        load_model_arg,
+        load_plugins,
+        parse_added,
+        write_model,
+    )
     from hybridtable.measurement.comparison import check_comparable, compare_run
     from hybridtable.measurement.run_reader import parse_column_map, read_runs
     from hybridtable.reports.compare import REPORT_MARKER, format_table, write_report
@@ -47,15 +66,16 @@ def run(args: argparse.Namespace) -> int:
         from hybridtable._validation import check_positive
 
         check_positive("--max-lag-s", args.max_lag_s)
+    load_plugins(args)
+    added = parse_added(args)  # a malformed --add before any work
+    base = load_model_arg(args)
     column_map = parse_column_map(args.column_map)
     runs = read_runs(args.runs, column_map)
     for r in runs:  # every defect before any work
         check_comparable(r)
-    check_outputs(args.json, args.report, input_paths(runs), "compare", REPORT_MARKER)
-    if args.add:  # a malformed --add before any work
-        from hybridtable.diagnosis.registry import parse_effect_spec
-
-        parse_effect_spec(args.add)
+    inputs = input_paths(runs)
+    check_outputs(args.json, args.report, inputs, "compare", REPORT_MARKER)
+    check_model_output(args.save_model, args.force, inputs)
     quiet = args.json == "-"
     iterator = runs
     if len(runs) > 1 and not args.no_progress and not quiet:
@@ -64,17 +84,21 @@ def run(args: argparse.Namespace) -> int:
         iterator = tqdm(runs, desc="compare", unit="run", file=sys.stderr, leave=False)
     comparisons = [compare_run(r, max_lag_s=args.max_lag_s) for r in iterator]
     document = {"runs": [c.to_json() for c in comparisons]}
-    if args.add:
-        comparisons, added = _compare_with_effect(
-            runs, comparisons, args.add, args.max_lag_s, quiet
+    model = None
+    if added or base is not None:
+        model, comparisons, document = _compare_with_model(
+            runs, comparisons, added, base, args, quiet
         )
-        document = {
-            "runs": [c.to_json() for c in comparisons],
-            "nominal_runs": document["runs"],
-            "added_effect": added,
-        }
     elif not quiet:
         print(format_table(comparisons))
+    if args.save_model:
+        if model is None:
+            from hybridtable.diagnosis.model_file import RigModel
+
+            model = RigModel.from_runs(runs, [], source="compare")
+        write_model(args.save_model, model)
+        if not quiet:
+            print(f"wrote the model to {args.save_model}: {model.describe()}")
     if args.json:
         write_json_atomic(args.json, document)
     if args.report:
@@ -84,26 +108,52 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _compare_with_effect(runs, nominal, text: str, max_lag_s, quiet: bool):
-    """``compare --add``: the comparisons with the effect of ``text`` added
-    (parameters not given fitted), printed beside the nominal ones."""
-    from hybridtable.diagnosis.add_effect import compare_with_effect
+def _compare_with_model(runs, nominal, added, base, args, quiet: bool):
+    """``compare --add`` / ``--model``: the comparisons with the model (the
+    added effects fitted where their values are not given), printed beside
+    the nominal ones."""
+    from dataclasses import replace
+
+    from hybridtable.diagnosis.add_effect import (
+        added_json,
+        compare_with_model,
+        model_with_effects,
+    )
     from hybridtable.reports.compare import format_error_fall, format_table
-    from hybridtable.reports.diagnose import format_parameters
 
     def notify(message: str) -> None:
         if not quiet:
             print(message, file=sys.stderr)
 
-    comparisons, added = compare_with_effect(runs, text, max_lag_s, notify)
+    if base is not None:
+        for line in base.rig_differences(runs):
+            notify(f"warning: {line}")
+    if added:
+        model = model_with_effects(runs, added, base, notify)
+    else:
+        model = base
+    comparisons = compare_with_model(runs, model, args.max_lag_s)
+    evidence = {
+        "error_to_noise_nominal": {c.run_id: c.to_json()["error_to_noise"] for c in nominal},
+        "error_to_noise": {c.run_id: c.to_json()["error_to_noise"] for c in comparisons},
+    }
+    if added:
+        model = replace(model, evidence=evidence)
+    names = [e.name for e, _ in added]
+    label = model.describe()
     if not quiet:
-        fitted = added["fitted"]
-        label = f"{added['effect']}: {format_parameters(added['effect'], added['parameters'])}"
         print("nominal model:")
         print(format_table(nominal))
         print()
-        print(f"with {label}" + (f" (fitted: {', '.join(fitted)})" if fitted else ""))
+        print(f"with {label}")
         print(format_table(comparisons))
         print()
-        print(format_error_fall(nominal, comparisons, added["effect"]))
-    return comparisons, added
+        print(format_error_fall(nominal, comparisons, "+".join(model.effect_names) or "the model"))
+    document = {
+        "runs": [c.to_json() for c in comparisons],
+        "nominal_runs": [c.to_json() for c in nominal],
+        "model": model.to_json(),
+        "model_file": args.model,
+        "added_effects": added_json(model, names),
+    }
+    return model, comparisons, document

@@ -26,6 +26,10 @@ BUILTIN_EFFECT_NAMES: tuple[str, ...] = (
 
 def register(sub) -> None:
     from hybridtable.commands._common import add_run_arguments
+    from hybridtable.commands._model_options import (
+        add_plugin_argument,
+        add_save_model_arguments,
+    )
 
     p = sub.add_parser(
         "diagnose",
@@ -58,6 +62,8 @@ def register(sub) -> None:
     p.add_argument(
         "--workers", type=int, default=None, help="processes fitting in parallel (default: 2)"
     )
+    add_plugin_argument(p)
+    add_save_model_arguments(p)
     p.add_argument("--no-progress", action="store_true", help="no progress output")
     p.set_defaults(func=run)
 
@@ -71,6 +77,7 @@ def diagnosis_json(d) -> dict:
 
 def run(args: argparse.Namespace) -> int:
     from hybridtable.commands._common import check_outputs, input_paths, write_json_atomic
+    from hybridtable.commands._model_options import check_model_output, load_plugins, write_model
     from hybridtable.diagnosis.diagnose import diagnose
     from hybridtable.diagnosis.registry import get_effect
     from hybridtable.errors import CommandError
@@ -82,6 +89,7 @@ def run(args: argparse.Namespace) -> int:
         write_report,
     )
 
+    load_plugins(args)
     effects = None
     if args.effects:
         effects = [e.strip() for e in args.effects.split(",") if e.strip()]
@@ -96,6 +104,7 @@ def run(args: argparse.Namespace) -> int:
     runs = read_runs(args.runs, parse_column_map(args.column_map))
     inputs = input_paths(runs)
     check_outputs(args.json, args.report, inputs, "diagnose", REPORT_MARKER)
+    check_model_output(args.save_model, args.force, inputs)
     quiet = args.json == "-"
     if not quiet and not args.no_progress:
         print(f"diagnosing {len(runs)} run(s)...", file=sys.stderr)
@@ -111,6 +120,13 @@ def run(args: argparse.Namespace) -> int:
         print()
         print(format_ranking(d))
         print(f"({d.simulations} model runs, {d.wall_time_s:.1f} s)")
+    if args.save_model:
+        from hybridtable.diagnosis.model_file import model_from_diagnosis
+
+        model = model_from_diagnosis(d)
+        write_model(args.save_model, model)
+        if not quiet:
+            print(f"wrote the model to {args.save_model}: {model.describe()}")
     if args.json:
         write_json_atomic(args.json, diagnosis_json(d))
     if args.report:

@@ -129,6 +129,8 @@ class Diagnosis:
     lookalikes: dict[str, list[str]] = field(default_factory=dict)
     wall_time_s: float = math.nan
     notes: list[str] = field(default_factory=list)
+    #: Standard errors of ``selected_values`` (:func:`~hybridtable.diagnosis.fit.parameter_std`).
+    selected_std: dict[str, dict[str, float | None]] = field(default_factory=dict)
 
     @property
     def ranking(self) -> list[Candidate]:
@@ -182,6 +184,7 @@ class Diagnosis:
             "physical": list(self.selected),
             "computer": list(self.audit.effects),
             "parameters": {n: dict(v) for n, v in named_values.items()},
+            "parameter_std": {n: dict(v) for n, v in self.selected_std.items()},
             "lookalikes": {k: list(v) for k, v in self.lookalikes.items()},
             "remaining": self.remaining(),
             "audit": self.audit.to_json(),

@@ -70,7 +70,14 @@ from hybridtable.diagnosis.candidates import (
 from hybridtable.diagnosis.design import separating_run
 from hybridtable.diagnosis.effects import ModelSpec, RigScale
 from hybridtable.diagnosis.evaluate import Evaluator, prepare_runs
-from hybridtable.diagnosis.fit import Fit, fit_effects, model_spec, pooled_error, residual_probe
+from hybridtable.diagnosis.fit import (
+    Fit,
+    fit_effects,
+    model_spec,
+    parameter_std,
+    pooled_error,
+    residual_probe,
+)
 from hybridtable.diagnosis.goodness import goodness_of_fit
 from hybridtable.diagnosis.registry import effect_names, get_effect
 from hybridtable.diagnosis.search import pairs_and_swaps
@@ -273,6 +280,7 @@ def diagnose(
             goodness = goodness_of_fit(data, final_fit.evaluations)
 
     selected_values = {n: dict(final_fit.values[n]) for n in selected}
+    selected_std = parameter_std(ev, final_fit) if selected else {}
     heldout_error = staircase[-1]["heldout_error"]
     explained = bool(goodness.passed and heldout_error <= EXPLAINED_MAX_ERROR)
     named = [*audit.effects, *selected]
@@ -314,6 +322,7 @@ def diagnose(
         verdict=verdict,
         selected=selected,
         selected_values=selected_values,
+        selected_std={n: dict(selected_std.get(n, {})) for n in selected},
         rounds=rounds,
         staircase=staircase,
         nominal=nominal.evaluations,

@@ -247,6 +247,53 @@ class ModelSpec:
             name=name,
         )
 
+    def linear_changes(self, params: Any) -> tuple[dict[str, float], list[str]]:
+        """The model as changes of the linear loop's physical parameters.
+
+        The linear models of :mod:`hybridtable.analysis` know a linear spring,
+        viscous damping and a pure sensor delay. Returns the changes of
+        ``params`` (a :class:`~hybridtable.loop.params.HybridLoopParams`;
+        names in :data:`~hybridtable.measurement.rig.PHYSICS_PARAMS`) that
+        represent this model there, and, in words, what they leave out:
+
+        - ``damping_n_s_per_m`` -> ``contact_damping_n_s_per_m``;
+        - ``stiffness_n_per_m`` -> ``contact_stiffness_n_per_m``;
+        - ``series_compliance_m_per_n`` ``s`` -> the series stiffness
+          ``k / (1 + k s)`` (exact for a massless structure);
+        - ``extra_delay_s`` -> added to ``sensor_delay_s``;
+        - ``bias_n``: a constant offset moves no pole (nothing to change);
+        - any other change (a nonlinear law, friction, a filter, a mode, a
+          user's wrapped system) is left out and named.
+        """
+        changes: dict[str, float] = {}
+        left: list[str] = []
+        contact = dict(self.contact)
+        k = float(contact.pop("stiffness_n_per_m", params.contact_stiffness_n_per_m))
+        if contact.pop("exponent", 1.0) != 1.0:
+            left.append("the nonlinear contact stiffness (exponent != 1)")
+        contact.pop("reference_deflection_m", None)
+        s = float(contact.pop("series_compliance_m_per_n", 0.0))
+        if k != params.contact_stiffness_n_per_m or s:
+            changes["contact_stiffness_n_per_m"] = k / (1.0 + k * s)
+        if "damping_n_s_per_m" in contact:
+            changes["contact_damping_n_s_per_m"] = float(contact.pop("damping_n_s_per_m"))
+        contact.pop("friction_velocity_m_per_s", None)
+        for key, value in contact.items():
+            if value:
+                left.append(f"contact {key} = {value:g} (not linear)")
+        sensor = dict(self.sensor)
+        if sensor.get("extra_delay_s"):
+            changes["sensor_delay_s"] = params.sensor_delay_s + float(sensor["extra_delay_s"])
+        if sensor.get("time_constant_s"):
+            left.append(f"the sensor's low pass ({sensor['time_constant_s']:g} s)")
+        if self.table:
+            left.append(
+                f"the table's structural mode ({self.table.get('frequency_hz', math.nan):g} Hz)"
+            )
+        for component, _ in self.wrappers:
+            left.append(f"a user effect's {component} system")
+        return changes, left
+
     def closed_loop_run(self, run: Run) -> Run:
         """``run`` with the spacecraft mass the model integrates with."""
         if self.mass_ratio == 1.0:

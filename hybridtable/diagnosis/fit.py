@@ -15,12 +15,15 @@ from hybridtable.diagnosis.effects import Effect, ModelSpec, RigScale
 from hybridtable.diagnosis.evaluate import Evaluation, Evaluator, RunData, prepare_runs
 from hybridtable.diagnosis.registry import build_spec, get_effect
 from hybridtable.diagnosis.settings import CHANNELS, FIT_ACCURACY
+from hybridtable.errors import ParameterError
 from hybridtable.measurement.run_format import Run
 
 __all__ = [
     "Fit",
     "fit_effects",
     "fit_effect",
+    "fit_given",
+    "parameter_std",
     "delta_bic",
     "pooled_error",
     "HeldOut",
@@ -292,6 +295,113 @@ def fit_effect(
         residuals = residual_probe(data, base.evaluations)
         fit = fit_effects(ev, [name], fixed=fixed, starts=starts_for(effect, scale, residuals))
     return dict(fit.values[name])
+
+
+def fit_given(
+    runs: Sequence[Run],
+    given: Sequence[tuple[Effect, Mapping[str, float]]],
+    accuracy: float = FIT_ACCURACY,
+    uncertainty: bool = True,
+) -> tuple[dict[str, dict[str, float]], dict[str, dict[str, float | None]]]:
+    """Fit the effects of ``given`` jointly to ``runs``, their given values held.
+
+    Returns the values (effect -> parameter -> value, SI units) and their
+    standard errors (:func:`parameter_std`; ``None`` for a value given, or
+    for every value when ``uncertainty`` is false). A closed-loop effect
+    (``mass_error``) is fitted on the closed loop's ``v_des``; it cannot be
+    fitted together with another effect's free parameters.
+
+    Raises
+    ------
+    ParameterError
+        For a value out of bounds, or a closed-loop effect with free
+        parameters combined with other effects.
+    """
+    data = prepare_runs(runs)
+    scale = RigScale.from_runs(runs)
+    names = [e.name for e, _ in given]
+    fixed = {e.name: {k: e.check_values(v, scale)[k] for k in v} for e, v in given}
+    free = {
+        e.name for e in (e for e, _ in given) for p in e.parameters if p.name not in fixed[e.name]
+    }
+    closed = [e.name for e, _ in given if e.stage == "closed_loop"]
+    ev = Evaluator(data, scale, accuracy)
+    if closed and len(given) > 1 and free:
+        raise ParameterError(
+            f"{closed[0]} is seen in the closed loop only: fit it alone, or give every "
+            "parameter of the other effects"
+        )
+    stage = "closed_loop" if closed else "replay"
+    if stage == "closed_loop":
+        ev.inject_noise(fit_effects(ev, []).evaluations)
+        ev.calibrate_closed_loop(fit_effects(ev, [], stage="closed_loop").evaluations)
+        fit = fit_effects(ev, names, fixed=fixed, stage=stage)
+    else:
+        starts: list = []
+        if free:
+            residuals = residual_probe(data, fit_effects(ev, []).evaluations)
+            for e, _ in given:
+                if e.name in free:
+                    starts += starts_for(e, scale, residuals)
+        fit = fit_effects(ev, names, fixed=fixed, starts=starts)
+    std = (
+        parameter_std(ev, fit, fixed)
+        if uncertainty
+        else {n: dict.fromkeys(fit.values[n]) for n in names}
+    )
+    return {n: dict(fit.values[n]) for n in names}, std
+
+
+def parameter_std(
+    ev: Evaluator, fit: Fit, fixed: Mapping[str, Mapping[str, float]] | None = None
+) -> dict[str, dict[str, float | None]]:
+    """Standard errors of a fit's free parameters, SI units.
+
+    The linearized least-squares covariance ``s^2 (J^T J)^-1`` of the whitened
+    residuals (``J`` by central differences of a hundredth of each
+    parameter's typical change, one-sided at a bound), with
+    ``s^2 = max(1, RSS / (N - p))``: the residuals are in noise units, and a
+    misfit larger than the noise widens the errors rather than narrowing
+    them. ``None`` for a parameter held fixed, and for all when the
+    parameters are not identifiable (a singular ``J^T J``).
+    """
+    fixed = fixed or {}
+    scale = ev.scale
+    names = list(fit.effects)
+    free = [
+        (n, p) for n in names for p in get_effect(n).parameters if p.name not in fixed.get(n, {})
+    ]
+    out: dict[str, dict[str, float | None]] = {n: dict.fromkeys(fit.values[n]) for n in names}
+    if not free:
+        return out
+
+    def stack(vals) -> np.ndarray:
+        spec = model_spec(names, vals, scale)
+        evs = [ev.evaluate(spec, i, fit.stage) for i in fit.indices]
+        return np.concatenate([w for e in evs for w in e.whitened.values()])
+
+    r0 = np.concatenate([w for i in fit.indices for w in fit.evaluations[i].whitened.values()])
+    jac = np.empty((r0.size, len(free)))
+    for j, (n, p) in enumerate(free):
+        lo, hi = p.bounds(scale)
+        step = 1e-2 * p.typical(scale)
+        x = fit.values[n][p.name]
+        up, down = min(x + step, hi), max(x - step, lo)
+        if up <= down:
+            return out
+        vals_up = {k: dict(v) for k, v in fit.values.items()}
+        vals_dn = {k: dict(v) for k, v in fit.values.items()}
+        vals_up[n][p.name], vals_dn[n][p.name] = up, down
+        jac[:, j] = (stack(vals_up) - stack(vals_dn)) / (up - down)
+    dof = max(r0.size - len(free), 1)
+    s2 = max(1.0, float(r0 @ r0) / dof)
+    jtj = jac.T @ jac
+    if not np.all(np.isfinite(jtj)) or np.linalg.cond(jtj) > 1e14:
+        return out
+    cov = s2 * np.linalg.inv(jtj)
+    for j, (n, p) in enumerate(free):
+        out[n][p.name] = math.sqrt(max(float(cov[j, j]), 0.0))
+    return out
 
 
 def starts_for(effect: Effect, scale: RigScale, residuals) -> list[dict[str, dict[str, float]]]:

@@ -8,7 +8,11 @@ use), a script through :func:`register_effect`.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+import importlib
+import importlib.util
+import sys
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
 
 from hybridtable.diagnosis.effects import Effect, ModelSpec, RigScale
 from hybridtable.diagnosis.library import builtin_effects
@@ -22,7 +26,9 @@ __all__ = [
     "effect_names",
     "get_effect",
     "parse_effect_spec",
+    "parse_effect_specs",
     "build_spec",
+    "load_plugin",
 ]
 
 
@@ -131,6 +137,107 @@ def parse_effect_spec(text: str) -> tuple[Effect, dict[str, float]]:
         except ValueError:
             raise ParameterError(f"--add {text}: {key} is not a number ({value!r})") from None
     return effect, values
+
+
+def parse_effect_specs(
+    texts: Sequence[str], flag: str = "--add"
+) -> list[tuple[Effect, dict[str, float]]]:
+    """Several ``EFFECT[:param=value,...]`` (a repeated ``--add``), in order.
+
+    Raises
+    ------
+    ParameterError
+        For a malformed spec, or an effect given twice or two effects that
+        change the same part of the model (e.g. two contact laws).
+    """
+    out: list[tuple[Effect, dict[str, float]]] = []
+    for text in texts:
+        effect, values = parse_effect_spec(text)
+        for other, _ in out:
+            if other.name == effect.name:
+                raise ParameterError(f"{flag} {effect.name}: given twice (give it once)")
+            if effect.conflicts_with(other):
+                raise ParameterError(
+                    f"{flag} {effect.name} and {other.name} both change "
+                    f"{', '.join(sorted(set(effect.touches) & set(other.touches)))}; "
+                    "give one of them"
+                )
+        out.append((effect, values))
+    return out
+
+
+def _import_module(where: str, text: str):
+    """The module named ``where``, or the Python file at the path ``where``."""
+    path = Path(where)
+    if where.endswith(".py") or path.is_file():
+        if not path.is_file():
+            raise ParameterError(f"--plugin {text}: no such file {where}")
+        name = f"hybridtable_plugin_{path.stem}_{abs(hash(str(path.resolve()))):x}"
+        if name in sys.modules:
+            return sys.modules[name]
+        spec = importlib.util.spec_from_file_location(name, path)
+        if spec is None or spec.loader is None:
+            raise ParameterError(f"--plugin {text}: cannot load {where} as Python")
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module
+        try:
+            spec.loader.exec_module(module)
+        except Exception as err:
+            del sys.modules[name]
+            raise ParameterError(f"--plugin {text}: {where} failed to load: {err!r}") from None
+        return module
+    try:
+        return importlib.import_module(where)
+    except ModuleNotFoundError as err:
+        raise ParameterError(
+            f"--plugin {text}: no module {err.name!r} (give an importable module "
+            "or the path of a .py file)"
+        ) from None
+    except Exception as err:
+        raise ParameterError(f"--plugin {text}: module {where} failed to load: {err!r}") from None
+
+
+def load_plugin(text: str) -> list[Effect]:
+    """Register the effect(s) of ``MODULE:ATTR`` and return them.
+
+    ``MODULE`` is an importable module (``my_lab.effects``) or the path of a
+    Python file (``./backlash.py``); ``ATTR`` names an
+    :class:`~hybridtable.diagnosis.effects.Effect` or a list or tuple of them.
+    Loading the same plug-in twice registers it once.
+
+    Raises
+    ------
+    ParameterError
+        One line: a malformed spec, a module or file that does not load, a
+        missing attribute, an attribute that is not an effect, a name that
+        another effect already has.
+    """
+    where, colon, attr = text.strip().rpartition(":")
+    if not colon or not where or not attr.isidentifier():
+        raise ParameterError(f"--plugin {text}: expected MODULE:ATTR or FILE.py:ATTR")
+    module = _import_module(where, text)
+    try:
+        found = getattr(module, attr)
+    except AttributeError:
+        raise ParameterError(f"--plugin {text}: {where} has no attribute {attr!r}") from None
+    items = (
+        list(found) if isinstance(found, Iterable) and not isinstance(found, Effect) else [found]
+    )
+    if not items or not all(isinstance(e, Effect) for e in items):
+        raise ParameterError(
+            f"--plugin {text}: {attr} is not an Effect or a list of them "
+            f"(got {type(found).__name__})"
+        )
+    _load_entry_points()
+    for effect in items:
+        if EFFECTS.get(effect.name) is not effect:
+            if effect.name in EFFECTS:
+                raise ParameterError(
+                    f"--plugin {text}: an effect named {effect.name!r} is already "
+                    "registered (rename the plug-in's effect)"
+                )
+            register_effect(effect)
+    return items
 
 
 def build_spec(

@@ -237,17 +237,30 @@ def set_table_initial_state(table: System, context, params: HybridLoopParams) ->
         setter(context, ic["p_act_m"], ic["v_act_m_per_s"])
 
 
-def build_rig_loop(run: Run, physics: RigPhysics | None = None):
-    """The closed loop of a run's rig as a built :class:`~hybridtable.loop.builder.HybridLoop`."""
+def build_rig_loop(run: Run, physics: RigPhysics | None = None, noise=None):
+    """The closed loop of a run's rig as a built :class:`~hybridtable.loop.builder.HybridLoop`.
+
+    With ``noise`` (a :class:`~hybridtable.systems.noise.MeasurementNoiseParams`),
+    the rig computer reads the force and the table position through it; the
+    loop's log keeps the noise-free signals.
+    """
     physics = physics or RigPhysics()
     params = _run_params(run, physics)
     builder = DiagramBuilder()
+    compensator = None
+    if noise is not None:
+        from hybridtable.compensators.registry import make_compensator
+        from hybridtable.systems.noise import with_measurement_noise
+
+        h = params.sample_period_s
+        compensator = with_measurement_noise(make_compensator(params, h), noise, h)
     loop = add_hybrid_loop(
         builder,
         params,
         table=physics.make_table(params),
         contact=physics.make_contact(params),
         sensor=physics.make_sensor(params),
+        compensator=compensator,
     )
     loop.diagram = builder.Build()
     loop.diagram.set_name(f"rig_loop_{run.run_id}")
@@ -270,12 +283,16 @@ def simulate_rig(
     physics: RigPhysics | None = None,
     integrator: str = "runge_kutta3",
     accuracy: float = 1e-8,
+    noise=None,
 ) -> SimulationResult:
     """Re-run the rig's whole loop from the run's initial state, for the
     record's full duration, and return one row per recorded tick.
 
     Row ``k`` has the ``hybridtable-run/1`` meaning (what the computer read at
     tick ``k``, the force it computed, the spacecraft state after the tick).
+    ``noise``: as in :func:`build_rig_loop` (the rows hold the noise-free
+    readings; :func:`~hybridtable.systems.noise.noise_series` adds what the
+    computer read).
 
     Raises
     ------
@@ -284,7 +301,7 @@ def simulate_rig(
     MeasurementError
         If the run's parameters do not make a model.
     """
-    loop = build_rig_loop(run, physics)
+    loop = build_rig_loop(run, physics, noise)
     h = run.sample_period_s
     # Logs at ticks 0 .. n (the last one gives the state after tick n - 1).
     result = run_loop(

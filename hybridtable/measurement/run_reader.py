@@ -45,6 +45,7 @@ __all__ = [
     "MeasurementError",
     "parse_column_map",
     "read_run",
+    "run_info_from_dict",
     "read_runs",
     "find_run_files",
 ]
@@ -112,6 +113,19 @@ def _read_info(path: Path) -> RunInfo:
         raise MeasurementError(
             f"{path} line {err.lineno}, column {err.colno}: not valid JSON ({err.msg})"
         ) from None
+    return run_info_from_dict(raw, str(path))
+
+
+def run_info_from_dict(raw: object, path: str) -> RunInfo:
+    """A run's JSON object as a checked :class:`RunInfo` (``path`` names it in
+    the messages).
+
+    Raises
+    ------
+    MeasurementError
+        For a missing key, a value of the wrong type or out of its range, an
+        unknown format or compensator.
+    """
     if not isinstance(raw, dict):
         raise MeasurementError(f"{path}: must hold a JSON object (got {type(raw).__name__})")
     missing = [k for k in RUN_KEYS if k not in raw]

@@ -1,17 +1,21 @@
 """Seeded measurement noise in front of a compensator.
 
 The rig computer reads noisy sensors: the measured force and the table
-position carry white noise, a new Gaussian sample every computer period, held
-in between. :func:`with_measurement_noise` puts a :class:`MeasurementNoise`
+position carry Gaussian noise, a new sample every computer period, held in
+between: white, or coloured as a stationary AR(1) sequence
+``e[k] = phi e[k-1] + sqrt(1 - phi^2) sigma w[k]`` (``phi`` the lag-one
+correlation, the same ``sigma`` whatever ``phi``). :func:`with_measurement_noise` puts a :class:`MeasurementNoise`
 between the loop's sensors and any compensator, as one system with the
 compensator's ports; the loop's log keeps the noise-free signals.
 
-The noise sequence is a function of ``(seed, channel, tick)`` only, so a run
-is reproducible and two runs with the same seed see the same noise.
+The noise sequence is a function of ``(seed, channel, tick)`` (and ``phi``)
+only, so a run is reproducible, two runs with the same seed see the same
+noise, and :func:`noise_series` gives the samples the computer read.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -21,12 +25,14 @@ from pydrake.systems.framework import BasicVector_, Diagram, DiagramBuilder, Lea
 from pydrake.systems.scalar_conversion import TemplateSystem
 
 from hybridtable._validation import check_nonnegative, check_positive
+from hybridtable.errors import ParameterError
 
 __all__ = [
     "MeasurementNoiseParams",
     "MeasurementNoise",
     "MeasurementNoise_",
     "noise_sample",
+    "noise_series",
     "with_measurement_noise",
 ]
 
@@ -43,6 +49,37 @@ def noise_sample(seed: int, channel: int, tick: int) -> float:
     return float(_chunk(seed, channel, tick // _CHUNK)[tick % _CHUNK])
 
 
+@lru_cache(maxsize=256)
+def _ar1_chunk(seed: int, channel: int, phi: float, index: int) -> np.ndarray:
+    """Chunk ``index`` of the unit-variance AR(1) sequence (each chunk
+    continues the previous one)."""
+    w = _chunk(seed, channel, index)
+    out = np.empty(_CHUNK)
+    gain = math.sqrt(1.0 - phi * phi)
+    prev = _ar1_chunk(seed, channel, phi, index - 1)[-1] if index > 0 else None
+    for k in range(_CHUNK):
+        prev = w[k] if prev is None else phi * prev + gain * w[k]
+        out[k] = prev
+    return out
+
+
+def _unit_sample(seed: int, channel: int, phi: float, tick: int) -> float:
+    if phi == 0.0:
+        return noise_sample(seed, channel, tick)
+    return float(_ar1_chunk(seed, channel, phi, tick // _CHUNK)[tick % _CHUNK])
+
+
+def noise_series(params: MeasurementNoiseParams, channel: str, n: int) -> np.ndarray:
+    """The noise of ``channel`` (``"force"``, N, or ``"position"``, m) at ticks
+    ``0 .. n - 1``: exactly what :class:`MeasurementNoise` adds."""
+    index, std = {
+        "force": (0, params.force_std_n),
+        "position": (1, params.position_std_m),
+    }[channel]
+    phi = params.ar1_coefficient
+    return np.array([std * _unit_sample(params.seed, index, phi, k) for k in range(n)])
+
+
 @dataclass(frozen=True)
 class MeasurementNoiseParams:
     """White measurement noise, SI units.
@@ -54,23 +91,33 @@ class MeasurementNoiseParams:
     position_std_m : float
         Standard deviation of the table position noise, >= 0.
     seed : int
-        Seed of the noise sequence.
+        Seed of the noise sequence, >= 0.
+    ar1_coefficient : float
+        Lag-one correlation ``phi`` of both channels' noise, in (-1, 1)
+        (0: white).
     """
 
     force_std_n: float = 0.0
     position_std_m: float = 0.0
     seed: int = 0
+    ar1_coefficient: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("force_std_n", "position_std_m"):
             object.__setattr__(self, name, check_nonnegative(name, getattr(self, name)))
+        if isinstance(self.seed, bool) or int(self.seed) != self.seed or self.seed < 0:
+            raise ParameterError(f"seed must be a whole number >= 0 (got {self.seed!r})")
         object.__setattr__(self, "seed", int(self.seed))
+        phi = float(self.ar1_coefficient)
+        if not (math.isfinite(phi) and -1.0 < phi < 1.0):
+            raise ParameterError(f"ar1_coefficient must be in (-1, 1) (got {self.ar1_coefficient})")
+        object.__setattr__(self, "ar1_coefficient", phi)
 
 
 @TemplateSystem.define("MeasurementNoise_", T_list=[float, AutoDiffXd])
 def MeasurementNoise_(T):
     class Impl(LeafSystem_[T]):
-        """Adds held white noise to the measured force and table position.
+        """Adds held noise (white or AR(1)) to the measured force and table position.
 
         Ports
         -----
@@ -101,11 +148,12 @@ def MeasurementNoise_(T):
 
         def _sample(self, tick: int) -> np.ndarray:
             p = self.params
+            phi = p.ar1_coefficient
             return np.array(
                 [
                     float(tick),
-                    p.force_std_n * noise_sample(p.seed, 0, tick),
-                    p.position_std_m * noise_sample(p.seed, 1, tick),
+                    p.force_std_n * _unit_sample(p.seed, 0, phi, tick),
+                    p.position_std_m * _unit_sample(p.seed, 1, phi, tick),
                 ]
             )
 

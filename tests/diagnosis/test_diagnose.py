@@ -309,12 +309,15 @@ def test_compare_add_shows_the_error_fall(tmp_path, capsys):
     text = capsys.readouterr().out
     assert "error fall with contact_damping" in text
     doc = json.loads(out.read_text())
-    assert doc["added_effect"] == {
-        "effect": "contact_damping",
-        "parameters": {"damping_n_s_per_m": 400.0},
-        "units": {"damping_n_s_per_m": "N s/m"},
-        "fitted": [],
-    }
+    assert doc["added_effects"] == [
+        {
+            "effect": "contact_damping",
+            "parameters": {"damping_n_s_per_m": 400.0},
+            "std": {"damping_n_s_per_m": None},
+            "units": {"damping_n_s_per_m": "N s/m"},
+            "fitted": [],
+        }
+    ]
     for before, after in zip(doc["nominal_runs"], doc["runs"], strict=True):
         assert before["error_to_noise"]["f_mea_n"] > 3.0
         assert after["error_to_noise"]["f_mea_n"] < 1.15
@@ -323,8 +326,13 @@ def test_compare_add_shows_the_error_fall(tmp_path, capsys):
         == 0
     )
     doc = json.loads(out.read_text())
-    assert doc["added_effect"]["fitted"] == ["damping_n_s_per_m"]
-    assert doc["added_effect"]["parameters"]["damping_n_s_per_m"] == pytest.approx(400, rel=0.05)
+    (added,) = doc["added_effects"]
+    assert added["fitted"] == ["damping_n_s_per_m"]
+    assert added["parameters"]["damping_n_s_per_m"] == pytest.approx(400, rel=0.05)
+    # The standard error is honest: the truth within a few of them, and small.
+    std = added["std"]["damping_n_s_per_m"]
+    assert 0.0 < std < 40.0
+    assert abs(added["parameters"]["damping_n_s_per_m"] - 400.0) < 5.0 * std + 2.0
     assert main(["compare", folder, "--add", "contact_damping:damping_n_s_per_m=-3"]) == 2
     assert "out of bounds" in capsys.readouterr().err
 

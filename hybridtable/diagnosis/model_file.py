@@ -1,0 +1,526 @@
+"""The model of a rig as a file (``hybridtable-model/1``): what ``diagnose`` or
+``compare --add`` found, carried into ``simulate``, ``margins``,
+``compensators`` and ``compare``.
+
+A :class:`RigModel` holds
+
+- the nominal parameters of the rig (the runs' JSON: ``nominal``) and the
+  scale the effects' bounds were taken at (``scale``);
+- the effects with their values, standard errors and which values were
+  fitted rather than given (``effects``);
+- what the audit found the rig computer used where its JSON differs, for the
+  whole rig (``computer``: the values every run shares) and per run;
+- the runs it was fitted to (id, files, SHA-256 of the CSV, the measured CoR,
+  their nominal parameters), where it came from, the evidence (verdict,
+  errors), the tool version and the time it was written.
+
+The file is JSON::
+
+    {"format": "hybridtable-model/1", "tool_version": "0.1.0",
+     "created": "2026-11-23T10:00:00+00:00", "source": "diagnose",
+     "nominal": {...the run format's keys...}, "scale": {...},
+     "effects": [{"name": "contact_damping",
+                  "parameters": {"damping_n_s_per_m": {"value": 301.2,
+                                  "std": 4.1, "unit": "N s/m", "fitted": true}}}],
+     "computer": {}, "runs": [...], "evidence": {...}}
+
+:func:`load_model` checks everything and raises
+:class:`~hybridtable.errors.ParameterError` with one line naming the file and
+the key: malformed JSON, another format version, an effect that is not
+registered (its plug-in not loaded), a parameter it does not have or out of
+its bounds.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import hashlib
+import json
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass, field, fields, replace
+from pathlib import Path
+from typing import Any
+
+from hybridtable.diagnosis.effects import Effect, ModelSpec, RigScale
+from hybridtable.diagnosis.registry import build_spec, get_effect
+from hybridtable.errors import MeasurementError, ParameterError
+from hybridtable.measurement.phases import cor_from_record
+from hybridtable.measurement.rig import COMPUTER_PARAMS, RigPhysics
+from hybridtable.measurement.run_format import Run, RunInfo
+from hybridtable.measurement.run_reader import run_info_from_dict
+
+__all__ = [
+    "MODEL_FORMAT",
+    "RIG_KEYS",
+    "FittedEffect",
+    "ModelRun",
+    "RigModel",
+    "tool_version",
+    "load_model",
+    "model_from_diagnosis",
+]
+
+#: Keys of the run format that describe the rig itself (not one run of it).
+RIG_KEYS: tuple[str, ...] = (
+    "sample_rate_hz",
+    "spacecraft_mass_kg",
+    "contact_stiffness_n_per_m",
+    "sensor_delay_s",
+    "table_natural_frequency_hz",
+    "table_damping_ratio",
+)
+
+#: Value of the model file's ``format`` key.
+MODEL_FORMAT = "hybridtable-model/1"
+
+
+def tool_version() -> str:
+    """The installed hybridtable's version (``"unknown"`` when not installed)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("hybridtable")
+    except PackageNotFoundError:
+        return "unknown"
+
+
+@dataclass(frozen=True)
+class FittedEffect:
+    """An effect of a model with its values (SI units).
+
+    Attributes
+    ----------
+    name : str
+        A registered effect.
+    values : mapping
+        Parameter -> value.
+    std : mapping
+        Parameter -> standard error (None: given, or not estimated).
+    fitted : tuple of str
+        The parameters fitted to the runs (the others were given).
+    """
+
+    name: str
+    values: Mapping[str, float]
+    std: Mapping[str, float | None] = field(default_factory=dict)
+    fitted: tuple[str, ...] = ()
+
+    @property
+    def effect(self) -> Effect:
+        return get_effect(self.name)
+
+
+@dataclass(frozen=True)
+class ModelRun:
+    """A run a model was fitted to."""
+
+    run_id: str
+    nominal: RunInfo
+    computer: Mapping[str, Any] = field(default_factory=dict)
+    cor_measured: float | None = None
+    csv: str | None = None
+    sha256: str | None = None
+
+
+@dataclass(frozen=True)
+class RigModel:
+    """A rig's model: the nominal parameters plus effects (see the module doc)."""
+
+    nominal: RunInfo
+    scale: RigScale
+    effects: tuple[FittedEffect, ...] = ()
+    computer: Mapping[str, Any] = field(default_factory=dict)
+    runs: tuple[ModelRun, ...] = ()
+    source: str = "user"
+    evidence: Mapping[str, Any] = field(default_factory=dict)
+    tool_version: str = field(default_factory=tool_version)
+    created: str = field(
+        default_factory=lambda: _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
+    )
+
+    # -- building ----------------------------------------------------------
+    @classmethod
+    def from_runs(
+        cls,
+        runs: Sequence[Run],
+        effects: Sequence[FittedEffect],
+        computer: Mapping[str, Mapping[str, Any]] | None = None,
+        source: str = "user",
+        evidence: Mapping[str, Any] | None = None,
+    ) -> RigModel:
+        """The model of the rig of ``runs`` with ``effects``; ``computer``
+        maps run ids to the audit's changes of the rig computer."""
+        if not runs:
+            raise ParameterError("a model needs the runs it describes")
+        computer = {k: dict(v) for k, v in (computer or {}).items()}
+        per_run = [computer.get(r.run_id, {}) for r in runs]
+        shared = {
+            k: v for k, v in per_run[0].items() if all(k in c and c[k] == v for c in per_run[1:])
+        }
+        model_runs = []
+        for r, c in zip(runs, per_run, strict=True):
+            try:
+                cor = cor_from_record(r.v_des_m_per_s, r.f_comp_n, r.info.initial_velocity_m_per_s)[
+                    0
+                ]
+            except ValueError:
+                cor = None
+            digest = hashlib.sha256(r.csv_path.read_bytes()).hexdigest() if r.csv_path else None
+            model_runs.append(
+                ModelRun(
+                    r.run_id,
+                    r.info,
+                    c,
+                    cor,
+                    str(r.csv_path) if r.csv_path else None,
+                    digest,
+                )
+            )
+        return cls(
+            nominal=runs[0].info,
+            scale=RigScale.from_runs(runs),
+            effects=tuple(effects),
+            computer=shared,
+            runs=tuple(model_runs),
+            source=source,
+            evidence=dict(evidence or {}),
+        )
+
+    # -- using ---------------------------------------------------------------
+    @property
+    def effect_names(self) -> tuple[str, ...]:
+        return tuple(e.name for e in self.effects)
+
+    def spec(self) -> ModelSpec:
+        """The :class:`~hybridtable.diagnosis.effects.ModelSpec` of the effects."""
+        return build_spec([(e.effect, dict(e.values)) for e in self.effects], self.scale)
+
+    def computer_for(self, run_id: str | None = None) -> dict[str, Any]:
+        """The rig computer's changes for run ``run_id`` (one the model was
+        fitted to), else those every run shared."""
+        for r in self.runs:
+            if r.run_id == run_id:
+                return dict(r.computer)
+        return dict(self.computer)
+
+    def physics(self, run_id: str | None = None, name: str = "model") -> RigPhysics:
+        """The :class:`~hybridtable.measurement.rig.RigPhysics` of the model
+        (its effects, and the rig computer as the audit found it)."""
+        physics = self.spec().physics(name=name)
+        computer = self.computer_for(run_id)
+        return replace(physics, computer=computer) if computer else physics
+
+    def linear_params(self, params: Any, keep_compensator: bool = True) -> tuple[Any, list[str]]:
+        """``params`` (a :class:`~hybridtable.loop.params.HybridLoopParams`)
+        with the model's physics as the linear models see it
+        (:meth:`~hybridtable.diagnosis.effects.ModelSpec.linear_changes`), the
+        compensator's beliefs left at their nominal values, and the rig
+        computer as the audit found it (its compensator kind only when
+        ``keep_compensator`` is false). Also returns what the linear models
+        leave out, in words."""
+        spec = self.spec()
+        changes, left = spec.linear_changes(params)
+        computer = self.computer_for(None)
+        if keep_compensator:
+            computer.pop("compensator", None)
+        if spec.mass_ratio != 1.0:
+            computer["spacecraft_mass_kg"] = params.spacecraft_mass_kg * spec.mass_ratio
+        return RigPhysics(changes=changes, computer=computer).apply(params), left
+
+    def closed_loop_run(self, run: Run) -> Run:
+        """``run`` with the spacecraft mass the model's computer integrates with."""
+        return self.spec().closed_loop_run(run)
+
+    def rig_differences(self, runs: Sequence[Run]) -> list[str]:
+        """Where the rig of ``runs`` differs from the model's (its nominal
+        physics and rate): the model's effects were fitted to another rig."""
+        out = []
+        for r in runs:
+            diffs = [
+                f"{k} {getattr(r.info, k):g} (model: {getattr(self.nominal, k):g})"
+                for k in RIG_KEYS
+                if not math.isclose(getattr(r.info, k), getattr(self.nominal, k), rel_tol=1e-9)
+            ]
+            if diffs:
+                out.append(f"run {r.run_id} is of another rig than the model's: {', '.join(diffs)}")
+        return out
+
+    def describe(self) -> str:
+        """One line: the effects and their values with standard errors."""
+        if not self.effects:
+            parts = ["the nominal model (no effect)"]
+        else:
+            parts = []
+            for e in self.effects:
+                units = {p.name: p.unit for p in e.effect.parameters}
+                vals = []
+                for k, v in e.values.items():
+                    s = e.std.get(k)
+                    err = f" +- {s:.3g}" if s is not None else ""
+                    unit = "" if units.get(k, "1") == "1" else f" {units[k]}"
+                    tag = "" if k in e.fitted else " (given)"
+                    vals.append(f"{k} = {v:.6g}{err}{unit}{tag}")
+                parts.append(f"{e.name}: {', '.join(vals)}")
+        if self.computer:
+            parts.append(
+                "rig computer: " + ", ".join(f"{k} = {v}" for k, v in self.computer.items())
+            )
+        return "; ".join(parts)
+
+    # -- the file ------------------------------------------------------------
+    def to_json(self) -> dict:
+        effects = []
+        for e in self.effects:
+            units = {p.name: p.unit for p in e.effect.parameters}
+            effects.append(
+                {
+                    "name": e.name,
+                    "description": e.effect.description,
+                    "parameters": {
+                        k: {
+                            "value": float(v),
+                            "std": e.std.get(k),
+                            "unit": units.get(k, ""),
+                            "fitted": k in e.fitted,
+                        }
+                        for k, v in e.values.items()
+                    },
+                }
+            )
+        return {
+            "format": MODEL_FORMAT,
+            "tool_version": self.tool_version,
+            "created": self.created,
+            "source": self.source,
+            "description": self.describe(),
+            "nominal": _info_json(self.nominal),
+            "scale": asdict(self.scale),
+            "effects": effects,
+            "computer": dict(self.computer),
+            "runs": [
+                {
+                    "run_id": r.run_id,
+                    "csv": r.csv,
+                    "sha256": r.sha256,
+                    "cor_measured": r.cor_measured,
+                    "computer": dict(r.computer),
+                    "nominal": _info_json(r.nominal),
+                }
+                for r in self.runs
+            ],
+            "evidence": dict(self.evidence),
+        }
+
+    @classmethod
+    def from_json(cls, data: Any, where: str) -> RigModel:
+        """A model from its JSON document (``where`` names it in messages).
+
+        Raises
+        ------
+        ParameterError
+            One line naming ``where`` and the key at fault.
+        """
+        if not isinstance(data, dict):
+            raise ParameterError(f"{where}: not a model file (a JSON object is expected)")
+        fmt = data.get("format")
+        if fmt != MODEL_FORMAT:
+            if isinstance(fmt, str) and fmt.startswith("hybridtable-model/"):
+                raise ParameterError(
+                    f"{where}: model format {fmt!r} is not supported "
+                    f"(this hybridtable {tool_version()} reads {MODEL_FORMAT!r})"
+                )
+            raise ParameterError(
+                f"{where}: not a model file (key format must be {MODEL_FORMAT!r}, "
+                f"got {json.dumps(fmt)})"
+            )
+        for key in ("nominal", "scale", "effects"):
+            if key not in data:
+                raise ParameterError(f"{where}: missing key {key}")
+        nominal = _info(data["nominal"], f"{where}: nominal")
+        scale = _scale(data["scale"], where)
+        raw_effects = data["effects"]
+        if not isinstance(raw_effects, list):
+            raise ParameterError(f"{where}: key effects must be a list")
+        effects = []
+        for i, raw in enumerate(raw_effects):
+            effects.append(_effect(raw, scale, f"{where}: effects[{i}]"))
+        names = [e.name for e in effects]
+        if len(set(names)) != len(names):
+            raise ParameterError(f"{where}: an effect is listed twice ({', '.join(names)})")
+        computer = _computer(data.get("computer", {}), f"{where}: computer")
+        runs = []
+        raw_runs = data.get("runs", [])
+        if not isinstance(raw_runs, list):
+            raise ParameterError(f"{where}: key runs must be a list")
+        for i, raw in enumerate(raw_runs):
+            w = f"{where}: runs[{i}]"
+            if not isinstance(raw, dict) or not isinstance(raw.get("run_id"), str):
+                raise ParameterError(f"{w}: must be an object with a run_id")
+            cor = raw.get("cor_measured")
+            if cor is not None and not _finite(cor):
+                raise ParameterError(f"{w}: cor_measured must be a number or null")
+            runs.append(
+                ModelRun(
+                    raw["run_id"],
+                    _info(raw.get("nominal"), f"{w}.nominal"),
+                    _computer(raw.get("computer", {}), f"{w}.computer"),
+                    None if cor is None else float(cor),
+                    raw.get("csv"),
+                    raw.get("sha256"),
+                )
+            )
+        evidence = data.get("evidence", {})
+        return cls(
+            nominal=nominal,
+            scale=scale,
+            effects=tuple(effects),
+            computer=computer,
+            runs=tuple(runs),
+            source=str(data.get("source", "user")),
+            evidence=evidence if isinstance(evidence, dict) else {},
+            tool_version=str(data.get("tool_version", "unknown")),
+            created=str(data.get("created", "")),
+        )
+
+
+# -- checks of the file's parts ------------------------------------------------
+def _finite(x: Any) -> bool:
+    return isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x)
+
+
+def _info_json(info: RunInfo) -> dict:
+    return info.to_dict()
+
+
+def _info(raw: Any, where: str) -> RunInfo:
+    try:
+        return run_info_from_dict(raw, where)
+    except MeasurementError as err:
+        raise ParameterError(str(err)) from None
+
+
+def _scale(raw: Any, where: str) -> RigScale:
+    names = [f.name for f in fields(RigScale)]
+    if not isinstance(raw, dict) or set(raw) != set(names):
+        raise ParameterError(f"{where}: key scale must hold {', '.join(names)}")
+    for k in names:
+        if not (_finite(raw[k]) and raw[k] > 0):
+            raise ParameterError(f"{where}: scale.{k} must be a number > 0 (got {raw[k]!r})")
+    return RigScale(**{k: float(raw[k]) for k in names})
+
+
+def _computer(raw: Any, where: str) -> dict[str, Any]:
+    if not isinstance(raw, dict):
+        raise ParameterError(f"{where}: must be an object")
+    bad = [k for k in raw if k not in COMPUTER_PARAMS]
+    if bad:
+        raise ParameterError(
+            f"{where}: {', '.join(bad)} not rig-computer parameters "
+            f"(one of {', '.join(COMPUTER_PARAMS)})"
+        )
+    for k, v in raw.items():
+        if k == "compensator":
+            if not isinstance(v, str):
+                raise ParameterError(f"{where}.compensator must be a string")
+        elif not (_finite(v) and v >= 0):
+            raise ParameterError(f"{where}.{k} must be a number >= 0 (got {v!r})")
+    return dict(raw)
+
+
+def _effect(raw: Any, scale: RigScale, where: str) -> FittedEffect:
+    if not isinstance(raw, dict) or not isinstance(raw.get("name"), str):
+        raise ParameterError(f"{where}: must be an object with a name")
+    name = raw["name"]
+    try:
+        effect = get_effect(name)
+    except ParameterError:
+        raise ParameterError(
+            f"{where}: effect {name!r} is not registered; load its plug-in with "
+            "--plugin MODULE:ATTR or install the package that provides it"
+        ) from None
+    params = raw.get("parameters")
+    if not isinstance(params, dict):
+        raise ParameterError(f"{where} ({name}): key parameters must be an object")
+    missing = [p for p in effect.parameter_names if p not in params]
+    if missing:
+        raise ParameterError(f"{where} ({name}): missing parameter(s) {', '.join(missing)}")
+    values: dict[str, float] = {}
+    std: dict[str, float | None] = {}
+    fitted = []
+    for key, item in params.items():
+        if key not in effect.parameter_names:
+            raise ParameterError(
+                f"{where} ({name}): no parameter {key!r} "
+                f"(its parameters: {', '.join(effect.parameter_names)})"
+            )
+        if not isinstance(item, dict) or not _finite(item.get("value")):
+            raise ParameterError(f"{where} ({name}).{key}: needs a finite number as value")
+        s = item.get("std")
+        if s is not None and not (_finite(s) and s >= 0):
+            raise ParameterError(f"{where} ({name}).{key}: std must be a number >= 0 or null")
+        values[key] = float(item["value"])
+        std[key] = None if s is None else float(s)
+        if item.get("fitted"):
+            fitted.append(key)
+    try:
+        effect.check_values(values, scale)
+    except ParameterError as err:
+        raise ParameterError(f"{where}: {err}") from None
+    return FittedEffect(name, values, std, tuple(fitted))
+
+
+# -- files ---------------------------------------------------------------------
+def load_model(path: str | Path) -> RigModel:
+    """Read and check a model file.
+
+    Raises
+    ------
+    ParameterError
+        One line naming the file: unreadable, not JSON, not a model of this
+        format version, an effect not registered, a value out of bounds.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ParameterError(f"{path}: no such model file") from None
+    except (OSError, UnicodeDecodeError) as err:
+        raise ParameterError(f"{path}: cannot read the model file ({err})") from None
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as err:
+        raise ParameterError(
+            f"{path} line {err.lineno}, column {err.colno}: not valid JSON ({err.msg})"
+        ) from None
+    return RigModel.from_json(data, str(path))
+
+
+def model_from_diagnosis(d: Any) -> RigModel:
+    """The model a :class:`~hybridtable.diagnosis.candidates.Diagnosis` found:
+    its physical effects with their fitted values and standard errors, the
+    audit's rig computer per run, and the evidence of the verdict."""
+    effects = [
+        FittedEffect(
+            n,
+            dict(d.selected_values[n]),
+            dict(d.selected_std.get(n, {})),
+            tuple(d.selected_values[n]),
+        )
+        for n in d.selected
+    ]
+    remaining = d.remaining()
+    evidence = {
+        "verdict": d.verdict,
+        "explained": d.explained,
+        "named": list(d.named),
+        "heldout_error": remaining["heldout_error"],
+        "error": remaining["error"],
+        "end_test_passed": remaining["test_passed"],
+        "end_test_p_value": remaining["p_value"],
+        "error_unit": "RMS residual / noise RMS, pooled over runs, f_mea and p_act",
+    }
+    computer = {x.run_id: d.audit.computer_changes(x.run_id) for x in d.data}
+    return RigModel.from_runs(
+        [x.run for x in d.data], effects, computer, source="diagnose", evidence=evidence
+    )
