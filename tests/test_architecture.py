@@ -213,12 +213,17 @@ def test_the_core_loop_imports_no_plugin_and_no_command():
     assert reach == []
 
 
+#: Modules that import a *user's* module by name: ``--plugin MODULE:ATTR``.
+USER_MODULE_LOADERS = {"hybridtable.diagnosis.registry"}
+
+
 def test_no_hidden_imports_of_our_own_modules():
     # Only the lazy re-exports of package __init__ files import by name, and this
-    # test reads their arrows from the ``lazy_exports`` call.
+    # test reads their arrows from the ``lazy_exports`` call; the plug-in
+    # loader imports the user's module that --plugin names, never one of ours.
     hidden = []
     for m, path in MODULES.items():
-        if m == "hybridtable._lazy":
+        if m == "hybridtable._lazy" or m in USER_MODULE_LOADERS:
             continue
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
             if isinstance(node, ast.Call):

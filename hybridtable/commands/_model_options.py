@@ -97,7 +97,7 @@ def load_model_arg(args: argparse.Namespace):
     """The :class:`~hybridtable.diagnosis.model_file.RigModel` of ``--model`` (or None)."""
     if not getattr(args, "model", None):
         return None
-    from hybridtable.diagnosis.model_file import load_model
+    from hybridtable.diagnosis.model_reader import load_model
 
     return load_model(args.model)
 

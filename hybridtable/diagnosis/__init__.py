@@ -10,8 +10,10 @@
 - :mod:`~hybridtable.diagnosis.candidates`: the evidence of each candidate, ranking;
 - :mod:`~hybridtable.diagnosis.design`: the run that would separate look-alikes;
 - :mod:`~hybridtable.diagnosis.diagnose`: :func:`diagnose`, the forward selection;
-- :mod:`~hybridtable.diagnosis.add_effect`: the model with one effect, compared
-  with the runs (``compare --add``);
+- :mod:`~hybridtable.diagnosis.add_effect`: the model with effects added
+  (fitted where not given), compared with the runs (``compare --add``);
+- :mod:`~hybridtable.diagnosis.model_file`: the model as a file
+  (``--save-model``, ``--model``);
 - :mod:`~hybridtable.diagnosis.settings`: thresholds.
 """
 
@@ -20,7 +22,7 @@ from hybridtable._lazy import lazy_exports
 __all__, __getattr__, __dir__ = lazy_exports(
     __name__,
     {
-        "add_effect": ("compare_with_effect",),
+        "add_effect": ("compare_with_model", "model_with_effects"),
         "candidates": (
             "Candidate",
             "Diagnosis",
@@ -33,10 +35,13 @@ __all__, __getattr__, __dir__ = lazy_exports(
             "RigScale",
             "Signature",
         ),
-        "fit": ("fit_effect",),
+        "fit": ("fit_effect", "fit_given"),
+        "model_file": ("FittedEffect", "RigModel", "model_from_diagnosis"),
+        "model_reader": ("load_model",),
         "registry": (
             "effect_names",
             "get_effect",
+            "load_plugin",
             "parse_effect_spec",
             "register_effect",
         ),

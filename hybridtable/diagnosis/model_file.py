@@ -24,31 +24,25 @@ The file is JSON::
                                   "std": 4.1, "unit": "N s/m", "fitted": true}}}],
      "computer": {}, "runs": [...], "evidence": {...}}
 
-:func:`load_model` checks everything and raises
-:class:`~hybridtable.errors.ParameterError` with one line naming the file and
-the key: malformed JSON, another format version, an effect that is not
-registered (its plug-in not loaded), a parameter it does not have or out of
-its bounds.
+:func:`~hybridtable.diagnosis.model_reader.load_model` reads it back,
+checking every key.
 """
 
 from __future__ import annotations
 
 import datetime as _dt
 import hashlib
-import json
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict, dataclass, field, fields, replace
-from pathlib import Path
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 from hybridtable.diagnosis.effects import Effect, ModelSpec, RigScale
 from hybridtable.diagnosis.registry import build_spec, get_effect
-from hybridtable.errors import MeasurementError, ParameterError
+from hybridtable.errors import ParameterError
 from hybridtable.measurement.phases import cor_from_record
-from hybridtable.measurement.rig import COMPUTER_PARAMS, RigPhysics
+from hybridtable.measurement.rig import RigPhysics
 from hybridtable.measurement.run_format import Run, RunInfo
-from hybridtable.measurement.run_reader import run_info_from_dict
 
 __all__ = [
     "MODEL_FORMAT",
@@ -57,7 +51,6 @@ __all__ = [
     "ModelRun",
     "RigModel",
     "tool_version",
-    "load_model",
     "model_from_diagnosis",
 ]
 
@@ -294,7 +287,7 @@ class RigModel:
             "created": self.created,
             "source": self.source,
             "description": self.describe(),
-            "nominal": _info_json(self.nominal),
+            "nominal": self.nominal.to_dict(),
             "scale": asdict(self.scale),
             "effects": effects,
             "computer": dict(self.computer),
@@ -305,195 +298,12 @@ class RigModel:
                     "sha256": r.sha256,
                     "cor_measured": r.cor_measured,
                     "computer": dict(r.computer),
-                    "nominal": _info_json(r.nominal),
+                    "nominal": r.nominal.to_dict(),
                 }
                 for r in self.runs
             ],
             "evidence": dict(self.evidence),
         }
-
-    @classmethod
-    def from_json(cls, data: Any, where: str) -> RigModel:
-        """A model from its JSON document (``where`` names it in messages).
-
-        Raises
-        ------
-        ParameterError
-            One line naming ``where`` and the key at fault.
-        """
-        if not isinstance(data, dict):
-            raise ParameterError(f"{where}: not a model file (a JSON object is expected)")
-        fmt = data.get("format")
-        if fmt != MODEL_FORMAT:
-            if isinstance(fmt, str) and fmt.startswith("hybridtable-model/"):
-                raise ParameterError(
-                    f"{where}: model format {fmt!r} is not supported "
-                    f"(this hybridtable {tool_version()} reads {MODEL_FORMAT!r})"
-                )
-            raise ParameterError(
-                f"{where}: not a model file (key format must be {MODEL_FORMAT!r}, "
-                f"got {json.dumps(fmt)})"
-            )
-        for key in ("nominal", "scale", "effects"):
-            if key not in data:
-                raise ParameterError(f"{where}: missing key {key}")
-        nominal = _info(data["nominal"], f"{where}: nominal")
-        scale = _scale(data["scale"], where)
-        raw_effects = data["effects"]
-        if not isinstance(raw_effects, list):
-            raise ParameterError(f"{where}: key effects must be a list")
-        effects = []
-        for i, raw in enumerate(raw_effects):
-            effects.append(_effect(raw, scale, f"{where}: effects[{i}]"))
-        names = [e.name for e in effects]
-        if len(set(names)) != len(names):
-            raise ParameterError(f"{where}: an effect is listed twice ({', '.join(names)})")
-        computer = _computer(data.get("computer", {}), f"{where}: computer")
-        runs = []
-        raw_runs = data.get("runs", [])
-        if not isinstance(raw_runs, list):
-            raise ParameterError(f"{where}: key runs must be a list")
-        for i, raw in enumerate(raw_runs):
-            w = f"{where}: runs[{i}]"
-            if not isinstance(raw, dict) or not isinstance(raw.get("run_id"), str):
-                raise ParameterError(f"{w}: must be an object with a run_id")
-            cor = raw.get("cor_measured")
-            if cor is not None and not _finite(cor):
-                raise ParameterError(f"{w}: cor_measured must be a number or null")
-            runs.append(
-                ModelRun(
-                    raw["run_id"],
-                    _info(raw.get("nominal"), f"{w}.nominal"),
-                    _computer(raw.get("computer", {}), f"{w}.computer"),
-                    None if cor is None else float(cor),
-                    raw.get("csv"),
-                    raw.get("sha256"),
-                )
-            )
-        evidence = data.get("evidence", {})
-        return cls(
-            nominal=nominal,
-            scale=scale,
-            effects=tuple(effects),
-            computer=computer,
-            runs=tuple(runs),
-            source=str(data.get("source", "user")),
-            evidence=evidence if isinstance(evidence, dict) else {},
-            tool_version=str(data.get("tool_version", "unknown")),
-            created=str(data.get("created", "")),
-        )
-
-
-# -- checks of the file's parts ------------------------------------------------
-def _finite(x: Any) -> bool:
-    return isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x)
-
-
-def _info_json(info: RunInfo) -> dict:
-    return info.to_dict()
-
-
-def _info(raw: Any, where: str) -> RunInfo:
-    try:
-        return run_info_from_dict(raw, where)
-    except MeasurementError as err:
-        raise ParameterError(str(err)) from None
-
-
-def _scale(raw: Any, where: str) -> RigScale:
-    names = [f.name for f in fields(RigScale)]
-    if not isinstance(raw, dict) or set(raw) != set(names):
-        raise ParameterError(f"{where}: key scale must hold {', '.join(names)}")
-    for k in names:
-        if not (_finite(raw[k]) and raw[k] > 0):
-            raise ParameterError(f"{where}: scale.{k} must be a number > 0 (got {raw[k]!r})")
-    return RigScale(**{k: float(raw[k]) for k in names})
-
-
-def _computer(raw: Any, where: str) -> dict[str, Any]:
-    if not isinstance(raw, dict):
-        raise ParameterError(f"{where}: must be an object")
-    bad = [k for k in raw if k not in COMPUTER_PARAMS]
-    if bad:
-        raise ParameterError(
-            f"{where}: {', '.join(bad)} not rig-computer parameters "
-            f"(one of {', '.join(COMPUTER_PARAMS)})"
-        )
-    for k, v in raw.items():
-        if k == "compensator":
-            if not isinstance(v, str):
-                raise ParameterError(f"{where}.compensator must be a string")
-        elif not (_finite(v) and v >= 0):
-            raise ParameterError(f"{where}.{k} must be a number >= 0 (got {v!r})")
-    return dict(raw)
-
-
-def _effect(raw: Any, scale: RigScale, where: str) -> FittedEffect:
-    if not isinstance(raw, dict) or not isinstance(raw.get("name"), str):
-        raise ParameterError(f"{where}: must be an object with a name")
-    name = raw["name"]
-    try:
-        effect = get_effect(name)
-    except ParameterError:
-        raise ParameterError(
-            f"{where}: effect {name!r} is not registered; load its plug-in with "
-            "--plugin MODULE:ATTR or install the package that provides it"
-        ) from None
-    params = raw.get("parameters")
-    if not isinstance(params, dict):
-        raise ParameterError(f"{where} ({name}): key parameters must be an object")
-    missing = [p for p in effect.parameter_names if p not in params]
-    if missing:
-        raise ParameterError(f"{where} ({name}): missing parameter(s) {', '.join(missing)}")
-    values: dict[str, float] = {}
-    std: dict[str, float | None] = {}
-    fitted = []
-    for key, item in params.items():
-        if key not in effect.parameter_names:
-            raise ParameterError(
-                f"{where} ({name}): no parameter {key!r} "
-                f"(its parameters: {', '.join(effect.parameter_names)})"
-            )
-        if not isinstance(item, dict) or not _finite(item.get("value")):
-            raise ParameterError(f"{where} ({name}).{key}: needs a finite number as value")
-        s = item.get("std")
-        if s is not None and not (_finite(s) and s >= 0):
-            raise ParameterError(f"{where} ({name}).{key}: std must be a number >= 0 or null")
-        values[key] = float(item["value"])
-        std[key] = None if s is None else float(s)
-        if item.get("fitted"):
-            fitted.append(key)
-    try:
-        effect.check_values(values, scale)
-    except ParameterError as err:
-        raise ParameterError(f"{where}: {err}") from None
-    return FittedEffect(name, values, std, tuple(fitted))
-
-
-# -- files ---------------------------------------------------------------------
-def load_model(path: str | Path) -> RigModel:
-    """Read and check a model file.
-
-    Raises
-    ------
-    ParameterError
-        One line naming the file: unreadable, not JSON, not a model of this
-        format version, an effect not registered, a value out of bounds.
-    """
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ParameterError(f"{path}: no such model file") from None
-    except (OSError, UnicodeDecodeError) as err:
-        raise ParameterError(f"{path}: cannot read the model file ({err})") from None
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as err:
-        raise ParameterError(
-            f"{path} line {err.lineno}, column {err.colno}: not valid JSON ({err.msg})"
-        ) from None
-    return RigModel.from_json(data, str(path))
 
 
 def model_from_diagnosis(d: Any) -> RigModel:

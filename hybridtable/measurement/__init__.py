@@ -5,6 +5,8 @@
 - :mod:`~hybridtable.measurement.run_reader`: read and validate runs in that
   format (:func:`read_runs`);
 - :mod:`~hybridtable.measurement.rig`: the rig model of a run (:class:`RigPhysics`);
+- :mod:`~hybridtable.measurement.recorder`: runs recorded from a modelled rig
+  (``simulate --record``);
 - :mod:`~hybridtable.measurement.replay`: the physical part driven by the recorded command;
 - :mod:`~hybridtable.measurement.comparison`: replay and closed loop against the
   record (:func:`compare_run`), built from
@@ -27,6 +29,10 @@ __all__, __getattr__, __dir__ = lazy_exports(
             "NoiseModel",
             "estimate_noise",
             "whiten",
+        ),
+        "recorder": (
+            "record_run",
+            "write_run",
         ),
         "replay": (
             "ReplayResult",
