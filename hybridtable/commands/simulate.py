@@ -6,7 +6,41 @@ import argparse
 import math
 import time
 
-__all__ = ["register", "add_loop_arguments", "params_from_args", "run"]
+__all__ = [
+    "LOOP_OPTIONS",
+    "register",
+    "add_loop_arguments",
+    "given_loop_options",
+    "loop_value",
+    "params_from_args",
+    "run",
+]
+
+
+#: The loop options: name -> (default, unit, help). ``None`` defaults are
+#: derived (see the help). The parser's defaults are ``None`` so that an
+#: option given on the command line can be told from its default (a model's
+#: or a recording's own values fill the options not given).
+LOOP_OPTIONS: dict[str, tuple[object, str, str]] = {
+    "sensor_delay_s": (0.005, "s", "force-sensor delay"),
+    "table_response_hz": (25.0, "Hz", "table response frequency (inf: ideal table)"),
+    "table_damping_ratio": (0.8, "1", "table damping ratio"),
+    "contact_frequency_hz": (1.0, "Hz", "contact natural frequency sqrt(k/m)/2pi (sets the mass)"),
+    "contact_stiffness_n_per_m": (1e5, "N/m", "contact stiffness k"),
+    "contact_damping_n_s_per_m": (0.0, "N s/m", "contact damping"),
+    "initial_velocity_m_per_s": (0.1, "m/s", "approach velocity"),
+    "initial_gap_m": (0.001, "m", "gap at t = 0"),
+    "lead_time_s": (None, "s", "SDC lead time (default: the sensor delay)"),
+    "compensator_stiffness_n_per_m": (
+        None,
+        "N/m",
+        "stiffness the compensator believes (MDC, SDMDC, smith) or starts from "
+        "(sdmdc-online's prior) (default: the true one)",
+    ),
+    "force_deadband_n": (0.0, "N", "readings at or below this are no contact"),
+    "sample_rate_hz": (None, "Hz", "sampled rig computer (default: continuous)"),
+    "time_step_s": (None, "s", "continuous-mode step (default: min(2e-4, 1/(5000 f_con)))"),
+}
 
 
 def add_loop_arguments(parser: argparse.ArgumentParser) -> None:
@@ -15,71 +49,68 @@ def add_loop_arguments(parser: argparse.ArgumentParser) -> None:
     from hybridtable.compensators.registry import compensator_names
 
     g = parser.add_argument_group("loop parameters (defaults: the paper's Table 1 point)")
-    g.add_argument("--compensator", default="none", help=f"one of {', '.join(compensator_names())}")
-    g.add_argument("--sensor-delay-s", type=parse_float, default=0.005)
-    g.add_argument("--table-response-hz", type=parse_float, default=25.0, help="inf: ideal table")
-    g.add_argument("--table-damping-ratio", type=parse_float, default=0.8)
-    g.add_argument("--contact-frequency-hz", type=parse_float, default=1.0)
-    g.add_argument("--contact-stiffness-n-per-m", type=parse_float, default=1e5)
-    g.add_argument("--contact-damping-n-s-per-m", type=parse_float, default=0.0)
-    g.add_argument("--initial-velocity-m-per-s", type=parse_float, default=0.1)
-    g.add_argument("--initial-gap-m", type=parse_float, default=0.001)
     g.add_argument(
-        "--lead-time-s", type=parse_float, default=None, help="default: the sensor delay"
-    )
-    g.add_argument(
-        "--compensator-stiffness-n-per-m",
-        type=parse_float,
+        "--compensator",
         default=None,
-        help="stiffness the compensator believes (MDC, SDMDC, smith) or starts from "
-        "(sdmdc-online's prior); default: the true one",
+        help=f"one of {', '.join(compensator_names())} (default none)",
     )
+    for name, (default, unit, text) in LOOP_OPTIONS.items():
+        shown = "" if default is None else f" (default {default:g})"
+        if "(default" in text:
+            shown = ""
+        unit_text = "" if unit == "1" else f" [{unit}]"
+        g.add_argument(
+            "--" + name.replace("_", "-"),
+            type=parse_float,
+            default=None,
+            help=f"{text}{unit_text}{shown}",
+        )
     g.add_argument(
         "--passivity",
         action="store_true",
         help="guard the compensator with the time-domain passivity observer/controller",
     )
-    g.add_argument("--force-deadband-n", type=parse_float, default=0.0)
     g.add_argument("--clamp-nonnegative", action="store_true", help="clamp f_comp at zero")
-    g.add_argument(
-        "--sample-rate-hz",
-        type=parse_float,
-        default=None,
-        help="sampled rig computer (default: continuous)",
-    )
-    g.add_argument(
-        "--time-step-s",
-        type=parse_float,
-        default=None,
-        help="continuous-mode step (default: min(2e-4, 1/(5000 f_con)))",
-    )
+
+
+def given_loop_options(args: argparse.Namespace) -> list[str]:
+    """The loop options given on the command line (flag names)."""
+    names = ["compensator", *LOOP_OPTIONS]
+    given = ["--" + n.replace("_", "-") for n in names if getattr(args, n, None) is not None]
+    for flag in ("passivity", "clamp_nonnegative"):
+        if getattr(args, flag, False):
+            given.append("--" + flag.replace("_", "-"))
+    return given
+
+
+def loop_value(args: argparse.Namespace, name: str):
+    """A loop option's value: given, else its default."""
+    value = getattr(args, name, None)
+    if value is None:
+        return "none" if name == "compensator" else LOOP_OPTIONS[name][0]
+    return value
 
 
 def params_from_args(args: argparse.Namespace):
     """HybridLoopParams from the options of :func:`add_loop_arguments`."""
     from hybridtable.studies.paper import paper_params
 
+    v = {n: loop_value(args, n) for n in ("compensator", *LOOP_OPTIONS)}
     return paper_params(
-        compensator=args.compensator,
-        sensor_delay_s=args.sensor_delay_s,
-        table_response_hz=args.table_response_hz,
-        table_damping_ratio=args.table_damping_ratio,
-        contact_frequency_hz=args.contact_frequency_hz,
-        contact_stiffness_n_per_m=args.contact_stiffness_n_per_m,
-        initial_velocity_m_per_s=args.initial_velocity_m_per_s,
-        contact_damping_n_s_per_m=args.contact_damping_n_s_per_m,
-        initial_gap_m=args.initial_gap_m,
-        lead_time_s=args.lead_time_s,
-        compensator_stiffness_n_per_m=args.compensator_stiffness_n_per_m,
-        force_deadband_n=args.force_deadband_n,
+        **v,
         clamp_nonnegative=args.clamp_nonnegative,
-        sample_rate_hz=args.sample_rate_hz,
-        time_step_s=args.time_step_s,
         passivity=getattr(args, "passivity", False),
     )
 
 
 def register(sub) -> None:
+    from hybridtable.commands._model_options import (
+        add_effect_argument,
+        add_model_argument,
+        add_plugin_argument,
+    )
+    from hybridtable.commands._simulate_rig import add_record_arguments
+
     p = sub.add_parser(
         "simulate",
         help="simulate one contact of the hybrid loop",
@@ -99,16 +130,46 @@ def register(sub) -> None:
     p.add_argument(
         "--html", metavar="FILE.html", help="record a Meshcat animation (--table stewart)"
     )
+    add_effect_argument(
+        p, ": give every parameter, e.g. --add contact_damping:damping_n_s_per_m=300"
+    )
+    add_model_argument(
+        p,
+        "simulate the rig it describes (its sampled computer, nominal parameters and "
+        "effects); without loop options, each run it was fitted to, against its recorded CoR",
+    )
+    add_plugin_argument(p)
+    add_record_arguments(p)
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     from hybridtable.commands._common import write_json
+    from hybridtable.commands._model_options import load_model_arg, load_plugins
+    from hybridtable.errors import CommandError
     from hybridtable.loop.simulation import simulate
 
+    load_plugins(args)
+    model = load_model_arg(args)
+    if args.record or model is not None:
+        from hybridtable.commands._simulate_rig import run_model, run_record
+
+        if args.plot:
+            raise CommandError("--plot is for one simulation (not with --record or --model)")
+        out = run_record(args, model) if args.record else run_model(args, model)
+        if args.json:
+            write_json(args.json, out)
+        return 0
+    for flag in ("runs", "velocities", "noise_force_n", "noise_position_m", "duration_s"):
+        if getattr(args, flag) is not None:
+            raise CommandError(f"--{flag.replace('_', '-')} needs --record DIR")
+    if args.compensator is not None and "," in args.compensator:
+        raise CommandError("--compensator: one compensator (a list only with --record)")
     params = params_from_args(args)
     t0 = time.perf_counter()
     extra = {}
+    if args.table == "stewart" and args.add:
+        raise CommandError("--add: effects need the second-order table back-end")
     if args.table == "stewart":
         from hybridtable.stewart.run import simulate_stewart
 
@@ -118,6 +179,8 @@ def run(args: argparse.Namespace) -> int:
         from hybridtable.errors import CommandError
 
         raise CommandError("--html needs --table stewart")
+    elif args.add:
+        result, params = _simulate_with_effects(args, params)
     else:
         result = simulate(params)
     wall = time.perf_counter() - t0
@@ -152,3 +215,43 @@ def run(args: argparse.Namespace) -> int:
 
         plot_run(result, args.plot)
     return 0
+
+
+def _simulate_with_effects(args: argparse.Namespace, params):
+    """The paper's loop with the ``--add`` effects (every parameter given)."""
+    from hybridtable.commands._simulate_rig import _physics
+    from hybridtable.errors import CommandError
+    from hybridtable.loop.builder import build_hybrid_loop
+    from hybridtable.loop.simulation import run_loop
+    from hybridtable.measurement.run_format import RunInfo
+
+    h = params.sample_period_s or params.step_s
+    info = RunInfo(
+        run_id="simulated",
+        sample_rate_hz=1.0 / h,
+        spacecraft_mass_kg=params.spacecraft_mass_kg,
+        contact_stiffness_n_per_m=params.contact_stiffness_n_per_m,
+        sensor_delay_s=params.sensor_delay_s,
+        table_natural_frequency_hz=params.table_response_hz,
+        table_damping_ratio=params.table_damping_ratio,
+        compensator=params.compensator,
+        lead_time_s=params.compensator_params().lead_time_s,
+        initial_gap_m=params.initial_gap_m,
+        initial_velocity_m_per_s=params.initial_velocity_m_per_s,
+        force_deadband_n=params.force_deadband_n,
+    )
+    physics, spec, _, _ = _physics(args, None, info)
+    if (spec.sensor or any(c == "sensor" for c, _ in spec.wrappers)) and (
+        params.sample_period_s is None
+    ):
+        raise CommandError("--add: effects of the force sensor need --sample-rate-hz")
+    if spec.mass_ratio != 1.0:
+        params = params.with_(spacecraft_mass_kg=params.spacecraft_mass_kg * spec.mass_ratio)
+    changes_sensor = bool(spec.sensor) or any(c == "sensor" for c, _ in spec.wrappers)
+    loop = build_hybrid_loop(
+        params,
+        table=physics.make_table(params),
+        contact=physics.make_contact(params),
+        sensor=physics.make_sensor(params) if changes_sensor else None,
+    )
+    return run_loop(loop), params

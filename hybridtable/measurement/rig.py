@@ -43,6 +43,7 @@ __all__ = [
     "add_physical_part",
     "build_rig_loop",
     "simulate_rig",
+    "simulate_rig_contact",
     "set_table_initial_state",
 ]
 
@@ -321,3 +322,23 @@ def simulate_rig(
     if not np.allclose(result.time_s, h * np.arange(n), rtol=0.0, atol=1e-6 * h):
         raise SimulationError(f"rig model of {run.run_id}: ticks out of step with the record")
     return result
+
+
+def simulate_rig_contact(
+    info: RunInfo,
+    physics: RigPhysics | None = None,
+    noise=None,
+    accuracy: float = 1e-8,
+) -> SimulationResult:
+    """One contact of the rig of ``info`` (its sampled computer, the physics
+    of ``physics``), from the approach until the spacecraft has separated;
+    the result's ``metrics`` hold its CoR, peak force and energy gain.
+
+    Raises
+    ------
+    SimulationError
+        If the model diverges or never separates.
+    """
+    empty = np.zeros(1)
+    frame = Run(info, empty, empty, empty, empty, empty, empty)
+    return run_loop(build_rig_loop(frame, physics, noise), accuracy=accuracy)
