@@ -1,6 +1,7 @@
-"""The rig modes of ``hybridtable simulate``: ``--model`` (the rig as a model
-file describes it) and ``--record`` (runs written as the rig's data logger
-would, with hidden effects and noise, and a ``truth.json`` of what was hidden).
+"""The rig modes of ``hybridtable simulate``: the rig a model file describes
+(``--model``, here) and the options it shares with ``--record``
+(:mod:`hybridtable.commands._record`): the run's parameters from the loop
+options, the physics from the model and ``--add``.
 
 Both run the rig computer of the run format (sampled, the compensated force
 clamped at zero and gated by the deadband, the MDC with the JSON stiffness),
@@ -12,23 +13,17 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 from dataclasses import replace
-from pathlib import Path
 from typing import Any
 
 from hybridtable.errors import CommandError
 
 __all__ = [
-    "TRUTH_FORMAT",
-    "add_record_arguments",
+    "refuse_unsupported",
     "rig_info_from_args",
+    "rig_physics",
     "run_model",
-    "run_record",
 ]
-
-#: Value of ``truth.json``'s ``format`` key.
-TRUTH_FORMAT = "hybridtable-truth/1"
 
 #: Loop options the run format's rig computer has no place for, and what to use.
 _REFUSED = {
@@ -40,67 +35,7 @@ _REFUSED = {
 }
 
 
-def add_record_arguments(parser: argparse.ArgumentParser) -> None:
-    """The options of ``simulate --record``."""
-    from hybridtable.commands._common import parse_float
-
-    g = parser.add_argument_group(
-        "recording runs (--record DIR): hybridtable-run/1 files of the rig with the "
-        "--add/--model effects hidden, and truth.json"
-    )
-    g.add_argument(
-        "--record",
-        metavar="DIR",
-        help="write runs (run1.csv + run1.json, ...) and truth.json into DIR; the runs' "
-        "JSON holds the nominal parameters only (--compensator may list one per run)",
-    )
-    g.add_argument(
-        "--runs", type=int, default=None, help="number of runs (default: one per velocity, else 1)"
-    )
-    g.add_argument(
-        "--velocities",
-        metavar="V1,V2,...",
-        help="approach velocity of each run [m/s] (default: --initial-velocity-m-per-s)",
-    )
-    g.add_argument(
-        "--noise-force-n",
-        type=parse_float,
-        default=None,
-        help="force-reading noise, standard deviation [N] (default: 0.002 x the "
-        "undamped peak force v sqrt(k m) of the fastest run)",
-    )
-    g.add_argument(
-        "--noise-position-m",
-        type=parse_float,
-        default=None,
-        help="table-position noise, standard deviation [m] (default: 1e-4 x the "
-        "undamped peak deflection v sqrt(m/k))",
-    )
-    g.add_argument(
-        "--noise-ar1",
-        type=parse_float,
-        default=0.0,
-        metavar="PHI",
-        help="lag-one correlation of both noises, in (-1, 1) (default 0: white)",
-    )
-    g.add_argument(
-        "--seed",
-        type=int,
-        default=0,
-        help="noise seed of run 1; run i uses seed + i - 1 (default 0)",
-    )
-    g.add_argument(
-        "--duration-s",
-        type=parse_float,
-        default=None,
-        help="length of each record [s] (default: approach + 3 undamped contact durations)",
-    )
-    g.add_argument(
-        "--force", action="store_true", help="write into a non-empty DIR, replacing its runs"
-    )
-
-
-def _refuse_unsupported(args: argparse.Namespace, mode: str) -> None:
+def refuse_unsupported(args: argparse.Namespace, mode: str) -> None:
     for name, instead in _REFUSED.items():
         value = getattr(args, name, None)
         if value not in (None, False):
@@ -137,7 +72,7 @@ def rig_info_from_args(
         Naming the option whose value is out of range.
     """
     from hybridtable._validation import check_nonnegative, check_positive
-    from hybridtable.commands.simulate import LOOP_OPTIONS
+    from hybridtable.commands._loop_options import LOOP_OPTIONS
     from hybridtable.measurement.run_format import RunInfo
     from hybridtable.measurement.run_reader import run_info_from_dict
 
@@ -203,7 +138,7 @@ def rig_info_from_args(
     return info
 
 
-def _physics(args: argparse.Namespace, model, info):
+def rig_physics(args: argparse.Namespace, model, info):
     """The rig's physics: the model's effects and rig computer, plus --add's
     (every parameter given). Returns (physics, the effects as (name, values))."""
     from hybridtable.commands._model_options import parse_added
@@ -262,11 +197,11 @@ def run_model(args: argparse.Namespace, model) -> dict:
     """``simulate --model``: with no loop option, every run the model was
     fitted to, at its own conditions, against its recorded CoR and the
     nominal model's; with loop options, one run of the modelled rig there."""
-    from hybridtable.commands.simulate import given_loop_options
+    from hybridtable.commands._loop_options import given_loop_options
     from hybridtable.measurement.rig import simulate_rig_contact
 
-    _refuse_unsupported(args, "simulate --model")
-    physics_args = _physics(args, model, model.nominal)
+    refuse_unsupported(args, "simulate --model")
+    physics_args = rig_physics(args, model, model.nominal)
     physics, spec, effects, _ = physics_args
     given = given_loop_options(args)
     rows = []
@@ -339,166 +274,3 @@ def _model_sentence(out: dict) -> str:
         f"{r['compensator']}: the modelled rig gives CoR {r['cor']:.5f} "
         f"(nominal model {r['cor_nominal']:.5f}), peak force {r['peak_force_n']:.1f} N."
     )
-
-
-# -- simulate --record -------------------------------------------------------------
-def _list(text: str | None, flag: str, convert) -> list:
-    if text is None:
-        return []
-    try:
-        items = [convert(x.strip()) for x in text.split(",") if x.strip()]
-    except ValueError:
-        raise CommandError(f"{flag}: expected a comma-separated list, got {text!r}") from None
-    if not items:
-        raise CommandError(f"{flag}: empty list")
-    return items
-
-
-def _per_run(items: list, n: int, flag: str) -> list:
-    if not items:
-        return [None] * n
-    if len(items) == 1:
-        return items * n
-    if len(items) != n:
-        raise CommandError(f"{flag}: give one value or one per run ({n} runs), got {len(items)}")
-    return items
-
-
-def _check_record_folder(folder: Path, n: int, force: bool) -> None:
-    if folder.exists() and not folder.is_dir():
-        raise CommandError(f"--record {folder} is a file, not a folder")
-    if folder.is_dir() and any(folder.iterdir()) and not force:
-        raise CommandError(
-            f"--record {folder} is not empty; choose a new folder, or give --force "
-            f"(replaces run1..run{n} and truth.json there, leaves other files)"
-        )
-
-
-def run_record(args: argparse.Namespace, model) -> dict:
-    """``simulate --record DIR``: write the runs and ``truth.json``."""
-    import json
-
-    from hybridtable.commands._common import write_json_atomic
-    from hybridtable.diagnosis.model_file import tool_version
-    from hybridtable.measurement.recorder import record_run, write_run
-    from hybridtable.systems.noise import MeasurementNoiseParams
-
-    _refuse_unsupported(args, "simulate --record")
-    velocities = _list(args.velocities, "--velocities", float)
-    compensators = _list(args.compensator, "--compensator", str)
-    if args.runs is not None and args.runs < 1:
-        raise CommandError(f"--runs must be >= 1 (got {args.runs})")
-    n = args.runs or max(len(velocities), len(compensators), 1)
-    velocities = _per_run(velocities, n, "--velocities")
-    compensators = _per_run(compensators, n, "--compensator")
-    if args.seed < 0:
-        raise CommandError(f"--seed must be >= 0 (got {args.seed})")
-    folder = Path(args.record)
-    _check_record_folder(folder, n, args.force)
-    base = model.nominal if model is not None else None
-    infos = [
-        rig_info_from_args(args, base, f"{folder.name}-run{i + 1}", compensators[i], velocities[i])
-        for i in range(n)
-    ]
-    v_max = max(i.initial_velocity_m_per_s for i in infos)
-    k, m = infos[0].contact_stiffness_n_per_m, infos[0].spacecraft_mass_kg
-    sigma_f = (
-        args.noise_force_n if args.noise_force_n is not None else 2e-3 * v_max * math.sqrt(k * m)
-    )
-    sigma_x = (
-        args.noise_position_m
-        if args.noise_position_m is not None
-        else 1e-4 * v_max * math.sqrt(m / k)
-    )
-    if args.force_deadband_n is None and base is None:
-        infos = [replace(i, force_deadband_n=5.0 * sigma_f) for i in infos]
-    physics, spec, effects, scale = _physics(
-        args, model, replace(infos[0], initial_velocity_m_per_s=v_max)
-    )
-    from hybridtable.measurement.recorder import FORMAT_COMPENSATORS
-
-    for i in infos:
-        if i.compensator not in FORMAT_COMPENSATORS:
-            raise CommandError(
-                f"--compensator {i.compensator}: a recorded run's computer is one of "
-                f"{', '.join(FORMAT_COMPENSATORS)}"
-            )
-    progress = None
-    if n > 1 and args.json != "-":
-        from tqdm import tqdm
-
-        progress = tqdm(total=n, desc="record", unit="run", file=sys.stderr, leave=False)
-    records = []
-    truth_runs = []
-    for i, info in enumerate(infos):
-        noise = MeasurementNoiseParams(sigma_f, sigma_x, args.seed + i, args.noise_ar1)
-        phys = physics
-        if spec.mass_ratio != 1.0:  # the computer integrates with another mass
-            mass = info.spacecraft_mass_kg * spec.mass_ratio
-            phys = replace(physics, computer={**physics.computer, "spacecraft_mass_kg": mass})
-        run, truth = record_run(info, phys, noise, args.duration_s)
-        records.append(run)
-        truth_runs.append(
-            {
-                "run_id": info.run_id,
-                "csv": f"run{i + 1}.csv",
-                "json": f"run{i + 1}.json",
-                "seed": args.seed + i,
-                "compensator": info.compensator,
-                "initial_velocity_m_per_s": info.initial_velocity_m_per_s,
-                **truth,
-            }
-        )
-        if progress is not None:
-            progress.update()
-    if progress is not None:
-        progress.close()
-    folder.mkdir(parents=True, exist_ok=True)
-    for i, run in enumerate(records):
-        write_run(run, folder, f"run{i + 1}", force=args.force)
-    from hybridtable.diagnosis.registry import get_effect
-
-    units = {name: {p.name: p.unit for p in get_effect(name).parameters} for name, _ in effects}
-    truth_doc = {
-        "format": TRUTH_FORMAT,
-        "tool_version": tool_version(),
-        "hidden": {
-            "effects": [
-                {
-                    "name": name,
-                    "parameters": {
-                        k_: {"value": v, "unit": units[name][k_]} for k_, v in values.items()
-                    },
-                }
-                for name, values in effects
-            ],
-            "computer": dict(physics.computer),
-        },
-        "noise": {
-            "force_std_n": sigma_f,
-            "position_std_m": sigma_x,
-            "ar1_coefficient": args.noise_ar1,
-        },
-        "model_file": args.model,
-        "nominal": infos[0].to_dict(),
-        "runs": truth_runs,
-    }
-    truth_path = folder / "truth.json"
-    if truth_path.exists() and not args.force:
-        raise CommandError(f"{truth_path} exists; give --force to replace it")
-    write_json_atomic(str(truth_path), truth_doc)
-    hidden = (
-        "; ".join(
-            f"{name} " + ", ".join(f"{k_}={v:g}" for k_, v in values.items())
-            for name, values in effects
-        )
-        or "nothing (the nominal rig)"
-    )
-    out = {"record": str(folder), "truth": json.loads(truth_path.read_text())}
-    if args.json != "-":
-        cors = ", ".join(f"{r['cor']:.4f}" for r in truth_runs)
-        print(
-            f"Recorded {n} run(s) into {folder} (CoR {cors}); hidden: {hidden}; noise "
-            f"{sigma_f:.3g} N and {sigma_x:.3g} m (AR(1) {args.noise_ar1:g}); see truth.json."
-        )
-    return out

@@ -6,110 +6,17 @@ import argparse
 import math
 import time
 
-__all__ = [
-    "LOOP_OPTIONS",
-    "register",
-    "add_loop_arguments",
-    "given_loop_options",
-    "loop_value",
-    "params_from_args",
-    "run",
-]
-
-
-#: The loop options: name -> (default, unit, help). ``None`` defaults are
-#: derived (see the help). The parser's defaults are ``None`` so that an
-#: option given on the command line can be told from its default (a model's
-#: or a recording's own values fill the options not given).
-LOOP_OPTIONS: dict[str, tuple[object, str, str]] = {
-    "sensor_delay_s": (0.005, "s", "force-sensor delay"),
-    "table_response_hz": (25.0, "Hz", "table response frequency (inf: ideal table)"),
-    "table_damping_ratio": (0.8, "1", "table damping ratio"),
-    "contact_frequency_hz": (1.0, "Hz", "contact natural frequency sqrt(k/m)/2pi (sets the mass)"),
-    "contact_stiffness_n_per_m": (1e5, "N/m", "contact stiffness k"),
-    "contact_damping_n_s_per_m": (0.0, "N s/m", "contact damping"),
-    "initial_velocity_m_per_s": (0.1, "m/s", "approach velocity"),
-    "initial_gap_m": (0.001, "m", "gap at t = 0"),
-    "lead_time_s": (None, "s", "SDC lead time (default: the sensor delay)"),
-    "compensator_stiffness_n_per_m": (
-        None,
-        "N/m",
-        "stiffness the compensator believes (MDC, SDMDC, smith) or starts from "
-        "(sdmdc-online's prior) (default: the true one)",
-    ),
-    "force_deadband_n": (0.0, "N", "readings at or below this are no contact"),
-    "sample_rate_hz": (None, "Hz", "sampled rig computer (default: continuous)"),
-    "time_step_s": (None, "s", "continuous-mode step (default: min(2e-4, 1/(5000 f_con)))"),
-}
-
-
-def add_loop_arguments(parser: argparse.ArgumentParser) -> None:
-    """Options shared by the commands that set up one loop (defaults: Table 1)."""
-    from hybridtable.commands._common import parse_float
-    from hybridtable.compensators.registry import compensator_names
-
-    g = parser.add_argument_group("loop parameters (defaults: the paper's Table 1 point)")
-    g.add_argument(
-        "--compensator",
-        default=None,
-        help=f"one of {', '.join(compensator_names())} (default none)",
-    )
-    for name, (default, unit, text) in LOOP_OPTIONS.items():
-        shown = "" if default is None else f" (default {default:g})"
-        if "(default" in text:
-            shown = ""
-        unit_text = "" if unit == "1" else f" [{unit}]"
-        g.add_argument(
-            "--" + name.replace("_", "-"),
-            type=parse_float,
-            default=None,
-            help=f"{text}{unit_text}{shown}",
-        )
-    g.add_argument(
-        "--passivity",
-        action="store_true",
-        help="guard the compensator with the time-domain passivity observer/controller",
-    )
-    g.add_argument("--clamp-nonnegative", action="store_true", help="clamp f_comp at zero")
-
-
-def given_loop_options(args: argparse.Namespace) -> list[str]:
-    """The loop options given on the command line (flag names)."""
-    names = ["compensator", *LOOP_OPTIONS]
-    given = ["--" + n.replace("_", "-") for n in names if getattr(args, n, None) is not None]
-    for flag in ("passivity", "clamp_nonnegative"):
-        if getattr(args, flag, False):
-            given.append("--" + flag.replace("_", "-"))
-    return given
-
-
-def loop_value(args: argparse.Namespace, name: str):
-    """A loop option's value: given, else its default."""
-    value = getattr(args, name, None)
-    if value is None:
-        return "none" if name == "compensator" else LOOP_OPTIONS[name][0]
-    return value
-
-
-def params_from_args(args: argparse.Namespace):
-    """HybridLoopParams from the options of :func:`add_loop_arguments`."""
-    from hybridtable.studies.paper import paper_params
-
-    v = {n: loop_value(args, n) for n in ("compensator", *LOOP_OPTIONS)}
-    return paper_params(
-        **v,
-        clamp_nonnegative=args.clamp_nonnegative,
-        passivity=getattr(args, "passivity", False),
-    )
+__all__ = ["register", "run"]
 
 
 def register(sub) -> None:
+    from hybridtable.commands._loop_options import add_loop_arguments
     from hybridtable.commands._model_options import (
         add_effect_argument,
         add_model_argument,
         add_plugin_argument,
     )
-    from hybridtable.commands._simulate_rig import add_record_arguments
+    from hybridtable.commands._record import add_record_arguments
 
     p = sub.add_parser(
         "simulate",
@@ -145,6 +52,7 @@ def register(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from hybridtable.commands._common import write_json
+    from hybridtable.commands._loop_options import params_from_args
     from hybridtable.commands._model_options import load_model_arg, load_plugins
     from hybridtable.errors import CommandError
     from hybridtable.loop.simulation import simulate
@@ -152,7 +60,8 @@ def run(args: argparse.Namespace) -> int:
     load_plugins(args)
     model = load_model_arg(args)
     if args.record or model is not None:
-        from hybridtable.commands._simulate_rig import run_model, run_record
+        from hybridtable.commands._record import run_record
+        from hybridtable.commands._simulate_rig import run_model
 
         if args.plot:
             raise CommandError("--plot is for one simulation (not with --record or --model)")
@@ -219,7 +128,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _simulate_with_effects(args: argparse.Namespace, params):
     """The paper's loop with the ``--add`` effects (every parameter given)."""
-    from hybridtable.commands._simulate_rig import _physics
+    from hybridtable.commands._simulate_rig import rig_physics
     from hybridtable.errors import CommandError
     from hybridtable.loop.builder import build_hybrid_loop
     from hybridtable.loop.simulation import run_loop
@@ -240,7 +149,7 @@ def _simulate_with_effects(args: argparse.Namespace, params):
         initial_velocity_m_per_s=params.initial_velocity_m_per_s,
         force_deadband_n=params.force_deadband_n,
     )
-    physics, spec, _, _ = _physics(args, None, info)
+    physics, spec, _, _ = rig_physics(args, None, info)
     if (spec.sensor or any(c == "sensor" for c, _ in spec.wrappers)) and (
         params.sample_period_s is None
     ):
