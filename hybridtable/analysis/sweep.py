@@ -97,6 +97,12 @@ class SweepResult:
     #: Filled by :func:`hybridtable.analysis.validation.validate_sweep`.
     validation: list[ValidationPoint] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    #: The ``transform`` of :func:`sweep_margins` (None: the grid's parameters
+    #: as they are); :func:`hybridtable.analysis.validation.validate_sweep`
+    #: applies it too. Not in the JSON document.
+    transform: Callable[[HybridLoopParams], HybridLoopParams] | None = field(
+        default=None, repr=False, compare=False
+    )
 
     @property
     def sampled(self) -> bool:
@@ -166,6 +172,7 @@ def sweep_margins(
     critical: bool = True,
     verify: bool = True,
     progress: bool = False,
+    transform: Callable[[HybridLoopParams], HybridLoopParams] | None = None,
 ) -> SweepResult:
     """Margins of every compensator over the (delay, table frequency) grid.
 
@@ -186,6 +193,12 @@ def sweep_margins(
         of the full Drake diagram at two grid points per compensator.
     progress : bool
         Show a tqdm progress bar.
+    transform : callable, optional
+        ``params -> params``: what the linear model is built from at each
+        point (and in the critical searches and the verification), e.g. a rig
+        model's physics as the linear models see it
+        (:meth:`~hybridtable.diagnosis.model_file.RigModel.linear_params`). The
+        grid axes stay the parameters before it.
     """
     t0 = time.perf_counter()
     _check_supported(base, compensators)
@@ -194,6 +207,12 @@ def sweep_margins(
     if delays.ndim != 1 or tables.ndim != 1 or delays.size == 0 or tables.size == 0:
         raise ParameterError("the grid needs at least one delay and one table frequency")
     model, lin = model_function(base, pade_order)
+    if transform is not None:
+        bare_model = model
+
+        def model(p: HybridLoopParams) -> LinearLoop:
+            return bare_model(transform(p))
+
     sampled_lin = SampledLoopLinearizer(lin) if base.sample_rate_hz is not None else None
     notes: set[str] = set()
     growth = growth_of(model)
@@ -228,6 +247,7 @@ def sweep_margins(
         if verify:
             for i, j in {(0, 0), (nd // 2, nt // 2)}:
                 p = cbase.with_(sensor_delay_s=float(delays[i]), table_response_hz=float(tables[j]))
+                p = p if transform is None else transform(p)
                 err = lin.verify(p) if sampled_lin is None else sampled_lin.verify(p)
                 verification = err if verification is None else max(verification, err)
         crit_d = np.full(nt, np.nan)
@@ -254,6 +274,7 @@ def sweep_margins(
         verification_error=verification,
         wall_time_s=time.perf_counter() - t0,
         notes=sorted(notes),
+        transform=transform,
     )
 
 

@@ -21,7 +21,9 @@ two ways, separated here for every point whose error exceeds a threshold:
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from dataclasses import replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.linalg import expm
@@ -31,6 +33,9 @@ from hybridtable.analysis.exact_delay import exact_margins
 from hybridtable.analysis.sampled import SampledLoopLinearizer
 from hybridtable.analysis.sweep import SweepResult, ValidationPoint
 from hybridtable.loop.params import HybridLoopParams
+
+if TYPE_CHECKING:
+    from hybridtable.loop.simulation import SimulationResult
 
 __all__ = [
     "EXPLAIN_ABOVE",
@@ -228,9 +233,14 @@ def validate_point(
     exact: bool = True,
     explain_above: float = EXPLAIN_ABOVE,
     ij: tuple[int, int] = (-1, -1),
+    simulate_fn: Callable[[HybridLoopParams], SimulationResult] | None = None,
 ) -> ValidationPoint:
     """Simulate ``params`` (nonlinear loop) and compare with ``cor_linear``;
-    split errors above ``explain_above`` into transient and gating parts."""
+    split errors above ``explain_above`` into transient and gating parts.
+
+    ``simulate_fn(params)`` replaces :func:`hybridtable.loop.simulation.simulate`
+    (e.g. a rig model's loop, whose physics ``params`` stand for in the
+    linear model)."""
     from hybridtable.errors import SimulationError
     from hybridtable.loop.simulation import simulate
 
@@ -251,7 +261,7 @@ def validate_point(
         except RuntimeError:
             cor_exact = None
     try:
-        sim = simulate(params)
+        sim = simulate(params) if simulate_fn is None else simulate_fn(params)
     except SimulationError as err:
         return ValidationPoint(
             **common, cor_sim=None, abs_error=None, cor_exact_delay=cor_exact, error=str(err)
@@ -289,10 +299,16 @@ def validate_sweep(
     exact: bool = True,
     explain_above: float = EXPLAIN_ABOVE,
     progress: bool = False,
+    simulate_fn: Callable[[HybridLoopParams], SimulationResult] | None = None,
 ) -> list[ValidationPoint]:
     """Validate ``n_points`` grid points (:func:`validation_indices`) for each
     compensator; appends to ``result.validation`` and returns the new points.
-    A failed simulation (divergence, no separation) is kept with ``error``."""
+    A failed simulation (divergence, no separation) is kept with ``error``.
+
+    With a ``result.transform`` the linear figures are those of the
+    transformed parameters and ``simulate_fn`` (called with the grid point's
+    parameters, before the transform; default: ``simulate`` of the
+    transformed ones) runs the nonlinear loop."""
     comps = list(compensators or result.compensators)
     idx = validation_indices(result.sensor_delay_s.size, result.table_response_hz.size, n_points)
     lin = ContactLoopLinearizer(result.pade_order or 3)
@@ -309,6 +325,12 @@ def validate_sweep(
             table_response_hz=float(result.table_response_hz[j]),
         )
         cor = float(result.compensators[c].predicted_cor[i, j])
-        points.append(validate_point(p, cor, lin, exact, explain_above, (i, j)))
+        if result.transform is None:
+            points.append(validate_point(p, cor, lin, exact, explain_above, (i, j)))
+            continue
+        run = None if simulate_fn is None else (lambda _q, p=p: simulate_fn(p))
+        q = result.transform(p)
+        point = validate_point(q, cor, lin, exact, explain_above, (i, j), simulate_fn=run)
+        points.append(replace(point, sensor_delay_s=p.sensor_delay_s))
     result.validation.extend(points)
     return points

@@ -1,5 +1,7 @@
 """``hybridtable compensators``: every compensator over the paper's Table 2 grid,
-under stiffness mismatch, sensor noise and a damped contact."""
+under stiffness mismatch, sensor noise and a damped contact; with ``--model``,
+every compensator on the rig a model file describes
+(:mod:`hybridtable.studies.model_compensators`)."""
 
 from __future__ import annotations
 
@@ -20,8 +22,19 @@ def _ratios(text: str) -> tuple[float, ...]:
     return values
 
 
+#: Defaults of the grid sweep's options (None in the parser, so that
+#: ``--model`` can tell an option given from one left alone).
+SWEEP_DEFAULTS = {
+    "prior_ratios": (0.5, 0.75, 1.0, 1.5, 2.0),
+    "force_noise_ratio": 1e-3,
+    "position_noise_ratio": 1e-4,
+    "contact_damping_ratio": 0.1,
+}
+
+
 def register(sub) -> None:
     from hybridtable.commands._common import parse_float
+    from hybridtable.commands._model_options import add_model_argument, add_plugin_argument
     from hybridtable.compensators.registry import compensator_names
     from hybridtable.studies.compensator_sweep import SCENARIOS
 
@@ -32,7 +45,9 @@ def register(sub) -> None:
         "over the distinct points of the paper's Table 2 under stiffness mismatch (the believed "
         "stiffness from -50% to +100%), sensor noise and a damped contact; print the worst CoR "
         "error, peak-force error and energy drift against an ideal loop, and the acceptance "
-        "checks of the online identification and the passivity guard.",
+        "checks of the online identification and the passivity guard. With --model: every "
+        "compensator on the modelled rig (its sampled computer at its runs' approach "
+        "velocities, the model's physics) against an ideal rig with the model's contact.",
     )
     p.add_argument("--json", metavar="FILE", help="write every run and the summary as JSON")
     p.add_argument("--report", metavar="DIR", help="write figures and report.md to DIR")
@@ -50,26 +65,26 @@ def register(sub) -> None:
     p.add_argument(
         "--prior-ratios",
         type=_ratios,
-        default=(0.5, 0.75, 1.0, 1.5, 2.0),
+        default=None,
         metavar="R1,R2",
         help="believed/true stiffness of the mismatch scenario (default: 0.5,0.75,1,1.5,2)",
     )
     p.add_argument(
         "--force-noise-ratio",
         type=parse_float,
-        default=1e-3,
+        default=None,
         help="force noise std / undamped peak force (default 1e-3)",
     )
     p.add_argument(
         "--position-noise-ratio",
         type=parse_float,
-        default=1e-4,
+        default=None,
         help="position noise std / peak deflection (default 1e-4)",
     )
     p.add_argument(
         "--contact-damping-ratio",
         type=parse_float,
-        default=0.1,
+        default=None,
         help="damping ratio of the damped scenario's contact (default 0.1)",
     )
     p.add_argument(
@@ -87,6 +102,12 @@ def register(sub) -> None:
     )
     p.add_argument("--tables", metavar="FILE", help="the paper's tables.json")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_model_argument(
+        p,
+        "rank every compensator (with and without the passivity guard) on the rig it "
+        "describes, against an ideal rig with its contact (replaces the Table 2 grid)",
+    )
+    add_plugin_argument(p)
     p.set_defaults(func=run)
 
 
@@ -99,7 +120,16 @@ def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from hybridtable.commands._common import write_json
+    from hybridtable.commands._model_options import load_model_arg, load_plugins
     from hybridtable.errors import CommandError
+
+    load_plugins(args)
+    model = load_model_arg(args)
+    if model is not None:
+        return _run_model(args, model)
+    for name, value in SWEEP_DEFAULTS.items():
+        if getattr(args, name) is None:
+            setattr(args, name, value)
     from hybridtable.reports.compensators import format_summary, write_report
     from hybridtable.studies.compensator_sweep import (
         SCENARIOS,
@@ -147,4 +177,76 @@ def run(args: argparse.Namespace) -> int:
             print(f"wrote {f}")
     if args.json:
         write_json(args.json, result.to_json())
+    return 0
+
+
+#: Options of the grid sweep that mean nothing on a modelled rig.
+_GRID_ONLY = (
+    ("quick", "--quick"),
+    ("scenarios", "--scenarios"),
+    ("tables", "--tables"),
+    ("sample_rate_hz", "--sample-rate-hz"),
+    ("prior_ratios", "--prior-ratios"),
+    ("force_noise_ratio", "--force-noise-ratio"),
+    ("position_noise_ratio", "--position-noise-ratio"),
+    ("contact_damping_ratio", "--contact-damping-ratio"),
+)
+
+
+def _rig_line(model) -> str:
+    n = model.nominal
+    velocities = sorted({r.nominal.initial_velocity_m_per_s for r in model.runs}) or [
+        n.initial_velocity_m_per_s
+    ]
+    return (
+        f"k {n.contact_stiffness_n_per_m:g} N/m, m {n.spacecraft_mass_kg:g} kg, sensor delay "
+        f"{n.sensor_delay_s * 1e3:g} ms, table {n.table_natural_frequency_hz:g} Hz / "
+        f"{n.table_damping_ratio:g}, lead {n.lead_time_s * 1e3:g} ms, dead band "
+        f"{n.force_deadband_n:g} N, sampled at {n.sample_rate_hz:g} Hz; approach "
+        + ", ".join(f"{v:g}" for v in velocities)
+        + " m/s"
+    )
+
+
+def _run_model(args: argparse.Namespace, model) -> int:
+    from pathlib import Path
+
+    from hybridtable.commands._common import write_json
+    from hybridtable.errors import CommandError
+    from hybridtable.reports.compensators import (
+        format_model_summary,
+        model_verdict,
+        write_model_report,
+    )
+    from hybridtable.studies.model_compensators import run_model_compensators
+
+    given = [flag for name, flag in _GRID_ONLY if getattr(args, name) not in (None, False)]
+    if given:
+        raise CommandError(f"{', '.join(given)}: not with --model (the model's rig is the grid)")
+    if args.report is not None and (Path(args.report) / "report.md").exists():
+        raise CommandError(f"{Path(args.report) / 'report.md'} exists; choose another directory")
+    if args.jobs is not None and args.jobs < 1:
+        raise CommandError(f"--jobs must be >= 1 (got {args.jobs})")
+    result = run_model_compensators(
+        model,
+        compensators=_names(args.compensators),
+        passivity=(False,) if args.no_passivity else (False, True),
+        jobs=args.jobs or 1,
+        progress=not args.no_progress and args.json != "-",
+    )
+    rig = _rig_line(model)
+    if args.report:
+        write_model_report(result, args.report, rig)
+    if args.json != "-":
+        print(format_model_summary(result, rig))
+        for f in result.figures:
+            print(f"wrote {f}")
+    if args.json:
+        data = {
+            "model": {"path": str(args.model), "description": model.describe()},
+            "rig": rig,
+            "verdict": model_verdict(result),
+            **result.to_json(),
+        }
+        write_json(args.json, data)
     return 0

@@ -1,4 +1,5 @@
-"""``hybridtable margins``: linear stability margins over sensor delay x table frequency."""
+"""``hybridtable margins``: linear stability margins over sensor delay x table frequency;
+with ``--model``, of the rig a model file describes."""
 
 from __future__ import annotations
 
@@ -13,6 +14,15 @@ __all__ = ["register", "run", "parse_list", "default_delays"]
 
 DEFAULT_DELAYS = "0:0.02:41"
 DEFAULT_TABLES = "5:200:40"
+
+#: Defaults of the rig options without ``--model`` (None in the parser, so
+#: that ``--model`` can tell an option given from one left alone).
+RIG_DEFAULTS = {
+    "table_damping_ratio": 0.8,
+    "contact_frequency_hz": 1.0,
+    "contact_stiffness_n_per_m": 1e5,
+    "initial_velocity_m_per_s": 0.1,
+}
 
 
 def parse_list(text: str, name: str) -> np.ndarray:
@@ -61,6 +71,7 @@ def default_delays(sample_rate_hz: float | None) -> np.ndarray:
 
 def register(sub) -> None:
     from hybridtable.commands._common import parse_float
+    from hybridtable.commands._model_options import add_model_argument, add_plugin_argument
 
     p = sub.add_parser(
         "margins",
@@ -69,7 +80,9 @@ def register(sub) -> None:
         "ungated compensator; Pade delay, or a sampled-data model with --sample-rate-hz) and "
         "give, per compensator and grid point, the predicted CoR, damping ratio, phase margin "
         "and effective delay, with the critical sensor delay per table frequency and the "
-        "critical table frequency per delay. Other parameters: the paper's Table 1.",
+        "critical table frequency per delay. Other parameters: the paper's Table 1. With "
+        "--model: the rig of a model file, its physics in the linear loop at every grid point, "
+        "and its operating point against the nominal model and a simulation of the model.",
     )
     p.add_argument(
         "--compensator",
@@ -89,9 +102,26 @@ def register(sub) -> None:
         default=DEFAULT_TABLES,
         help=f"table response frequencies, same syntax, inf = ideal (default {DEFAULT_TABLES})",
     )
-    p.add_argument("--table-damping-ratio", type=parse_float, default=0.8, metavar="Z")
-    p.add_argument("--contact-frequency-hz", type=parse_float, default=1.0, metavar="F")
-    p.add_argument("--contact-stiffness-n-per-m", type=parse_float, default=1e5)
+    p.add_argument(
+        "--table-damping-ratio",
+        type=parse_float,
+        default=None,
+        metavar="Z",
+        help="default 0.8 (with --model: the model's rig's)",
+    )
+    p.add_argument(
+        "--contact-frequency-hz",
+        type=parse_float,
+        default=None,
+        metavar="F",
+        help="sets the spacecraft mass, default 1 (with --model: the model's mass)",
+    )
+    p.add_argument(
+        "--contact-stiffness-n-per-m",
+        type=parse_float,
+        default=None,
+        help="default 1e5 (with --model: the model's rig's)",
+    )
     g = p.add_mutually_exclusive_group()
     g.add_argument("--contact-damping-n-s-per-m", type=parse_float, default=None)
     g.add_argument(
@@ -101,20 +131,25 @@ def register(sub) -> None:
         help="contact damping as a ratio c / (2 sqrt(k m))",
     )
     p.add_argument(
-        "--lead-time-s", type=parse_float, default=None, help="SDC lead (default: the delay)"
+        "--lead-time-s",
+        type=parse_float,
+        default=None,
+        help="SDC lead (default: the delay; with --model: the rig's lead time)",
     )
     p.add_argument(
         "--initial-velocity-m-per-s",
         type=parse_float,
-        default=0.1,
-        help="approach velocity of the validation runs",
+        default=None,
+        help="approach velocity of the validation runs (default 0.1; with --model: the "
+        "model's nominal one)",
     )
     p.add_argument(
         "--sample-rate-hz",
         type=parse_float,
         default=None,
         metavar="R",
-        help="sampled-data model of a rig computer at R Hz (delays must be whole samples)",
+        help="sampled-data model of a rig computer at R Hz (delays must be whole samples; "
+        "with --model: default the model's rig's rate)",
     )
     p.add_argument("--pade-order", type=int, default=3, metavar="N", help="default 3")
     p.add_argument(
@@ -129,22 +164,59 @@ def register(sub) -> None:
         "--report", metavar="DIR", help="write heatmaps, critical curves, Bode plot, summary.md"
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    add_model_argument(
+        p,
+        "the margins of the rig it describes (its nominal parameters, sampled at its rate; its "
+        "effects in the linear loop at every grid point) and, at the rig's operating point, "
+        "the nominal against the model's CoR and a simulation of the model",
+    )
+    add_plugin_argument(p)
     p.set_defaults(func=run)
 
 
-def _base_params(args: argparse.Namespace):
+def _model_base(args: argparse.Namespace, model):
+    """The model's rig (:func:`~hybridtable.measurement.rig.rig_params` of its
+    nominal run), the options given overriding it."""
+    from hybridtable.measurement.rig import rig_params
+
+    base = rig_params(model.nominal, f"{args.model}: nominal")
+    changes: dict = {}
+    k = base.contact_stiffness_n_per_m
+    if args.contact_stiffness_n_per_m is not None:
+        k = args.contact_stiffness_n_per_m
+        changes.update(contact_stiffness_n_per_m=k, compensator_stiffness_n_per_m=k)
+    if args.contact_frequency_hz is not None:
+        if not (math.isfinite(args.contact_frequency_hz) and args.contact_frequency_hz > 0):
+            from hybridtable.errors import CommandError
+
+            raise CommandError("--contact-frequency-hz must be > 0")
+        changes["spacecraft_mass_kg"] = k / (2.0 * math.pi * args.contact_frequency_hz) ** 2
+    for name in ("table_damping_ratio", "initial_velocity_m_per_s", "lead_time_s"):
+        if getattr(args, name) is not None:
+            changes[name] = getattr(args, name)
+    if args.sample_rate_hz is not None:
+        changes["sample_rate_hz"] = args.sample_rate_hz
+    return base.with_(**changes)
+
+
+def _base_params(args: argparse.Namespace, model=None):
     from hybridtable.errors import CommandError
     from hybridtable.studies.paper import paper_params
 
-    base = paper_params(
-        sensor_delay_s=0.0,  # the grid sets it
-        table_damping_ratio=args.table_damping_ratio,
-        contact_frequency_hz=args.contact_frequency_hz,
-        contact_stiffness_n_per_m=args.contact_stiffness_n_per_m,
-        initial_velocity_m_per_s=args.initial_velocity_m_per_s,
-        lead_time_s=args.lead_time_s,
-        sample_rate_hz=args.sample_rate_hz,
-    )
+    if model is not None:
+        base = _model_base(args, model)
+    else:
+        given = {k: getattr(args, k) for k in RIG_DEFAULTS}
+        rig = {k: v if given[k] is None else given[k] for k, v in RIG_DEFAULTS.items()}
+        base = paper_params(
+            sensor_delay_s=0.0,  # the grid sets it
+            table_damping_ratio=rig["table_damping_ratio"],
+            contact_frequency_hz=rig["contact_frequency_hz"],
+            contact_stiffness_n_per_m=rig["contact_stiffness_n_per_m"],
+            initial_velocity_m_per_s=rig["initial_velocity_m_per_s"],
+            lead_time_s=args.lead_time_s,
+            sample_rate_hz=args.sample_rate_hz,
+        )
     if args.contact_damping_ratio is not None:
         if not (math.isfinite(args.contact_damping_ratio) and args.contact_damping_ratio >= 0):
             raise CommandError("--contact-damping-ratio must be >= 0")
@@ -158,15 +230,21 @@ def run(args: argparse.Namespace) -> int:
     from hybridtable.analysis.sweep import sweep_margins
     from hybridtable.analysis.validation import validate_sweep
     from hybridtable.commands._common import write_json
+    from hybridtable.commands._model_options import load_model_arg, load_plugins
     from hybridtable.compensators.paper import COMPENSATORS
     from hybridtable.errors import CommandError
     from hybridtable.reports.margins import (
         REPORT_FILES,
+        format_model_point,
+        model_operating_point,
         operating_point,
         table1_point,
         write_report,
     )
     from hybridtable.systems.sensor import delay_samples
+
+    load_plugins(args)
+    model = load_model_arg(args)
 
     comps = [c.strip() for c in args.compensator.split(",") if c.strip()]
     for c in comps:
@@ -178,7 +256,7 @@ def run(args: argparse.Namespace) -> int:
         raise CommandError("--pade-order must be >= 1")
     if args.validate < 0:
         raise CommandError("--validate must be >= 0")
-    base = _base_params(args)
+    base = _base_params(args, model)
     delays = (
         default_delays(base.sample_rate_hz)
         if args.sensor_delay_s is None
@@ -202,12 +280,31 @@ def run(args: argparse.Namespace) -> int:
     progress = not args.no_progress and args.json != "-"
 
     t0 = time.perf_counter()
+    transform = simulate_fn = None
+    if model is not None:
+        from hybridtable.studies.model_compensators import model_transform, simulate_model
+
+        transform = model_transform(model)
+
+        def simulate_fn(p):
+            return simulate_model(model, p)
+
     result = sweep_margins(
-        base, delays, tables, comps, pade_order=args.pade_order, progress=progress
+        base,
+        delays,
+        tables,
+        comps,
+        pade_order=args.pade_order,
+        progress=progress,
+        transform=transform,
     )
     sweep_wall = time.perf_counter() - t0
     if args.validate:
-        validate_sweep(result, args.validate, progress=progress)
+        validate_sweep(result, args.validate, progress=progress, simulate_fn=simulate_fn)
+    model_point = model_lines = None
+    if model is not None:
+        model_point = model_operating_point(model, base, comps, args.pade_order)
+        model_lines = format_model_point(model_point, model, args.model)
     table1 = None
     if args.report is not None:
         table1 = operating_point(
@@ -215,7 +312,7 @@ def run(args: argparse.Namespace) -> int:
             args.pade_order,
             simulate=True,
         )
-        files = write_report(result, args.report, table1)
+        files = write_report(result, args.report, table1, model_lines)
     wall = time.perf_counter() - t0
 
     data = result.to_json_dict()
@@ -223,7 +320,20 @@ def run(args: argparse.Namespace) -> int:
     data["wall_time_s"] = wall
     if table1 is not None:
         data["table1_point"] = table1.to_dict()
+    if model_point is not None:
+        data["model"].update(
+            path=str(args.model),
+            description=model.describe(),
+            left_out=list(model_point.left_out),
+            linear_changes={k: list(v) for k, v in model_point.linear_changes.items()},
+            operating_point_sensor_delay_s=model.nominal.sensor_delay_s,
+            operating_point_table_response_hz=model.nominal.table_natural_frequency_hz,
+            operating_point_initial_velocity_m_per_s=base.initial_velocity_m_per_s,
+        )
+        data["operating_point"] = model_point.to_dict()
     if args.json != "-":
+        for line in model_lines or ():
+            print(line)
         _print_summary(result, sweep_wall)
         if args.report is not None:
             for f in files:

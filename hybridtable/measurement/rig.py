@@ -119,10 +119,19 @@ class RigPhysics:
         pinned to their values before the change), then :attr:`computer`."""
         if not self.changes and not self.computer:
             return params
+        # The beliefs as compensator_params() resolves them, for any
+        # compensator (a plug-in's kind is not one CompensatorParams knows).
+        def pick(value, default):
+            return default if value is None else value
+
         pinned = params.with_(
-            lead_time_s=params.compensator_params().lead_time_s,
-            compensator_stiffness_n_per_m=params.compensator_params().stiffness_n_per_m,
-            compensator_damping_n_s_per_m=params.compensator_params().damping_n_s_per_m,
+            lead_time_s=pick(params.lead_time_s, params.sensor_delay_s),
+            compensator_stiffness_n_per_m=pick(
+                params.compensator_stiffness_n_per_m, params.contact_stiffness_n_per_m
+            ),
+            compensator_damping_n_s_per_m=pick(
+                params.compensator_damping_n_s_per_m, params.contact_damping_n_s_per_m
+            ),
         )
         return pinned.with_(**dict(self.changes)).with_(**dict(self.computer))
 

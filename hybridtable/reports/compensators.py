@@ -1,5 +1,6 @@
 """Summary, figures and Markdown report of a compensator sweep
-(:mod:`hybridtable.studies.compensator_sweep`).
+(:mod:`hybridtable.studies.compensator_sweep`), and of the compensators on a
+modelled rig (:mod:`hybridtable.studies.model_compensators`).
 """
 
 from __future__ import annotations
@@ -24,6 +25,9 @@ from hybridtable.studies.compensator_sweep import (
 __all__ = [
     "format_summary",
     "write_report",
+    "model_verdict",
+    "format_model_summary",
+    "write_model_report",
 ]
 
 
@@ -280,3 +284,102 @@ def _plot_half_stiffness(result: SweepResult, path: Path) -> Path:
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
+
+
+# -- compensators --model ------------------------------------------------------
+def _cor(x: float) -> str:
+    return f"{x:.3f}" if math.isfinite(x) else "failed"
+
+
+def model_verdict(result) -> str:
+    """One line: the compensator that comes closest to the model's contact
+    and what no compensation gives."""
+    ranking = result.ranking()
+    if not ranking or not math.isfinite(ranking[0]["max_abs_cor_error"]):
+        return "On the modelled rig no compensator ran through a contact (every run failed)"
+    best = ranking[0]
+    line = (
+        f"On the modelled rig {best['key']} comes closest: CoR {best['cor']:.3f} against "
+        f"the contact's {best['cor_reference']:.3f} ({best['cor_error']:+.3f})"
+    )
+    if len(result.points) > 1:
+        line += f" at {best['initial_velocity_m_per_s']:g} m/s, its worst approach"
+    none = next((e for e in ranking if e["key"] == "none"), None)
+    if none is not None and none is not best:
+        line += f"; none gives {_cor(none['cor'])}"
+    return line
+
+
+def format_model_summary(result, rig: str = "") -> str:
+    """The verdict, then every compensator ranked by its CoR error against
+    the ideal rig with the model's contact; ``rig`` describes the rig (a line)."""
+    lines = [model_verdict(result), f"model: {result.description}"]
+    if rig:
+        lines.append(f"rig (nominal): {rig}")
+    refs = ", ".join(
+        f"{q['initial_velocity_m_per_s']:g} m/s: CoR {_cor(q['cor_reference'])}"
+        for q in result.points
+    )
+    lines.append(
+        "reference: an ideal rig (continuous, no delay, ideal table, no compensation) with "
+        f"the model's contact only ({refs})"
+    )
+    worst = " (worst approach)" if len(result.points) > 1 else ""
+    lines.append(
+        f"{len(result.runs)} runs, {result.wall_time_s:.1f} s; ranked by |CoR error|{worst}"
+    )
+    lines.append(
+        f"{'rank':>4}  {'compensator':<26}{'CoR':>8}{'reference':>11}{'CoR error':>11}"
+        f"{'|dF_peak|':>11}{'E created':>11}{'failed':>8}"
+    )
+    for e in result.ranking():
+        ok = math.isfinite(e["cor"])
+        lines.append(
+            f"{e['rank']:>4}  {e['key']:<26}"
+            + (f"{e['cor']:>8.4f}" if ok else f"{'failed':>8}")
+            + f"{e['cor_reference']:>11.4f}"
+            + (f"{e['cor_error']:>+11.4f}" if ok else f"{'-':>11}")
+            + f"{e['max_abs_peak_force_error']:>11.4f}{e['max_energy_created']:>11.4f}"
+            + f"{e['failed']:>8d}"
+        )
+    return "\n".join(lines)
+
+
+def write_model_report(result, out_dir: str | Path, rig: str = "") -> list[str]:
+    """``model_cor.png`` (CoR per compensator and guard against the
+    reference) and ``report.md`` in ``out_dir``; returns the paths. Refuses
+    (ParameterError) to overwrite an existing ``report.md``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out = Path(out_dir)
+    report = out / "report.md"
+    if report.exists():
+        raise ParameterError(f"{report} exists; choose another --report directory")
+    out.mkdir(parents=True, exist_ok=True)
+    ranking = result.ranking()
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    x = np.arange(len(ranking))
+    cors = [e["cor"] if math.isfinite(e["cor"]) else np.nan for e in ranking]
+    ax.bar(x, cors, color=["C1" if e["passivity"] else "C0" for e in ranking])
+    for q in result.points:
+        ax.axhline(q["cor_reference"], color="k", lw=0.8, ls="--")
+    ax.axhline(1.0, color="0.6", lw=0.8, ls=":")
+    finite = [c for c in cors if np.isfinite(c)] + [q["cor_reference"] for q in result.points]
+    if finite:
+        ax.set_ylim(min(finite) - 0.05, max(finite) + 0.05)
+    ax.set_xticks(x, [e["key"] for e in ranking], rotation=45, ha="right", fontsize=7)
+    ax.set_ylabel("CoR on the modelled rig")
+    ax.set_title("Compensators on the modelled rig (dashed: the model's contact, ideal rig)")
+    ax.grid(True, axis="y", alpha=0.3)
+    fig.tight_layout()
+    figure = out / "model_cor.png"
+    fig.savefig(figure, dpi=120)
+    plt.close(fig)
+    text = ["# Compensators on the modelled rig", "", "```", format_model_summary(result, rig)]
+    text += ["```", "", f"![model_cor]({figure.name})", ""]
+    report.write_text("\n".join(text))
+    result.figures = [str(figure), str(report)]
+    return list(result.figures)
