@@ -212,3 +212,17 @@ def test_repeated_add_in_simulate_and_its_errors(capsys):
     ]:
         assert main(["simulate", *extra]) == 2
         assert words in capsys.readouterr().err
+
+
+def test_margins_with_the_model_shows_the_damping(rig, capsys):
+    args = ["margins", "--model", str(rig["model"]), "--sensor-delay-s", "0.004"]
+    assert main([*args, "--table-response-hz", "30", "--json", "-", "--no-progress"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    point = doc["operating_point"]
+    zeta = HIDDEN_DAMPING / (2.0 * math.sqrt(6e4 * 6e4 / (2 * math.pi * 1.5) ** 2))
+    loss = math.exp(-math.pi * zeta / math.sqrt(1 - zeta**2))
+    assert set(point) == {"none", "SDC", "MDC", "SDMDC"}
+    for c, p in point.items():
+        # The damping lowers every compensator's predicted CoR by its loss.
+        assert p["cor_model"] < p["cor_nominal"], c
+        assert p["cor_model"] / p["cor_nominal"] == pytest.approx(loss, abs=0.003), c
