@@ -14,7 +14,15 @@ from __future__ import annotations
 import argparse
 import sys
 
-from hybridtable.commands import compare, compensators, diagnose, margins, reproduce, simulate
+from hybridtable.commands import (
+    compare,
+    compensators,
+    diagnose,
+    effects,
+    margins,
+    reproduce,
+    simulate,
+)
 from hybridtable.errors import CommandError, ParameterError, SimulationError
 
 __all__ = [
@@ -26,7 +34,7 @@ __all__ = [
 
 #: Modules that register sub-commands, in the order ``--help`` lists them.
 #: Each keeps its heavy imports inside ``run`` so that ``--help`` starts fast.
-COMMANDS = (simulate, reproduce, compare, diagnose, compensators, margins)
+COMMANDS = (simulate, reproduce, compare, diagnose, effects, compensators, margins)
 
 
 class _Parser(argparse.ArgumentParser):

@@ -119,6 +119,7 @@ class RigPhysics:
         pinned to their values before the change), then :attr:`computer`."""
         if not self.changes and not self.computer:
             return params
+
         # The beliefs as compensator_params() resolves them, for any
         # compensator (a plug-in's kind is not one CompensatorParams knows).
         def pick(value, default):

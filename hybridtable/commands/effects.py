@@ -1,0 +1,236 @@
+"""``hybridtable effects``: the registered physical effects, their parameters,
+units and bounds.
+
+Lists every effect that ``diagnose``, ``compare --add`` and ``simulate --add``
+know: the built-ins, those of installed packages (entry-point group
+``hybridtable.effects``) and those of ``--plugin MODULE:ATTR``. Bounds that
+depend on the rig (callables of a
+:class:`~hybridtable.diagnosis.effects.RigScale`) are evaluated at a
+reference rig: the paper's Table 1 point (sampled at 1 kHz) by default, or the
+rig of the recorded runs of ``--rig RUN``.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+__all__ = ["SOURCES", "register", "run", "paper_scale", "effect_json", "format_effects"]
+
+#: Where a registered effect comes from (``"script"``: ``register_effect``
+#: called in this process, e.g. by a program using the Python API).
+SOURCES: tuple[str, ...] = ("built-in", "entry point", "plug-in", "script")
+
+#: Sample period of the paper's Table 1 point as a reference rig (s): the
+#: paper's loop is continuous; recorded runs are sampled at 1 kHz.
+PAPER_SAMPLE_PERIOD_S = 1e-3
+
+
+def register(sub) -> None:
+    from hybridtable.commands._model_options import add_plugin_argument
+
+    p = sub.add_parser(
+        "effects",
+        help="list the registered physical effects with their parameters, units and bounds",
+        description="List every registered physical effect (built-in, from installed "
+        "packages through the entry-point group hybridtable.effects, or from --plugin) "
+        "with its parameters, units, bounds, typical change and null value (the value "
+        "at which the effect vanishes), its stage (replay or closed loop) and a one-line "
+        "description. Bounds relative to the rig (marked *) are evaluated at a reference "
+        "rig: the paper's Table 1 point, or the rig of --rig RUN. The console opens with "
+        "one sentence; --json gives a list of one object per effect.",
+    )
+    p.add_argument(
+        "--json",
+        metavar="FILE",
+        help="write the list of effects as JSON (- for stdout, then nothing else is printed)",
+    )
+    add_plugin_argument(p)
+    p.add_argument(
+        "--rig",
+        metavar="RUN",
+        help="evaluate the bounds at the rig of these recorded runs (a run's .csv or "
+        ".json, or a folder; the fastest approach velocity of them) (default: the "
+        "paper's Table 1 point: k = 1e5 N/m, m = 2533 kg, v = 0.1 m/s, sensor delay "
+        "5 ms, table 25 Hz, sampled at 1 kHz)",
+    )
+    p.set_defaults(func=run)
+
+
+def paper_scale():
+    """The :class:`~hybridtable.diagnosis.effects.RigScale` of the paper's Table 1
+    point, sampled at :data:`PAPER_SAMPLE_PERIOD_S`."""
+    from hybridtable.diagnosis.effects import RigScale
+    from hybridtable.studies.paper import table1_params
+
+    p = table1_params("none")
+    return RigScale(
+        stiffness_n_per_m=p.contact_stiffness_n_per_m,
+        mass_kg=p.spacecraft_mass_kg,
+        sample_period_s=PAPER_SAMPLE_PERIOD_S,
+        sensor_delay_s=p.sensor_delay_s,
+        velocity_m_per_s=p.initial_velocity_m_per_s,
+        table_frequency_hz=p.table_response_hz,
+    )
+
+
+def _scale_json(scale, where: str) -> dict:
+    return {
+        "rig": where,
+        "stiffness_n_per_m": scale.stiffness_n_per_m,
+        "mass_kg": scale.mass_kg,
+        "sample_period_s": scale.sample_period_s,
+        "sensor_delay_s": scale.sensor_delay_s,
+        "velocity_m_per_s": scale.velocity_m_per_s,
+        "table_frequency_hz": scale.table_frequency_hz,
+        "peak_deflection_m": scale.peak_deflection_m,
+        "peak_force_n": scale.peak_force_n,
+    }
+
+
+def effect_json(effect, source: str, scale, where: str) -> dict:
+    """One effect as a JSON object, its bounds evaluated at ``scale`` (the rig ``where``)."""
+    params = []
+    for p in effect.parameters:
+        lower, upper = p.bounds(scale)
+        fields = {"lower": p.lower, "upper": p.upper, "typical": p.scale, "null": p.null}
+        params.append(
+            {
+                "name": p.name,
+                "unit": p.unit,
+                "description": p.description,
+                "lower": lower,
+                "upper": upper,
+                "typical": p.typical(scale),
+                "null": p.null_value(scale),
+                "bounds_depend_on_rig": callable(p.lower) or callable(p.upper),
+                "rig_dependent": [k for k, v in fields.items() if callable(v)],
+            }
+        )
+    sig = effect.signature
+    return {
+        "name": effect.name,
+        "description": effect.description,
+        "parameters": params,
+        "stage": effect.stage,
+        "signature": {
+            "channels": list(sig.channels),
+            "phases": list(sig.phases),
+            "text": sig.text,
+        },
+        "source": source,
+        "touches": list(effect.touches),
+        "separation_hint": effect.separation_hint,
+        "bounds_at": _scale_json(scale, where),
+    }
+
+
+def _number(x: float | None, rig: bool) -> str:
+    text = "-" if x is None else f"{x:.4g}"
+    return text + ("*" if rig else " ")
+
+
+def format_effects(items: list[dict]) -> str:
+    """The console text of :func:`effect_json` objects: one sentence, the rig
+    the bounds are evaluated at, and the table."""
+    counts = {s: sum(1 for e in items if e["source"] == s) for s in SOURCES}
+    plugins = counts["entry point"] + counts["plug-in"]
+    head = (
+        f"{len(items)} effects registered ({counts['built-in']} built-in, {plugins} from plug-ins"
+    )
+    parts = []
+    if counts["entry point"]:
+        parts.append(f"{counts['entry point']} from entry points")
+    if counts["plug-in"]:
+        parts.append(f"{counts['plug-in']} by --plugin")
+    if parts:
+        head += ": " + ", ".join(parts)
+    if counts["script"]:
+        head += f"; {counts['script']} registered by a script"
+    head += ")."
+    lines = [head]
+    if items:
+        s = items[0]["bounds_at"]
+        lines.append(
+            f"Values marked * depend on the rig; evaluated at {s['rig']}: "
+            f"k = {s['stiffness_n_per_m']:.4g} N/m, m = {s['mass_kg']:.4g} kg, "
+            f"h = {s['sample_period_s']:.4g} s, T = {s['sensor_delay_s']:.4g} s, "
+            f"v = {s['velocity_m_per_s']:.4g} m/s, f_table = {s['table_frequency_hz']:.4g} Hz "
+            f"(peak deflection {s['peak_deflection_m']:.4g} m, peak force "
+            f"{s['peak_force_n']:.4g} N)."
+        )
+    lines.append("")
+    header = (
+        f"{'effect':<22}{'source':<13}{'stage':<13}description\n"
+        f"  {'parameter':<30}{'unit':<8}{'lower':>12}{'upper':>12}{'typical':>12}"
+        f"{'null':>12}  description"
+    )
+    lines.append(header)
+    lines.append("-" * 104)
+    for e in items:
+        lines.append(f"{e['name']:<22}{e['source']:<13}{e['stage']:<13}{e['description']}")
+        for p in e["parameters"]:
+            rig = set(p["rig_dependent"])
+            lines.append(
+                f"  {p['name']:<30}{p['unit']:<8}"
+                f"{_number(p['lower'], 'lower' in rig):>12}"
+                f"{_number(p['upper'], 'upper' in rig):>12}"
+                f"{_number(p['typical'], 'typical' in rig):>12}"
+                f"{_number(p['null'], 'null' in rig):>12}  {p['description']}"
+            )
+    lines.append("")
+    lines.append(
+        "typical: the fit's unit step; null: the value at which the effect vanishes "
+        "(- : none). Use an effect with --add NAME[:param=value,...]."
+    )
+    return "\n".join(lines)
+
+
+def _sources(plugin_effects) -> dict[str, str]:
+    """Effect name -> where it comes from (:data:`SOURCES`)."""
+    from importlib.metadata import entry_points
+
+    from hybridtable.diagnosis.effects import Effect
+    from hybridtable.diagnosis.library import BUILTIN_EFFECTS
+    from hybridtable.diagnosis.registry import EFFECTS, ENTRY_POINT_GROUP
+
+    out = {e.name: "built-in" for e in BUILTIN_EFFECTS if EFFECTS.get(e.name) is e}
+    for ep in entry_points(group=ENTRY_POINT_GROUP):
+        try:  # loaded (and checked) by the registry already: the module is cached
+            effect = ep.load()
+        except Exception:  # a broken entry point is the registry's to report
+            continue
+        if isinstance(effect, Effect) and EFFECTS.get(effect.name) is effect:
+            out.setdefault(effect.name, "entry point")
+    for effect in plugin_effects:
+        out.setdefault(effect.name, "plug-in")
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    from hybridtable.commands._common import check_outputs, input_paths, write_json_atomic
+    from hybridtable.diagnosis.effects import RigScale
+    from hybridtable.diagnosis.registry import effect_names, get_effect, load_plugin
+
+    effect_names()  # registers the entry points' effects before the plug-ins
+    plugin_effects = [e for text in args.plugin for e in load_plugin(text)]
+    inputs = []
+    if args.rig:
+        from hybridtable.measurement.run_reader import read_runs
+
+        runs = read_runs([args.rig])
+        inputs = input_paths(runs)
+        scale = RigScale.from_runs(runs)
+        ids = ", ".join(r.run_id for r in runs)
+        where = f"the rig of {args.rig} ({ids})"
+    else:
+        scale = paper_scale()
+        where = "the paper's Table 1 point"
+    check_outputs(args.json, None, inputs, "effects", "")
+    sources = _sources(plugin_effects)
+    names = effect_names()
+    items = [effect_json(get_effect(n), sources.get(n, "script"), scale, where) for n in names]
+    if args.json != "-":
+        print(format_effects(items))
+    if args.json:
+        write_json_atomic(args.json, items)
+    return 0
