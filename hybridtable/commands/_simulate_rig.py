@@ -201,17 +201,15 @@ def run_model(args: argparse.Namespace, model) -> dict:
     from hybridtable.measurement.rig import simulate_rig_contact
 
     refuse_unsupported(args, "simulate --model")
-    physics_args = rig_physics(args, model, model.nominal)
-    physics, spec, effects, _ = physics_args
+    physics, spec, effects, _ = rig_physics(args, model, model.nominal)
     given = given_loop_options(args)
     rows = []
     if not given and model.runs:
-        cases = [(r.nominal, model.physics(r.run_id), r) for r in model.runs]
-        if args.add:
-            cases = [
-                (r.nominal, replace(physics, computer=model.computer_for(r.run_id)), r)
-                for r in model.runs
-            ]
+        # Each fitted run with its own rig computer (the audit's, per run).
+        cases = [
+            (r.nominal, replace(physics, computer=model.computer_for(r.run_id)), r)
+            for r in model.runs
+        ]
     else:
         info = rig_info_from_args(args, model.nominal, "simulated")
         cases = [(info, physics, None)]
