@@ -114,8 +114,6 @@ def _check_record_folder(folder: Path, n: int, force: bool) -> None:
 
 def run_record(args: argparse.Namespace, model) -> dict:
     """``simulate --record DIR``: write the runs and ``truth.json``."""
-    import json
-
     from hybridtable.commands._common import write_json_atomic
     from hybridtable.diagnosis.model_file import tool_version
     from hybridtable.measurement.recorder import record_run, write_run
@@ -150,8 +148,10 @@ def run_record(args: argparse.Namespace, model) -> dict:
     )
     if args.force_deadband_n is None and base is None:
         infos = [replace(i, force_deadband_n=5.0 * sigma_f) for i in infos]
-    physics, spec, effects, scale = rig_physics(
-        args, model, replace(infos[0], initial_velocity_m_per_s=v_max)
+    from hybridtable.diagnosis.effects import RigScale
+
+    physics, spec, effects = rig_physics(
+        args, model, model.scale if model is not None else RigScale.from_info(infos[0], v_max)
     )
     from hybridtable.measurement.recorder import FORMAT_COMPENSATORS
 
@@ -232,7 +232,7 @@ def run_record(args: argparse.Namespace, model) -> dict:
         )
         or "nothing (the nominal rig)"
     )
-    out = {"record": str(folder), "truth": json.loads(truth_path.read_text())}
+    out = {"record": str(folder), "truth": truth_doc}
     if args.json != "-":
         cors = ", ".join(f"{r['cor']:.4f}" for r in truth_runs)
         print(

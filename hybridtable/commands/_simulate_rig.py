@@ -19,11 +19,15 @@ from typing import Any
 from hybridtable.errors import CommandError
 
 __all__ = [
+    "RECORD_SAMPLE_RATE_HZ",
     "refuse_unsupported",
     "rig_info_from_args",
     "rig_physics",
     "run_model",
 ]
+
+#: Rate of a simulated rig's computer when neither an option nor a model gives one (Hz).
+RECORD_SAMPLE_RATE_HZ = 1000.0
 
 #: Loop options the run format's rig computer has no place for, and what to use.
 _REFUSED = {
@@ -79,25 +83,37 @@ def rig_info_from_args(
     def b(key):
         return getattr(base, key) if base is not None else None
 
+    def d(name):
+        return LOOP_OPTIONS[name][0]
+
     k = check_positive(
         "--contact-stiffness-n-per-m",
-        _number(args, "contact_stiffness_n_per_m", b("contact_stiffness_n_per_m"), 1e5),
+        _number(
+            args,
+            "contact_stiffness_n_per_m",
+            b("contact_stiffness_n_per_m"),
+            d("contact_stiffness_n_per_m"),
+        ),
     )
     if args.contact_frequency_hz is not None or base is None:
         f = check_positive(
             "--contact-frequency-hz",
-            _number(args, "contact_frequency_hz", None, LOOP_OPTIONS["contact_frequency_hz"][0]),
+            _number(args, "contact_frequency_hz", None, d("contact_frequency_hz")),
         )
         mass = k / (2.0 * math.pi * f) ** 2
     else:
         mass = base.spacecraft_mass_kg
     delay = check_nonnegative(
-        "--sensor-delay-s", _number(args, "sensor_delay_s", b("sensor_delay_s"), 0.005)
+        "--sensor-delay-s",
+        _number(args, "sensor_delay_s", b("sensor_delay_s"), d("sensor_delay_s")),
     )
     rate = check_positive(
-        "--sample-rate-hz", _number(args, "sample_rate_hz", b("sample_rate_hz"), 1000.0)
+        "--sample-rate-hz",
+        _number(args, "sample_rate_hz", b("sample_rate_hz"), RECORD_SAMPLE_RATE_HZ),
     )
-    table = _number(args, "table_response_hz", b("table_natural_frequency_hz"), 25.0)
+    table = _number(
+        args, "table_response_hz", b("table_natural_frequency_hz"), d("table_response_hz")
+    )
     if not (table > 0 and math.isfinite(table)):
         raise CommandError(
             f"--table-response-hz must be finite and > 0 for a recorded rig (got {table})"
@@ -115,18 +131,26 @@ def rig_info_from_args(
         "table_natural_frequency_hz": table,
         "table_damping_ratio": check_nonnegative(
             "--table-damping-ratio",
-            _number(args, "table_damping_ratio", b("table_damping_ratio"), 0.8),
+            _number(
+                args, "table_damping_ratio", b("table_damping_ratio"), d("table_damping_ratio")
+            ),
         ),
         "compensator": compensator or args.compensator or (b("compensator") or "none"),
         "lead_time_s": check_nonnegative("--lead-time-s", lead),
         "initial_gap_m": check_nonnegative(
-            "--initial-gap-m", _number(args, "initial_gap_m", b("initial_gap_m"), 0.001)
+            "--initial-gap-m",
+            _number(args, "initial_gap_m", b("initial_gap_m"), d("initial_gap_m")),
         ),
         "initial_velocity_m_per_s": check_positive(
             "--initial-velocity-m-per-s",
             velocity
             if velocity is not None
-            else _number(args, "initial_velocity_m_per_s", b("initial_velocity_m_per_s"), 0.1),
+            else _number(
+                args,
+                "initial_velocity_m_per_s",
+                b("initial_velocity_m_per_s"),
+                d("initial_velocity_m_per_s"),
+            ),
         ),
         "force_deadband_n": check_nonnegative(
             "--force-deadband-n",
@@ -138,9 +162,15 @@ def rig_info_from_args(
     return info
 
 
-def rig_physics(args: argparse.Namespace, model, info):
+def rig_physics(args: argparse.Namespace, model, scale=None):
     """The rig's physics: the model's effects and rig computer, plus --add's
-    (every parameter given). Returns (physics, the effects as (name, values))."""
+    (every parameter given, checked against the bounds at ``scale``, default
+    the model's).
+
+    Returns the :class:`~hybridtable.measurement.rig.RigPhysics`, the
+    :class:`~hybridtable.diagnosis.effects.ModelSpec`, and the effects as
+    ``[(name, values), ...]``.
+    """
     from hybridtable.commands._model_options import parse_added
     from hybridtable.diagnosis.registry import build_spec
 
@@ -156,7 +186,7 @@ def rig_physics(args: argparse.Namespace, model, info):
             for e in model.effects:
                 if effect.conflicts_with(e.effect):
                     raise CommandError(f"--add {effect.name}: the model already has {e.name}")
-    scale = model.scale if model is not None else _scale(info)
+    scale = model.scale if scale is None else scale
     checked = [(e, e.check_values(v, scale)) for e, v in added]
     effects = [(e.effect, dict(e.values)) for e in model.effects] if model is not None else []
     effects += checked
@@ -164,20 +194,7 @@ def rig_physics(args: argparse.Namespace, model, info):
     physics = spec.physics(name="+".join(e.name for e, _ in effects) or "nominal")
     if model is not None and model.computer_for(None):
         physics = replace(physics, computer=model.computer_for(None))
-    return physics, spec, [(e.name, v) for e, v in effects], scale
-
-
-def _scale(info):
-    from hybridtable.diagnosis.effects import RigScale
-
-    return RigScale(
-        stiffness_n_per_m=info.contact_stiffness_n_per_m,
-        mass_kg=info.spacecraft_mass_kg,
-        sample_period_s=info.sample_period_s,
-        sensor_delay_s=info.sensor_delay_s,
-        velocity_m_per_s=info.initial_velocity_m_per_s,
-        table_frequency_hz=info.table_natural_frequency_hz,
-    )
+    return physics, spec, [(e.name, v) for e, v in effects]
 
 
 def _metrics(result) -> dict[str, float]:
@@ -201,7 +218,7 @@ def run_model(args: argparse.Namespace, model) -> dict:
     from hybridtable.measurement.rig import simulate_rig_contact
 
     refuse_unsupported(args, "simulate --model")
-    physics, spec, effects, _ = rig_physics(args, model, model.nominal)
+    physics, spec, effects = rig_physics(args, model)
     given = given_loop_options(args)
     rows = []
     if not given and model.runs:

@@ -62,15 +62,7 @@ def paper_scale():
     from hybridtable.diagnosis.effects import RigScale
     from hybridtable.studies.paper import table1_params
 
-    p = table1_params("none")
-    return RigScale(
-        stiffness_n_per_m=p.contact_stiffness_n_per_m,
-        mass_kg=p.spacecraft_mass_kg,
-        sample_period_s=PAPER_SAMPLE_PERIOD_S,
-        sensor_delay_s=p.sensor_delay_s,
-        velocity_m_per_s=p.initial_velocity_m_per_s,
-        table_frequency_hz=p.table_response_hz,
-    )
+    return RigScale.from_params(table1_params("none"), PAPER_SAMPLE_PERIOD_S)
 
 
 def _scale_json(scale, where: str) -> dict:

@@ -129,34 +129,18 @@ def run(args: argparse.Namespace) -> int:
 def _simulate_with_effects(args: argparse.Namespace, params):
     """The paper's loop with the ``--add`` effects (every parameter given)."""
     from hybridtable.commands._simulate_rig import rig_physics
+    from hybridtable.diagnosis.effects import RigScale
     from hybridtable.errors import CommandError
     from hybridtable.loop.builder import build_hybrid_loop
     from hybridtable.loop.simulation import run_loop
-    from hybridtable.measurement.run_format import RunInfo
 
-    h = params.sample_period_s or params.step_s
-    info = RunInfo(
-        run_id="simulated",
-        sample_rate_hz=1.0 / h,
-        spacecraft_mass_kg=params.spacecraft_mass_kg,
-        contact_stiffness_n_per_m=params.contact_stiffness_n_per_m,
-        sensor_delay_s=params.sensor_delay_s,
-        table_natural_frequency_hz=params.table_response_hz,
-        table_damping_ratio=params.table_damping_ratio,
-        compensator=params.compensator,
-        lead_time_s=params.compensator_params().lead_time_s,
-        initial_gap_m=params.initial_gap_m,
-        initial_velocity_m_per_s=params.initial_velocity_m_per_s,
-        force_deadband_n=params.force_deadband_n,
-    )
-    physics, spec, _, _ = rig_physics(args, None, info)
-    if (spec.sensor or any(c == "sensor" for c, _ in spec.wrappers)) and (
-        params.sample_period_s is None
-    ):
+    scale = RigScale.from_params(params, params.sample_period_s or params.step_s)
+    physics, spec, _ = rig_physics(args, None, scale)
+    changes_sensor = bool(spec.sensor) or any(c == "sensor" for c, _ in spec.wrappers)
+    if changes_sensor and params.sample_period_s is None:
         raise CommandError("--add: effects of the force sensor need --sample-rate-hz")
     if spec.mass_ratio != 1.0:
         params = params.with_(spacecraft_mass_kg=params.spacecraft_mass_kg * spec.mass_ratio)
-    changes_sensor = bool(spec.sensor) or any(c == "sensor" for c, _ in spec.wrappers)
     loop = build_hybrid_loop(
         params,
         table=physics.make_table(params),

@@ -86,16 +86,39 @@ class RigScale:
 
     @classmethod
     def from_runs(cls, runs: Sequence[Run]) -> RigScale:
+        """The scale of the rig of ``runs`` (the first run's JSON), at their
+        fastest approach."""
         if not runs:
             raise ParameterError("no runs")
-        info = runs[0].info
+        return cls.from_info(runs[0].info, max(r.info.initial_velocity_m_per_s for r in runs))
+
+    @classmethod
+    def from_info(cls, info: Any, velocity_m_per_s: float | None = None) -> RigScale:
+        """The scale of the rig of a run's JSON (a
+        :class:`~hybridtable.measurement.run_format.RunInfo`); the approach
+        velocity defaults to its own."""
         return cls(
             stiffness_n_per_m=info.contact_stiffness_n_per_m,
             mass_kg=info.spacecraft_mass_kg,
             sample_period_s=info.sample_period_s,
             sensor_delay_s=info.sensor_delay_s,
-            velocity_m_per_s=max(r.info.initial_velocity_m_per_s for r in runs),
+            velocity_m_per_s=(
+                info.initial_velocity_m_per_s if velocity_m_per_s is None else velocity_m_per_s
+            ),
             table_frequency_hz=info.table_natural_frequency_hz,
+        )
+
+    @classmethod
+    def from_params(cls, params: Any, sample_period_s: float) -> RigScale:
+        """The scale of a loop's :class:`~hybridtable.loop.params.HybridLoopParams`,
+        with the rig computer's period ``sample_period_s``."""
+        return cls(
+            stiffness_n_per_m=params.contact_stiffness_n_per_m,
+            mass_kg=params.spacecraft_mass_kg,
+            sample_period_s=sample_period_s,
+            sensor_delay_s=params.sensor_delay_s,
+            velocity_m_per_s=params.initial_velocity_m_per_s,
+            table_frequency_hz=params.table_response_hz,
         )
 
     @property
