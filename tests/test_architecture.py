@@ -31,6 +31,7 @@ LAYERS: dict[str, int] = {
     "errors": 0,
     "_lazy": 0,
     "_validation": 0,
+    "_files": 0,
     "data": 0,
     "systems": 1,
     "compensators": 2,

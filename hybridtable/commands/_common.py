@@ -7,12 +7,11 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import sys
-import tempfile
 from pathlib import Path
 from typing import Any
 
+from hybridtable._files import write_text_atomic
 from hybridtable.errors import CommandError
 
 __all__ = [
@@ -47,15 +46,19 @@ def _jsonable(obj: Any) -> Any:
     return obj
 
 
+def _json_text(data: Any) -> str:
+    return json.dumps(_jsonable(data), indent=2) + "\n"
+
+
 def write_json(path: str | Path, data: Any) -> None:
     """Write ``data`` as JSON (NaN -> null, inf -> "inf"); ``-`` is stdout."""
-    text = json.dumps(_jsonable(data), indent=2)
+    text = _json_text(data)
     if str(path) == "-":
-        sys.stdout.write(text + "\n")
+        sys.stdout.write(text)
         return
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(text + "\n")
+    path.write_text(text)
 
 
 def input_paths(runs) -> list[Path]:
@@ -107,16 +110,7 @@ def write_json_atomic(path: str, data) -> None:
     if path == "-":
         write_json(path, data)
         return
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent)
-    os.close(fd)
-    try:
-        write_json(tmp, data)
-        os.replace(tmp, target)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+    write_text_atomic(path, _json_text(data))
 
 
 def add_run_arguments(parser: argparse.ArgumentParser, report: str) -> None:

@@ -273,28 +273,10 @@ def fit_effect(
     given: Mapping[str, float] | None = None,
     accuracy: float = FIT_ACCURACY,
 ) -> dict[str, float]:
-    """Values of effect ``name`` fitted to ``runs`` (the ``given`` ones held).
-
-    A replay effect is fitted on the replay, a closed-loop effect on the
-    closed loop's spacecraft velocity.
-    """
-    effect = get_effect(name)
-    data = prepare_runs(runs)
-    scale = RigScale.from_runs(runs)
-    checked = effect.check_values(given or {}, scale)
-    given = {k: checked[k] for k in (given or {})}
-    ev = Evaluator(data, scale, accuracy)
-    fixed = {name: dict(given)} if given else None
-    if effect.stage == "closed_loop":
-        ev.inject_noise(fit_effects(ev, []).evaluations)
-        base = fit_effects(ev, [], stage="closed_loop")
-        ev.calibrate_closed_loop(base.evaluations)
-        fit = fit_effects(ev, [name], fixed=fixed, stage="closed_loop")
-    else:
-        base = fit_effects(ev, [])
-        residuals = residual_probe(data, base.evaluations)
-        fit = fit_effects(ev, [name], fixed=fixed, starts=starts_for(effect, scale, residuals))
-    return dict(fit.values[name])
+    """Values of effect ``name`` fitted to ``runs`` (the ``given`` ones held):
+    :func:`fit_given` for one effect, without standard errors."""
+    values, _ = fit_given(runs, [(get_effect(name), dict(given or {}))], accuracy, False)
+    return values[name]
 
 
 def fit_given(
@@ -320,7 +302,10 @@ def fit_given(
     data = prepare_runs(runs)
     scale = RigScale.from_runs(runs)
     names = [e.name for e, _ in given]
-    fixed = {e.name: {k: e.check_values(v, scale)[k] for k in v} for e, v in given}
+    fixed = {}
+    for e, v in given:
+        checked = e.check_values(v, scale)
+        fixed[e.name] = {k: checked[k] for k in v}
     free = {
         e.name for e in (e for e, _ in given) for p in e.parameters if p.name not in fixed[e.name]
     }

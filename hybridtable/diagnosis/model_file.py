@@ -154,9 +154,9 @@ class RigModel:
         model_runs = []
         for r, c in zip(runs, per_run, strict=True):
             try:
-                cor = cor_from_record(r.v_des_m_per_s, r.f_comp_n, r.info.initial_velocity_m_per_s)[
-                    0
-                ]
+                cor, _, _ = cor_from_record(
+                    r.v_des_m_per_s, r.f_comp_n, r.info.initial_velocity_m_per_s
+                )
             except ValueError:
                 cor = None
             digest = hashlib.sha256(r.csv_path.read_bytes()).hexdigest() if r.csv_path else None

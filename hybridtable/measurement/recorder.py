@@ -23,13 +23,12 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import tempfile
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
+from hybridtable._files import write_text_atomic
 from hybridtable.errors import CommandError, ParameterError, SimulationError
 from hybridtable.measurement.phases import cor_from_record
 from hybridtable.measurement.rig import RigPhysics, simulate_rig
@@ -144,19 +143,6 @@ def run_files(folder: str | Path, stem: str) -> tuple[Path, Path]:
     return folder / f"{stem}.csv", folder / f"{stem}.json"
 
 
-def _write_atomic(path: Path, text: str, force: bool) -> None:
-    if path.exists() and not force:
-        raise CommandError(f"{path} exists; not replacing it without --force")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-
-
 def write_run(run: Run, folder: str | Path, stem: str, force: bool = False) -> Run:
     """Write ``run`` as ``folder/stem.csv`` and ``folder/stem.json``
     (``hybridtable-run/1``); return it with its paths set.
@@ -180,6 +166,6 @@ def write_run(run: Run, folder: str | Path, stem: str, force: bool = False) -> R
     info = run.info.to_dict()
     info["format"] = FORMAT
     assert set(info) == set(RUN_KEYS)
-    _write_atomic(csv_path, "\n".join(lines) + "\n", force)
-    _write_atomic(json_path, json.dumps(info, indent=2) + "\n", force)
+    write_text_atomic(csv_path, "\n".join(lines) + "\n")
+    write_text_atomic(json_path, json.dumps(info, indent=2) + "\n")
     return replace(run, csv_path=csv_path, json_path=json_path)
