@@ -2,8 +2,10 @@
 PYTHON ?= python3
 VENV := .venv
 STAMP := $(VENV)/.installed
+BROWSER_STAMP := $(VENV)/.installed-browser
+CHROMIUM := /usr/bin/chromium
 
-.PHONY: run test lint setup clean
+.PHONY: run test test-browser test-docs lint setup clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -14,12 +16,32 @@ $(STAMP): pyproject.toml
 setup: $(STAMP)
 
 run: $(STAMP)
-	$(VENV)/bin/hybridtable reproduce --out-dir out/reproduce --json out/reproduce/reproduce.json
+	$(VENV)/bin/hybridtable reproduce --out-dir out/reproduce --json out/reproduce/reproduce.json --force
 
 test: $(STAMP)
 	$(VENV)/bin/ruff check .
 	$(VENV)/bin/ruff format --check .
 	MPLBACKEND=Agg $(VENV)/bin/python -m pytest -q
+
+$(BROWSER_STAMP): $(STAMP)
+	$(VENV)/bin/python -m pip install --quiet -e '.[test,browser]'
+	touch $(BROWSER_STAMP)
+
+# The HTML reports opened in headless chromium: Debian's package (installed here
+# if missing), driven by playwright; no browser is ever downloaded. A missing
+# browser is a failure here, not a skip.
+test-browser: $(BROWSER_STAMP)
+	@if [ ! -x $(CHROMIUM) ]; then \
+	  if [ "$$(id -u)" -eq 0 ]; then SUDO=; else SUDO=sudo; fi; \
+	  $$SUDO apt-get update && \
+	  $$SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y chromium chromium-driver; \
+	fi
+	HYBRIDTABLE_REQUIRE_BROWSER=1 MPLBACKEND=Agg $(VENV)/bin/python -m pytest -q -m browser
+
+# Every sh block of README.md and docs/*.md, run as written in a copy of the
+# repository with nothing beside it (tests/test_docs.py).
+test-docs: $(STAMP)
+	MPLBACKEND=Agg $(VENV)/bin/python -m pytest -q -m docs tests/test_docs.py
 
 clean:
 	rm -rf $(VENV) out

@@ -14,6 +14,12 @@ from pathlib import Path
 __all__ = ["write_text_atomic"]
 
 
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
 def write_text_atomic(path: str | Path, text: str) -> None:
     """Write ``text`` (UTF-8, newlines as given) to ``path`` atomically,
     creating its folder."""
@@ -23,6 +29,7 @@ def write_text_atomic(path: str | Path, text: str) -> None:
     try:
         with os.fdopen(fd, "w", encoding="utf-8", newline="") as f:
             f.write(text)
+        os.chmod(tmp, 0o666 & ~_umask())  # as open() would, not mkstemp's 0600
         os.replace(tmp, target)
     finally:
         if os.path.exists(tmp):

@@ -18,11 +18,13 @@ from hybridtable.commands import (
     compare,
     compensators,
     diagnose,
+    diagram,
     effects,
     margins,
     reproduce,
     simulate,
 )
+from hybridtable.commands._common import add_force_argument
 from hybridtable.errors import CommandError, ParameterError, SimulationError
 
 __all__ = [
@@ -34,12 +36,44 @@ __all__ = [
 
 #: Modules that register sub-commands, in the order ``--help`` lists them.
 #: Each keeps its heavy imports inside ``run`` so that ``--help`` starts fast.
-COMMANDS = (simulate, reproduce, compare, diagnose, effects, compensators, margins)
+COMMANDS = (simulate, reproduce, compare, diagnose, effects, compensators, margins, diagram)
 
 
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # one line, exit 2
         self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+class _HelpFormatter(argparse.HelpFormatter):
+    """Every option's help ends with its default, unless it says it already."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        default = action.default
+        if (
+            "default" in text
+            or default in (None, False, [], argparse.SUPPRESS)
+            or action.nargs == 0
+            or not action.option_strings
+        ):
+            return text
+        shown = f"{default:g}" if isinstance(default, float) else str(default)
+        return f"{text} (default {shown})"
+
+
+def _flag_message(err: Exception, parser: argparse.ArgumentParser | None) -> str:
+    """A parameter error in the words of the command line: a field named at the
+    start of the message (``sensor_delay_s must be >= 0``) becomes its flag
+    (``--sensor-delay-s must be >= 0``) when the command has that flag."""
+    text = str(err)
+    if parser is None:
+        return text
+    field = text.split(" ", 1)[0]
+    flag = "--" + field.replace("_", "-")
+    flags = {s for a in parser._actions for s in a.option_strings}
+    if field.isidentifier() and flag in flags:
+        return flag + text[len(field) :]
+    return text
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -48,9 +82,25 @@ def build_parser() -> argparse.ArgumentParser:
         description="Hybrid-simulation motion tables: delay compensation, margins, measurements.",
     )
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    _add_parser = sub.add_parser
+
+    def add_parser(*args, **kwargs):
+        kwargs.setdefault("formatter_class", _HelpFormatter)
+        return _add_parser(*args, **kwargs)
+
+    sub.add_parser = add_parser  # every command's --help shows its defaults
     for command in COMMANDS:
         command.register(sub)
+    for command_parser in sub.choices.values():
+        add_force_argument(command_parser)  # one overwrite policy for every command
     return parser
+
+
+def _sub_parser(parser: argparse.ArgumentParser, name: str) -> argparse.ArgumentParser | None:
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            return action.choices.get(name)
+    return None
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -60,7 +110,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return int(args.func(args) or 0)
     except (ParameterError, CommandError) as err:
-        print(f"hybridtable {args.command}: error: {err}", file=sys.stderr)
+        sub = _sub_parser(parser, args.command)
+        print(f"hybridtable {args.command}: error: {_flag_message(err, sub)}", file=sys.stderr)
         return 2
     except SimulationError as err:
         print(f"hybridtable {args.command}: error: {err}", file=sys.stderr)

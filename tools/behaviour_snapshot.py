@@ -3,9 +3,9 @@
 A restructuring must not change a single number. Save a snapshot before it,
 another after, and diff them::
 
-    python tools/behaviour_snapshot.py save /tmp/before --runs ../shared/examples/nominal
+    python tools/behaviour_snapshot.py save /tmp/before --runs examples/nominal
     ...  # move code
-    python tools/behaviour_snapshot.py save /tmp/after --runs ../shared/examples/nominal
+    python tools/behaviour_snapshot.py save /tmp/after --runs examples/nominal
     python tools/behaviour_snapshot.py diff /tmp/before /tmp/after
 
 The commands run as a user runs them (``python -m hybridtable.cli``):

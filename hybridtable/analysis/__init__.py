@@ -8,6 +8,9 @@
 - :mod:`hybridtable.analysis.sampled`: sampled-data model of a rig computer (ZOH, ``z^-M``);
 - :mod:`hybridtable.analysis.margins`: contact pole, predicted CoR, phase margin, effective
   delay, critical sensor delay and table frequency;
+- :mod:`hybridtable.analysis.robustness`: gain, phase and delay margins (python-control's
+  ``stability_margins``), the delay a CoR limit allows;
+- :mod:`hybridtable.analysis.linear_export`: the linear loop as a file python-control loads;
 - :mod:`hybridtable.analysis.sweep`: all of it over a (delay, table frequency) grid;
 - :mod:`hybridtable.analysis.validation`: predictions against the nonlinear simulation;
 - :mod:`hybridtable.reports.margin_plots` and :mod:`hybridtable.reports.margins`: heatmaps,
@@ -37,6 +40,16 @@ __all__, __getattr__, __dir__ = lazy_exports(
             "critical_table_frequency",
             "growth_of",
             "loop_margins",
+        ),
+        "robustness": (
+            "GainDelayMargins",
+            "cor_limited_delay",
+            "gain_delay_margins",
+        ),
+        "linear_export": (
+            "linear_model_document",
+            "load_linear_model",
+            "save_linear_model",
         ),
         "sampled": ("SampledLoopLinearizer",),
         "sweep": (

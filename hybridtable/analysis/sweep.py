@@ -11,6 +11,7 @@ simulation.
 
 from __future__ import annotations
 
+import sys
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
@@ -222,7 +223,14 @@ def sweep_margins(
     if progress:
         from tqdm import tqdm
 
-        bar = tqdm(total=len(compensators) * (nd * nt), desc="margins", unit="pt", leave=False)
+        # on stderr, cleared when done: the console opens with the verdict
+        bar = tqdm(
+            total=len(compensators) * (nd * nt),
+            desc="margins",
+            unit="pt",
+            leave=False,
+            file=sys.stderr,
+        )
     out: dict[str, CompensatorSweep] = {}
     for comp in compensators:
         cbase = base.with_(compensator=comp)

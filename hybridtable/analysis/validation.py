@@ -21,6 +21,7 @@ two ways, separated here for every point whose error exceeds a threshold:
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING
@@ -316,7 +317,7 @@ def validate_sweep(
     if progress:
         from tqdm import tqdm
 
-        jobs = tqdm(jobs, desc="validate", unit="sim", leave=False)
+        jobs = tqdm(jobs, desc="validate", unit="sim", leave=False, file=sys.stderr)
     points = []
     for c, i, j in jobs:
         p = result.base.with_(

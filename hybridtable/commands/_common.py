@@ -8,6 +8,7 @@ import argparse
 import json
 import math
 import sys
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -16,11 +17,14 @@ from hybridtable.errors import CommandError
 
 __all__ = [
     "parse_float",
+    "number_type",
+    "range_words",
+    "UNIT_METAVARS",
     "write_json",
-    "write_json_atomic",
     "input_paths",
     "add_run_arguments",
     "check_outputs",
+    "add_force_argument",
 ]
 
 
@@ -30,6 +34,51 @@ def parse_float(text: str) -> float:
         return float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+
+
+#: ``argparse`` metavar of an option by its unit.
+UNIT_METAVARS: dict[str, str] = {
+    "s": "SECONDS",
+    "Hz": "HZ",
+    "N/m": "N_PER_M",
+    "N s/m": "N_S_PER_M",
+    "m/s": "M_PER_S",
+    "m": "METRES",
+    "N": "NEWTONS",
+    "1": "RATIO",
+}
+
+_RANGES = {
+    ">0": (lambda x: x > 0.0 and math.isfinite(x), "> 0"),
+    ">=0": (lambda x: x >= 0.0 and math.isfinite(x), ">= 0"),
+    ">0|inf": (lambda x: x > 0.0, "> 0 (or inf)"),
+    "any": (math.isfinite, "finite"),
+}
+
+
+def number_type(accepted: str, unit: str = "1"):
+    """argparse type: a float in the range ``accepted`` (``">0"``, ``">=0"``,
+    ``">0|inf"``, ``"any"``); argparse names the flag in the error, e.g.
+    ``argument --sensor-delay-s: must be >= 0 [s] (got -1)``."""
+    check, words = _RANGES[accepted]
+    unit_text = "" if unit == "1" else f" [{unit}]"
+
+    def number(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+        if math.isnan(value) or not check(value):
+            raise argparse.ArgumentTypeError(f"must be {words}{unit_text} (got {text})")
+        return value
+
+    number.__name__ = "number"
+    return number
+
+
+def range_words(accepted: str) -> str:
+    """The words of a range of :func:`number_type` (``"> 0"``)."""
+    return _RANGES[accepted][1]
 
 
 def _jsonable(obj: Any) -> Any:
@@ -51,14 +100,15 @@ def _json_text(data: Any) -> str:
 
 
 def write_json(path: str | Path, data: Any) -> None:
-    """Write ``data`` as JSON (NaN -> null, inf -> "inf"); ``-`` is stdout."""
+    """Write ``data`` as JSON (NaN -> null, inf -> "inf"); ``-`` is stdout.
+
+    A file is written through a temporary file and a rename: a reader never
+    sees half a file, and an error leaves the old one in place."""
     text = _json_text(data)
     if str(path) == "-":
         sys.stdout.write(text)
         return
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(text)
+    write_text_atomic(path, text)
 
 
 def input_paths(runs) -> list[Path]:
@@ -67,50 +117,71 @@ def input_paths(runs) -> list[Path]:
 
 
 def check_outputs(
-    json_path: str | None,
-    report_dir: str | None,
-    inputs: list[Path],
-    command: str,
-    report_marker: str,
+    force: bool,
+    inputs: Iterable[Path] = (),
+    *,
+    files: Mapping[str, str | Path | None] | None = None,
+    folders: Mapping[str, str | Path | None] | None = None,
 ) -> None:
-    """Refuse outputs that would write over an input or a user's folder.
+    """The one overwrite policy of every command, checked before any work.
 
-    ``report_marker`` is the file by which ``command``'s reports mark their
-    folders.
+    An existing output is replaced only with ``--force``; an input (a run's CSV
+    or JSON, a model file) is never written over, with or without it.
+
+    Parameters
+    ----------
+    force
+        The command's ``--force``.
+    inputs
+        The files the command reads (resolved), see :func:`input_paths`.
+    files
+        ``{flag: path}`` of the output files (``None`` or ``-`` for stdout:
+        not checked), e.g. ``{"--json": args.json}``.
+    folders
+        ``{flag: path}`` of the output folders (``--report DIR``): a folder
+        that holds files is written into, its files of the same names replaced,
+        only with ``--force``.
 
     Raises
     ------
     CommandError
-        If ``json_path`` is an input file or a folder, or ``report_dir`` is a
-        file, holds an input, or is a non-empty folder not written by an
-        earlier ``command --report``.
+        One line naming the flag: the output is an input, a file where a folder
+        is wanted (or the other way round), or exists and ``force`` is false.
     """
-    if json_path and json_path != "-":
-        target = Path(json_path).resolve()
+    inputs = {Path(p).resolve() for p in inputs}
+    for flag, path in (files or {}).items():
+        if path is None or str(path) == "-":
+            continue
+        target = Path(path).resolve()
         if target in inputs:
-            raise CommandError(f"--json {json_path} is one of the input files; not writing over it")
+            raise CommandError(f"{flag} {path} is one of the input files; not writing over it")
         if target.is_dir():
-            raise CommandError(f"--json {json_path} is a folder")
-    if report_dir:
-        d = Path(report_dir).resolve()
+            raise CommandError(f"{flag} {path} is a folder; give a file name")
+        if target.exists() and not force:
+            raise CommandError(f"{flag} {path} exists; give --force to replace it")
+    for flag, path in (folders or {}).items():
+        if path is None:
+            continue
+        d = Path(path).resolve()
         if d.exists() and not d.is_dir():
-            raise CommandError(f"--report {report_dir} is a file, not a folder")
+            raise CommandError(f"{flag} {path} is a file, not a folder")
         if any(d == p.parent or d in p.parents for p in inputs):
-            raise CommandError(f"--report {report_dir} holds input runs; choose another folder")
-        if d.is_dir() and any(d.iterdir()) and not (d / report_marker).is_file():
+            raise CommandError(f"{flag} {path} holds input files; choose another folder")
+        if d.is_dir() and any(d.iterdir()) and not force:
             raise CommandError(
-                f"--report {report_dir} is not empty and not an earlier {command} report; "
-                "choose a new or empty folder"
+                f"{flag} {path} is not empty; choose a new folder, or give --force to "
+                "write into it (its files of the same names are replaced)"
             )
 
 
-def write_json_atomic(path: str, data) -> None:
-    """:func:`write_json` through a temporary file and a rename: a reader never
-    sees half a file, and an error leaves the old one in place."""
-    if path == "-":
-        write_json(path, data)
-        return
-    write_text_atomic(path, _json_text(data))
+def add_force_argument(parser: argparse.ArgumentParser) -> None:
+    """``--force``: the one switch by which a command replaces existing outputs."""
+    parser.add_argument(
+        "--force",
+        action="store_true",
+        help="replace existing outputs (without it, an existing output file or a "
+        "non-empty output folder is an error and nothing is written)",
+    )
 
 
 def add_run_arguments(parser: argparse.ArgumentParser, report: str) -> None:

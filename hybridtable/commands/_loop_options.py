@@ -12,6 +12,7 @@ import argparse
 
 __all__ = [
     "LOOP_OPTIONS",
+    "LOOP_RANGES",
     "add_loop_arguments",
     "given_loop_options",
     "loop_value",
@@ -44,28 +45,46 @@ LOOP_OPTIONS: dict[str, tuple[object, str, str]] = {
     "time_step_s": (None, "s", "continuous-mode step (default: min(2e-4, 1/(5000 f_con)))"),
 }
 
+#: The accepted range of each loop option (:func:`~hybridtable.commands._common.number_type`).
+LOOP_RANGES: dict[str, str] = {
+    "sensor_delay_s": ">=0",
+    "table_response_hz": ">0|inf",
+    "table_damping_ratio": ">=0",
+    "contact_frequency_hz": ">0",
+    "contact_stiffness_n_per_m": ">0",
+    "contact_damping_n_s_per_m": ">=0",
+    "initial_velocity_m_per_s": ">0",
+    "initial_gap_m": ">=0",
+    "lead_time_s": ">=0",
+    "compensator_stiffness_n_per_m": ">0",
+    "force_deadband_n": ">=0",
+    "sample_rate_hz": ">0",
+    "time_step_s": ">0",
+}
+
 
 def add_loop_arguments(parser: argparse.ArgumentParser) -> None:
     """Options shared by the commands that set up one loop (defaults: Table 1)."""
-    from hybridtable.commands._common import parse_float
+    from hybridtable.commands._common import UNIT_METAVARS, number_type, range_words
     from hybridtable.compensators.registry import compensator_names
 
     g = parser.add_argument_group("loop parameters (defaults: the paper's Table 1 point)")
     g.add_argument(
         "--compensator",
         default=None,
+        metavar="NAME",
         help=f"one of {', '.join(compensator_names())} (default none)",
     )
     for name, (default, unit, text) in LOOP_OPTIONS.items():
-        shown = "" if default is None else f" (default {default:g})"
-        if "(default" in text:
-            shown = ""
-        unit_text = "" if unit == "1" else f" [{unit}]"
+        words, _, derived = text.partition(" (default")
+        shown = f" (default{derived}" if derived else f" (default {default:g})"
+        accepted = LOOP_RANGES[name]
         g.add_argument(
             "--" + name.replace("_", "-"),
-            type=parse_float,
+            type=number_type(accepted, unit),
+            metavar=UNIT_METAVARS[unit],
             default=None,
-            help=f"{text}{unit_text}{shown}",
+            help=f"{words} [{unit}], {range_words(accepted)}{shown}",
         )
     g.add_argument(
         "--passivity",

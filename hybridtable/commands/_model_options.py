@@ -65,16 +65,13 @@ def add_model_argument(parser: argparse.ArgumentParser, what: str) -> None:
 
 
 def add_save_model_arguments(parser: argparse.ArgumentParser) -> None:
-    """``--save-model FILE`` and ``--force``."""
+    """``--save-model FILE`` (replaced only with the command's ``--force``)."""
     parser.add_argument(
         "--save-model",
         metavar="FILE.json",
         help="write the model (nominal parameters, effects with fitted values and "
         "standard errors, the runs, the tool version) for simulate/margins/"
         "compensators/compare --model",
-    )
-    parser.add_argument(
-        "--force", action="store_true", help="replace an existing --save-model file"
     )
 
 
@@ -118,6 +115,6 @@ def check_model_output(path: str | None, force: bool, inputs=()) -> None:
 
 def write_model(path: str, model) -> None:
     """Write a model file atomically."""
-    from hybridtable.commands._common import write_json_atomic
+    from hybridtable.commands._common import write_json
 
-    write_json_atomic(path, model.to_json())
+    write_json(path, model.to_json())

@@ -75,9 +75,6 @@ def add_record_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="length of each record [s] (default: approach + 3 undamped contact durations)",
     )
-    g.add_argument(
-        "--force", action="store_true", help="write into a non-empty DIR, replacing its runs"
-    )
 
 
 def _list(text: str | None, flag: str, convert) -> list:
@@ -102,19 +99,9 @@ def _per_run(items: list, n: int, flag: str) -> list:
     return items
 
 
-def _check_record_folder(folder: Path, n: int, force: bool) -> None:
-    if folder.exists() and not folder.is_dir():
-        raise CommandError(f"--record {folder} is a file, not a folder")
-    if folder.is_dir() and any(folder.iterdir()) and not force:
-        raise CommandError(
-            f"--record {folder} is not empty; choose a new folder, or give --force "
-            f"(replaces run1..run{n} and truth.json there, leaves other files)"
-        )
-
-
 def run_record(args: argparse.Namespace, model) -> dict:
     """``simulate --record DIR``: write the runs and ``truth.json``."""
-    from hybridtable.commands._common import write_json_atomic
+    from hybridtable.commands._common import check_outputs, write_json
     from hybridtable.diagnosis.model_file import tool_version
     from hybridtable.measurement.recorder import record_run, write_run
     from hybridtable.systems.noise import MeasurementNoiseParams
@@ -130,7 +117,7 @@ def run_record(args: argparse.Namespace, model) -> dict:
     if args.seed < 0:
         raise CommandError(f"--seed must be >= 0 (got {args.seed})")
     folder = Path(args.record)
-    _check_record_folder(folder, n, args.force)
+    check_outputs(args.force, folders={"--record": folder})
     base = model.nominal if model is not None else None
     infos = [
         rig_info_from_args(args, base, f"{folder.name}-run{i + 1}", compensators[i], velocities[i])
@@ -222,9 +209,7 @@ def run_record(args: argparse.Namespace, model) -> dict:
         "runs": truth_runs,
     }
     truth_path = folder / "truth.json"
-    if truth_path.exists() and not args.force:
-        raise CommandError(f"{truth_path} exists; give --force to replace it")
-    write_json_atomic(str(truth_path), truth_doc)
+    write_json(str(truth_path), truth_doc)
     hidden = (
         "; ".join(
             f"{name} " + ", ".join(f"{k_}={v:g}" for k_, v in values.items())

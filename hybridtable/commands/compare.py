@@ -50,9 +50,8 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hybridtable.commands._common import check_outputs, input_paths, write_json_atomic
+    from hybridtable.commands._common import check_outputs, input_paths, write_json
     from hybridtable.commands._model_options import (
-        check_model_output,
         load_model_arg,
         load_plugins,
         parse_added,
@@ -60,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
     )
     from hybridtable.measurement.comparison import check_comparable, compare_run
     from hybridtable.measurement.run_reader import parse_column_map, read_runs
-    from hybridtable.reports.compare import REPORT_MARKER, format_table, write_report
+    from hybridtable.reports.compare import format_table, format_whiteness, verdict, write_report
 
     if args.max_lag_s is not None:
         from hybridtable._validation import check_positive
@@ -74,8 +73,12 @@ def run(args: argparse.Namespace) -> int:
     for r in runs:  # every defect before any work
         check_comparable(r)
     inputs = input_paths(runs)
-    check_outputs(args.json, args.report, inputs, "compare", REPORT_MARKER)
-    check_model_output(args.save_model, args.force, inputs)
+    check_outputs(
+        args.force,
+        inputs,
+        files={"--json": args.json, "--save-model": args.save_model},
+        folders={"--report": args.report},
+    )
     quiet = args.json == "-"
     iterator = runs
     if len(runs) > 1 and not args.no_progress and not quiet:
@@ -83,14 +86,20 @@ def run(args: argparse.Namespace) -> int:
 
         iterator = tqdm(runs, desc="compare", unit="run", file=sys.stderr, leave=False)
     comparisons = [compare_run(r, max_lag_s=args.max_lag_s) for r in iterator]
-    document = {"runs": [c.to_json() for c in comparisons]}
+    sentence = verdict(comparisons)
+    document = {"verdict": sentence, "runs": [c.to_json() for c in comparisons]}
     model = None
     if added or base is not None:
         model, comparisons, document = _compare_with_model(
             runs, comparisons, added, base, args, quiet
         )
+        sentence = document["verdict"]
     elif not quiet:
+        print(sentence)  # the console opens with the verdict
+        print()
         print(format_table(comparisons))
+        print()
+        print(format_whiteness(comparisons))
     if args.save_model:
         if model is None:
             from hybridtable.diagnosis.model_file import RigModel
@@ -100,11 +109,14 @@ def run(args: argparse.Namespace) -> int:
         if not quiet:
             print(f"wrote the model to {args.save_model}: {model.describe()}")
     if args.json:
-        write_json_atomic(args.json, document)
+        write_json(args.json, document)
     if args.report:
-        files = write_report(comparisons, args.report)
+        files = write_report(comparisons, args.report, verdict_text=sentence)
         if not quiet:
-            print(f"wrote {files[0]} and {len(files) - 1} figures")
+            print(
+                f"wrote {files[0]}, {files[0].with_suffix('.html')} (figures embedded) and "
+                f"{len(files) - 1} figures"
+            )
     return 0
 
 
@@ -119,7 +131,12 @@ def _compare_with_model(runs, nominal, added, base, args, quiet: bool):
         compare_with_model,
         model_with_effects,
     )
-    from hybridtable.reports.compare import format_error_fall, format_table
+    from hybridtable.reports.compare import (
+        format_error_fall,
+        format_table,
+        format_whiteness,
+        verdict,
+    )
 
     def notify(message: str) -> None:
         if not quiet:
@@ -141,15 +158,22 @@ def _compare_with_model(runs, nominal, added, base, args, quiet: bool):
         model = replace(model, evidence=evidence)
     names = [e.name for e, _ in added]
     label = model.describe()
+    effects = " + ".join(model.effect_names)
+    sentence = verdict(comparisons, f"The model with {effects}" if effects else "The given model")
     if not quiet:
+        print(sentence)  # the console opens with the verdict
+        print()
         print("nominal model:")
         print(format_table(nominal))
         print()
         print(f"with {label}")
         print(format_table(comparisons))
         print()
+        print(format_whiteness(comparisons))
+        print()
         print(format_error_fall(nominal, comparisons, "+".join(model.effect_names) or "the model"))
     document = {
+        "verdict": sentence,
         "runs": [c.to_json() for c in comparisons],
         "nominal_runs": [c.to_json() for c in nominal],
         "model": model.to_json(),

@@ -44,8 +44,8 @@ def register(sub) -> None:
         description="Run every registered compensator, with and without the passivity guard, "
         "over the distinct points of the paper's Table 2 under stiffness mismatch (the believed "
         "stiffness from -50% to +100%), sensor noise and a damped contact; print the worst CoR "
-        "error, peak-force error and energy drift against an ideal loop, and the acceptance "
-        "checks of the online identification and the passivity guard. With --model: every "
+        "error, peak-force error and energy drift against an ideal loop, and whether the online "
+        "identification and the passivity guard hold what they promise. With --model: every "
         "compensator on the modelled rig (its sampled computer at its runs' approach "
         "velocities, the model's physics) against an ideal rig with the model's contact.",
     )
@@ -119,7 +119,7 @@ def run(args: argparse.Namespace) -> int:
     import json
     from pathlib import Path
 
-    from hybridtable.commands._common import write_json
+    from hybridtable.commands._common import check_outputs, write_json
     from hybridtable.commands._model_options import load_model_arg, load_plugins
     from hybridtable.errors import CommandError
 
@@ -148,8 +148,12 @@ def run(args: argparse.Namespace) -> int:
             tables = json.loads(path.read_text())
         except (OSError, json.JSONDecodeError) as err:
             raise CommandError(f"cannot read {args.tables}: {err}") from None
-    if args.report is not None and (Path(args.report) / "report.md").exists():
-        raise CommandError(f"{Path(args.report) / 'report.md'} exists; choose another directory")
+    check_outputs(
+        args.force,
+        [Path(args.tables)] if args.tables else [],
+        files={"--json": args.json},
+        folders={"--report": args.report},
+    )
     if args.jobs is not None and args.jobs < 1:
         raise CommandError(f"--jobs must be >= 1 (got {args.jobs})")
     settings = SweepSettings(
@@ -211,7 +215,7 @@ def _rig_line(model) -> str:
 def _run_model(args: argparse.Namespace, model) -> int:
     from pathlib import Path
 
-    from hybridtable.commands._common import write_json
+    from hybridtable.commands._common import check_outputs, write_json
     from hybridtable.errors import CommandError
     from hybridtable.reports.compensators import (
         format_model_summary,
@@ -223,8 +227,12 @@ def _run_model(args: argparse.Namespace, model) -> int:
     given = [flag for name, flag in _GRID_ONLY if getattr(args, name) not in (None, False)]
     if given:
         raise CommandError(f"{', '.join(given)}: not with --model (the model's rig is the grid)")
-    if args.report is not None and (Path(args.report) / "report.md").exists():
-        raise CommandError(f"{Path(args.report) / 'report.md'} exists; choose another directory")
+    check_outputs(
+        args.force,
+        [Path(args.model)],
+        files={"--json": args.json},
+        folders={"--report": args.report},
+    )
     if args.jobs is not None and args.jobs < 1:
         raise CommandError(f"--jobs must be >= 1 (got {args.jobs})")
     result = run_model_compensators(

@@ -76,14 +76,13 @@ def diagnosis_json(d) -> dict:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hybridtable.commands._common import check_outputs, input_paths, write_json_atomic
-    from hybridtable.commands._model_options import check_model_output, load_plugins, write_model
+    from hybridtable.commands._common import check_outputs, input_paths, write_json
+    from hybridtable.commands._model_options import load_plugins, write_model
     from hybridtable.diagnosis.diagnose import diagnose
     from hybridtable.diagnosis.registry import get_effect
     from hybridtable.errors import CommandError
     from hybridtable.measurement.run_reader import parse_column_map, read_runs
     from hybridtable.reports.diagnose import (
-        REPORT_MARKER,
         format_ranking,
         summary_sentence,
         write_report,
@@ -103,8 +102,12 @@ def run(args: argparse.Namespace) -> int:
         raise CommandError(f"--workers must be >= 1 (got {args.workers})")
     runs = read_runs(args.runs, parse_column_map(args.column_map))
     inputs = input_paths(runs)
-    check_outputs(args.json, args.report, inputs, "diagnose", REPORT_MARKER)
-    check_model_output(args.save_model, args.force, inputs)
+    check_outputs(
+        args.force,
+        inputs,
+        files={"--json": args.json, "--save-model": args.save_model},
+        folders={"--report": args.report},
+    )
     quiet = args.json == "-"
     if not quiet and not args.no_progress:
         print(f"diagnosing {len(runs)} run(s)...", file=sys.stderr)
@@ -128,9 +131,12 @@ def run(args: argparse.Namespace) -> int:
         if not quiet:
             print(f"wrote the model to {args.save_model}: {model.describe()}")
     if args.json:
-        write_json_atomic(args.json, diagnosis_json(d))
+        write_json(args.json, diagnosis_json(d))
     if args.report:
         files = write_report(d, args.report)
         if not quiet:
-            print(f"wrote {files[0]} and {len(files) - 1} figures")
+            print(
+                f"wrote {files[0]}, {files[0].with_suffix('.html')} (figures embedded) and "
+                f"{len(files) - 1} figures"
+            )
     return 0

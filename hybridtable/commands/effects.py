@@ -199,7 +199,7 @@ def _sources(plugin_effects) -> dict[str, str]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hybridtable.commands._common import check_outputs, input_paths, write_json_atomic
+    from hybridtable.commands._common import check_outputs, input_paths, write_json
     from hybridtable.diagnosis.effects import RigScale
     from hybridtable.diagnosis.registry import effect_names, get_effect, load_plugin
 
@@ -217,12 +217,12 @@ def run(args: argparse.Namespace) -> int:
     else:
         scale = paper_scale()
         where = "the paper's Table 1 point"
-    check_outputs(args.json, None, inputs, "effects", "")
+    check_outputs(args.force, inputs, files={"--json": args.json})
     sources = _sources(plugin_effects)
     names = effect_names()
     items = [effect_json(get_effect(n), sources.get(n, "script"), scale, where) for n in names]
     if args.json != "-":
         print(format_effects(items))
     if args.json:
-        write_json_atomic(args.json, items)
+        write_json(args.json, items)
     return 0

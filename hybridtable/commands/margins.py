@@ -1,5 +1,7 @@
 """``hybridtable margins``: linear stability margins over sensor delay x table frequency;
-with ``--model``, of the rig a model file describes."""
+at one operating point the gain, phase and delay margins (and, with
+``--export-linear``, the linear loop as a file python-control loads); with
+``--model``, of the rig a model file describes."""
 
 from __future__ import annotations
 
@@ -80,7 +82,10 @@ def register(sub) -> None:
         "ungated compensator; Pade delay, or a sampled-data model with --sample-rate-hz) and "
         "give, per compensator and grid point, the predicted CoR, damping ratio, phase margin "
         "and effective delay, with the critical sensor delay per table frequency and the "
-        "critical table frequency per delay. Other parameters: the paper's Table 1. With "
+        "critical table frequency per delay, the sensor delay up to which the CoR stays within "
+        "--cor-limit, and at one operating point the gain, phase and delay margins (python-"
+        "control, loop broken at the spacecraft model's force input). Other parameters: the "
+        "paper's Table 1. With "
         "--model: the rig of a model file, its physics in the linear loop at every grid point, "
         "and its operating point against the nominal model and a simulation of the model.",
     )
@@ -161,7 +166,45 @@ def register(sub) -> None:
     )
     p.add_argument("--json", metavar="FILE", help="write the results as JSON (- for stdout)")
     p.add_argument(
-        "--report", metavar="DIR", help="write heatmaps, critical curves, Bode plot, summary.md"
+        "--report", metavar="DIR", help="write heatmaps, critical curves, Bode plot, report.md"
+    )
+    p.add_argument(
+        "--cor-limit",
+        type=parse_float,
+        default=1.01,
+        metavar="COR",
+        help="the CoR limit: report the largest sensor delay up to which the predicted CoR "
+        "stays within it",
+    )
+    p.add_argument(
+        "--operating-delay-s",
+        type=parse_float,
+        default=None,
+        metavar="T",
+        help="sensor delay of the operating point of the gain/phase/delay margins and "
+        "--export-linear (default 0.005, the paper's Table 1, in whole samples when sampled; "
+        "with --model: the rig's)",
+    )
+    p.add_argument(
+        "--operating-table-hz",
+        type=parse_float,
+        default=None,
+        metavar="F",
+        help="table response frequency of the operating point (default 25, the paper's "
+        "Table 1; with --model: the rig's)",
+    )
+    p.add_argument(
+        "--export-linear",
+        metavar="FILE",
+        help="write the linear loop at the operating point (A, B, C, D, dt, state/input/"
+        "output names and units, parameters) as FILE.json or FILE.npz, for control.ss",
+    )
+    p.add_argument(
+        "--export-compensator",
+        metavar="NAME",
+        default=None,
+        help="the compensator of --export-linear (default: SDMDC if listed, else the first "
+        "listed; with --model: the rig's own if listed)",
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     add_model_argument(
@@ -227,14 +270,20 @@ def _base_params(args: argparse.Namespace, model=None):
 
 
 def run(args: argparse.Namespace) -> int:
+    from hybridtable.analysis.robustness import grid_cor_limits
     from hybridtable.analysis.sweep import sweep_margins
     from hybridtable.analysis.validation import validate_sweep
-    from hybridtable.commands._common import write_json
+    from hybridtable.commands._common import check_outputs, write_json
     from hybridtable.commands._model_options import load_model_arg, load_plugins
     from hybridtable.compensators.paper import COMPENSATORS
     from hybridtable.errors import CommandError
+    from hybridtable.reports.margin_point import (
+        format_grid,
+        format_point,
+        margins_verdict,
+        point_margins,
+    )
     from hybridtable.reports.margins import (
-        REPORT_FILES,
         format_model_point,
         model_operating_point,
         operating_point,
@@ -270,13 +319,12 @@ def run(args: argparse.Namespace) -> int:
     if base.sample_period_s is not None:
         for T in delays:
             delay_samples(float(T), base.sample_period_s)  # ParameterError if not whole
-    if args.report is not None:
-        d = Path(args.report)
-        if d.exists() and not d.is_dir():
-            raise CommandError(f"--report: {d} exists and is not a directory")
-        taken = [name for name in REPORT_FILES if (d / name).exists()]
-        if taken:
-            raise CommandError(f"--report: {d / taken[0]} exists; choose another directory")
+    model_inputs = [Path(args.model)] if getattr(args, "model", None) else []
+    check_outputs(
+        args.force, model_inputs, files={"--json": args.json}, folders={"--report": args.report}
+    )
+    check_outputs(args.force, model_inputs, files={"--export-linear": args.export_linear})
+    op_delay, op_table, export_comp = _operating_point(args, base, model, comps)
     progress = not args.no_progress and args.json != "-"
 
     t0 = time.perf_counter()
@@ -305,6 +353,14 @@ def run(args: argparse.Namespace) -> int:
     if model is not None:
         model_point = model_operating_point(model, base, comps, args.pade_order)
         model_lines = format_model_point(model_point, model, args.model)
+    point = point_margins(
+        base, comps, op_delay, op_table, args.pade_order, args.cor_limit, transform
+    )
+    verdict = margins_verdict(result, point)
+    limits = grid_cor_limits(result, args.cor_limit)
+    exported = None
+    if args.export_linear:
+        exported = _export_linear(args.export_linear, point, export_comp, args.pade_order)
     table1 = None
     if args.report is not None:
         table1 = operating_point(
@@ -312,10 +368,18 @@ def run(args: argparse.Namespace) -> int:
             args.pade_order,
             simulate=True,
         )
-        files = write_report(result, args.report, table1, model_lines)
+        files = write_report(
+            result, args.report, table1, model_lines, point, args.cor_limit, verdict
+        )
     wall = time.perf_counter() - t0
 
     data = result.to_json_dict()
+    data = {"verdict": verdict, **data, "cor_limit": args.cor_limit}
+    for c, lim in limits.items():
+        data["compensators"][c].update({k: v.tolist() for k, v in lim.items()})
+    data["operating_point_margins"] = point.to_dict()
+    if exported is not None:
+        data["linear_export"] = {"path": str(exported), "compensator": export_comp}
     data["sweep_wall_time_s"] = sweep_wall
     data["wall_time_s"] = wall
     if table1 is not None:
@@ -334,43 +398,80 @@ def run(args: argparse.Namespace) -> int:
     if args.json != "-":
         for line in model_lines or ():
             print(line)
-        _print_summary(result, sweep_wall)
+        print(verdict)
+        for line in format_point(point):
+            print(line)
+        for line in format_grid(result, sweep_wall, limits, args.cor_limit, point.undamped):
+            print(line)
         if args.report is not None:
             for f in files:
                 print(f"wrote {f}")
+        if exported is not None:
+            print(f"wrote {exported} (the linear loop with {export_comp}, for control.ss)")
         print(f"wall time {wall:.1f} s")
     if args.json:
         write_json(args.json, data)
     return 0
 
 
-def _print_summary(result, sweep_wall: float) -> None:
-    kind = (
-        f"sampled at {result.base.sample_rate_hz:g} Hz"
-        if result.sampled
-        else f"Pade order {result.pade_order}"
+def _operating_point(args: argparse.Namespace, base, model, comps) -> tuple[float, float, str]:
+    """The operating point's sensor delay (s) and table frequency (Hz), and the
+    compensator of ``--export-linear``, checked."""
+    from hybridtable.analysis.linear_export import EXPORT_SUFFIXES
+    from hybridtable.errors import CommandError, ParameterError
+    from hybridtable.systems.sensor import delay_samples
+
+    if not (math.isfinite(args.cor_limit) and args.cor_limit > 0):
+        raise CommandError("--cor-limit must be a number > 0")
+    delay, table = args.operating_delay_s, args.operating_table_hz
+    if delay is None:
+        delay = 0.005 if model is None else model.nominal.sensor_delay_s
+        h = base.sample_period_s
+        if h is not None and model is None:
+            delay = round(delay / h) * h
+    elif not (math.isfinite(delay) and delay >= 0):
+        raise CommandError("--operating-delay-s must be finite and >= 0")
+    elif base.sample_period_s is not None:
+        try:
+            delay_samples(delay, base.sample_period_s)
+        except ParameterError:
+            raise CommandError(
+                f"--operating-delay-s must be a whole number of sample periods "
+                f"({base.sample_period_s:g} s)"
+            ) from None
+    if table is None:
+        table = 25.0 if model is None else model.nominal.table_natural_frequency_hz
+    elif not table > 0:
+        raise CommandError("--operating-table-hz must be > 0 (inf: ideal table)")
+    comp = args.export_compensator
+    if comp is None:
+        own = model.nominal.compensator if model is not None else None
+        comp = own if own in comps else "SDMDC" if "SDMDC" in comps else comps[0]
+    elif comp not in comps:
+        raise CommandError(f"--export-compensator: {comp!r} is not in --compensator")
+    if args.export_linear:
+        if Path(args.export_linear).suffix.lower() not in EXPORT_SUFFIXES:
+            raise CommandError("--export-linear: give a file name ending in .json or .npz")
+        if args.json and Path(args.json).resolve() == Path(args.export_linear).resolve():
+            raise CommandError("--export-linear and --json name the same file")
+    return float(delay), float(table), comp
+
+
+def _export_linear(path: str, point, compensator: str, pade_order: int) -> Path:
+    """Write the linear loop of ``compensator`` at the operating point."""
+    from hybridtable.analysis.linear_export import (
+        linear_model_document,
+        save_linear_model,
+        state_labels,
     )
-    print(
-        f"grid {result.sensor_delay_s.size} delays x {result.table_response_hz.size} table "
-        f"frequencies, {kind}: {sweep_wall:.1f} s"
+
+    loop = point.loops[compensator]
+    m, g = point.margins[compensator], point.robust[compensator]
+    doc = linear_model_document(
+        loop,
+        compensator,
+        {"sensor_delay_s": point.sensor_delay_s, "table_response_hz": point.table_response_hz},
+        state_labels(loop.params, pade_order),
+        extra={"margins": {"predicted_cor": m.predicted_cor, **g.to_dict()}},
     )
-    print(
-        f"{'compensator':12s} {'CoR min':>9s} {'CoR max':>9s} {'stable':>11s} {'crit. delay [ms]':>20s}"
-    )
-    for c, cs in result.compensators.items():
-        cor = cs.predicted_cor[np.isfinite(cs.predicted_cor)]
-        cd = cs.critical_delay_s * 1e3
-        print(
-            f"{c:12s} {cor.min():9.5f} {cor.max():9.5f} "
-            f"{int(cs.stable.sum()):5d}/{cs.stable.size:<5d} "
-            f"{np.nanmin(cd):9.3f}-{np.nanmax(cd):<9.3f}"
-        )
-    if result.validation:
-        err = result.max_validation_error()
-        n_fail = sum(v.abs_error is None for v in result.validation)
-        print(
-            f"validation: {len(result.validation)} simulations, max |CoR_linear - CoR_sim| "
-            f"= {err:.5f}" + (f", {n_fail} failed" if n_fail else "")
-            if err is not None
-            else f"validation: all {n_fail} simulations failed"
-        )
+    return save_linear_model(path, doc)

@@ -35,15 +35,20 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hybridtable.commands._common import write_json
+    from pathlib import Path
+
+    from hybridtable.commands._common import check_outputs, write_json
     from hybridtable.errors import CommandError
-    from hybridtable.reports.reproduce import format_tables, reproduce
+    from hybridtable.reports.reproduce import format_tables, reproduce, verdict
 
-    if args.tables is not None:
-        from pathlib import Path
-
-        if not Path(args.tables).is_file():
-            raise CommandError(f"no such tables file: {args.tables}")
+    if args.tables is not None and not Path(args.tables).is_file():
+        raise CommandError(f"no such tables file: {args.tables}")
+    check_outputs(
+        args.force,
+        [Path(args.tables)] if args.tables else [],
+        files={"--json": args.json},
+        folders={"--out-dir": args.out_dir},
+    )
     t0 = time.perf_counter()
     rep = reproduce(
         out_dir=args.out_dir,
@@ -56,6 +61,8 @@ def run(args: argparse.Namespace) -> int:
     data = rep.to_json()
     data["wall_time_s"] = wall
     if args.json != "-":
+        print(verdict(rep))
+        print()
         print(format_tables(rep))
         for f in rep.figures:
             print(f"wrote {f}")

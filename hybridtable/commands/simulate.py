@@ -34,9 +34,7 @@ def register(sub) -> None:
         help="table back-end: the second-order model, or the Stewart platform "
         "(MultibodyPlant, tuned to --table-response-hz; sampled loop, default 1000 Hz)",
     )
-    p.add_argument(
-        "--html", metavar="FILE.html", help="record a Meshcat animation (--table stewart)"
-    )
+    _add_stewart_arguments(p)
     add_effect_argument(
         p, ": give every parameter, e.g. --add contact_damping:damping_n_s_per_m=300"
     )
@@ -51,7 +49,9 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hybridtable.commands._common import write_json
+    from pathlib import Path
+
+    from hybridtable.commands._common import check_outputs, write_json
     from hybridtable.commands._loop_options import params_from_args
     from hybridtable.commands._model_options import load_model_arg, load_plugins
     from hybridtable.errors import CommandError
@@ -59,12 +59,21 @@ def run(args: argparse.Namespace) -> int:
 
     load_plugins(args)
     model = load_model_arg(args)
+    check_outputs(
+        args.force,
+        [Path(args.model)] if args.model else [],
+        files={"--json": args.json, "--plot": args.plot, "--html": args.html},
+    )
     if args.record or model is not None:
         from hybridtable.commands._record import run_record
         from hybridtable.commands._simulate_rig import run_model
 
         if args.plot:
             raise CommandError("--plot is for one simulation (not with --record or --model)")
+        if args.table == "stewart" or _stewart_flags_given(args):
+            raise CommandError(
+                "--table stewart simulates one contact (not with --record or --model)"
+            )
         out = run_record(args, model) if args.record else run_model(args, model)
         if args.json:
             write_json(args.json, out)
@@ -79,15 +88,11 @@ def run(args: argparse.Namespace) -> int:
     extra = {}
     if args.table == "stewart" and args.add:
         raise CommandError("--add: effects need the second-order table back-end")
+    stewart_show = None
     if args.table == "stewart":
-        from hybridtable.stewart.run import simulate_stewart
-
-        run_ = simulate_stewart(params, html=args.html)
-        result, params, extra = run_.result, run_.params, run_.summary()
-    elif args.html:
-        from hybridtable.errors import CommandError
-
-        raise CommandError("--html needs --table stewart")
+        result, params, extra, stewart_show = _run_stewart(args, params)
+    elif _stewart_flags_given(args):
+        raise CommandError(f"{' '.join(_stewart_flags_given(args))}: needs --table stewart")
     elif args.add:
         result, params = _simulate_with_effects(args, params)
     else:
@@ -112,6 +117,13 @@ def run(args: argparse.Namespace) -> int:
         **extra,
     }
     if args.json != "-":
+        from hybridtable.reports.verdicts import contact_verdict
+
+        damped = params.contact_damping_n_s_per_m > 0 or bool(args.add)
+        verdict = contact_verdict(params.compensator, m.cor, damped=damped)
+        if args.table == "stewart":
+            verdict = f"On the Stewart table, {verdict[0].lower()}{verdict[1:]}"
+        print(verdict)
         print(
             f"{params.compensator}: CoR {m.cor:.5f}  peak force {m.peak_force_n:.1f} N  "
             f"contact {m.contact_duration_s:.4f} s  energy gain {m.energy_gain_j:+.4g} J  "
@@ -123,7 +135,210 @@ def run(args: argparse.Namespace) -> int:
         from hybridtable.reports.figures import plot_run
 
         plot_run(result, args.plot)
+    if stewart_show is not None:
+        stewart_show()
     return 0
+
+
+def _add_stewart_arguments(p: argparse.ArgumentParser) -> None:
+    """The options that show a Stewart run (``--table stewart``)."""
+    from hybridtable.commands._common import parse_float
+
+    g = p.add_argument_group("seeing a Stewart run (--table stewart)")
+    g.add_argument(
+        "--html",
+        metavar="FILE.html",
+        help="record the run as a Meshcat animation in a self-contained HTML file "
+        "(about 2 MB; open it in a browser)",
+    )
+    g.add_argument(
+        "--meshcat",
+        action="store_true",
+        help="show the run in a live Meshcat view (a server on localhost; its URL is "
+        "printed); from a terminal it plays in a loop until Enter or Ctrl-C, otherwise once",
+    )
+    g.add_argument(
+        "--magnify",
+        type=parse_float,
+        metavar="X",
+        help="draw the platform's displacement from home X times larger (the physics is "
+        "unchanged) (default: a round factor that draws the peak displacement at about "
+        "10%% of the platform's radius)",
+    )
+    g.add_argument(
+        "--realtime-rate",
+        type=parse_float,
+        metavar="R",
+        help="play the motion at R times real time, e.g. 0.2 for slow motion (default 1)",
+    )
+
+
+def _stewart_flags_given(args: argparse.Namespace) -> list[str]:
+    """The options of :func:`_add_stewart_arguments` given on the command line."""
+    given = [("--html", args.html is not None), ("--meshcat", args.meshcat)]
+    given += [("--magnify", args.magnify is not None)]
+    given += [("--realtime-rate", args.realtime_rate is not None)]
+    return [flag for flag, on in given if on]
+
+
+def _check_stewart_args(args: argparse.Namespace, params) -> None:
+    """Refuse, before any simulation, what the Stewart table cannot run, with
+    the flags to change (the checks of ``check_stewart_loop`` and those of the
+    back-end's contact, in the command line's words)."""
+    import math
+
+    from hybridtable.errors import CommandError
+    from hybridtable.stewart.run import DEFAULT_SAMPLE_RATE_HZ, stewart_limits
+
+    for flag, value in (("--magnify", args.magnify), ("--realtime-rate", args.realtime_rate)):
+        if value is not None and not (math.isfinite(value) and value > 0.0):
+            raise CommandError(f"{flag} must be a number > 0 (got {value:g})")
+    if (args.magnify is not None or args.realtime_rate is not None) and not (
+        args.html or args.meshcat
+    ):
+        raise CommandError("--magnify and --realtime-rate set the drawing of --html or --meshcat")
+    rate_given = params.sample_rate_hz is not None
+    rate = params.sample_rate_hz or DEFAULT_SAMPLE_RATE_HZ
+    at_rate = f"--sample-rate-hz {rate:g}" + ("" if rate_given else " (its default)")
+    f = params.table_response_hz
+    if math.isinf(f):
+        raise CommandError(
+            "--table-response-hz inf: the Stewart table has a finite response; give a "
+            "finite --table-response-hz (default 25)"
+        )
+    if not rate_given:
+        from hybridtable.errors import ParameterError
+
+        try:
+            params.with_(sample_rate_hz=rate)
+        except ParameterError:
+            d = params.sensor_delay_s
+            raise CommandError(
+                f"the Stewart table runs the loop sampled at {at_rate} and --sensor-delay-s {d:g} "
+                f"is not a whole number of its periods ({1.0 / rate:g} s); give e.g. "
+                f"--sensor-delay-s {math.floor(d * rate) / rate:g} or "
+                f"{math.ceil(d * rate) / rate:g}, or a --sample-rate-hz that divides it"
+            ) from None
+        params = params.with_(sample_rate_hz=rate)
+    limits = stewart_limits(params)
+    if f > limits.max_response_hz * (1.0 + 1e-12):
+        needed = limits.min_sample_rate_hz(f, params.sensor_delay_s)
+        raise CommandError(
+            f"--table-response-hz {f:g} is too fast for the Stewart table at {at_rate}: "
+            f"it needs --table-response-hz <= {limits.max_response_hz:g}, or "
+            f"--sample-rate-hz >= {needed:g}"
+        )
+    gap = limits.max_initial_gap_m(params)
+    if params.initial_gap_m > gap:
+        raise CommandError(
+            f"--initial-gap-m {params.initial_gap_m:g} starts the Stewart table outside its "
+            f"workspace: it reaches {-limits.workspace_m[0]:.4f} m below the contact point "
+            f"(needs --initial-gap-m <= {gap:.4f})"
+        )
+    k, c = params.contact_stiffness_n_per_m, params.contact_damping_n_s_per_m
+    critical = 2.0 * math.sqrt(k * params.spacecraft_mass_kg)
+    if c >= critical:
+        raise CommandError(
+            f"--contact-damping-n-s-per-m {c:g} is at or above the contact's critical "
+            f"damping ({critical:.6g} N s/m with --contact-stiffness-n-per-m {k:g} and "
+            f"--contact-frequency-hz {params.contact_frequency_hz:g}): such a contact does not "
+            "rebound and the Stewart table's Hunt-Crossley contact has no equivalent; give a "
+            "smaller --contact-damping-n-s-per-m"
+        )
+
+
+def _run_stewart(args: argparse.Namespace, params):
+    """The Stewart branch of :func:`run`: simulate with a progress bar, and
+    return ``(result, params, JSON fields, show)``; ``show()`` (after the
+    summary lines) writes ``--html`` and plays ``--meshcat``."""
+    import math
+    import sys
+
+    from hybridtable.errors import CommandError, ParameterError, WorkspaceError
+    from hybridtable.stewart.run import DEFAULT_SAMPLE_RATE_HZ, simulate_stewart
+    from hybridtable.stewart.view import auto_force_scale_n_per_m, auto_magnify
+
+    _check_stewart_args(args, params)
+    try:
+        run_ = simulate_stewart(params, progress=True)
+    except WorkspaceError as err:
+        v, f = params.initial_velocity_m_per_s, params.contact_frequency_hz
+        raise CommandError(
+            f"the Stewart table left its workspace during the run: {err}. The devices "
+            f"penetrate about --initial-velocity-m-per-s / (2 pi --contact-frequency-hz) = "
+            f"{v / (2.0 * math.pi * f):.3f} m; lower --initial-velocity-m-per-s or raise "
+            "--contact-frequency-hz"
+        ) from None
+    except ParameterError as err:
+        if not str(err).startswith(("could not tune", "the table does not follow")):
+            raise
+        rate = params.sample_rate_hz or DEFAULT_SAMPLE_RATE_HZ
+        raise CommandError(
+            f"the Stewart table could not be tuned to --table-response-hz "
+            f"{params.table_response_hz:g} with --table-damping-ratio "
+            f"{params.table_damping_ratio:g} at --sample-rate-hz {rate:g} (its leg servo is "
+            "too slow for it); give a lower --table-response-hz or a higher --sample-rate-hz"
+        ) from None
+    extra = run_.summary()
+    drawing = None
+    if args.html or args.meshcat:
+        motion, radius = run_.motion, run_.stewart.geometry.top_radius_m
+        drawing = {
+            "magnify": args.magnify or auto_magnify(motion.peak_displacement_m, radius),
+            "force_arrow_n_per_m": auto_force_scale_n_per_m(motion.peak_force_n),
+            "realtime_rate": args.realtime_rate or 1.0,
+            "peak_plate_displacement_m": motion.peak_displacement_m,
+        }
+        extra["drawing"] = drawing
+
+    def show() -> None:
+        if args.json != "-":
+            step = run_.step
+            print(
+                f"Stewart table identified as {step.response_frequency_hz:.2f} Hz, damping "
+                f"ratio {step.damping_ratio:.3f}; the 1-D loop with that table gives CoR "
+                f"{run_.second_order_cor:.5f}"
+            )
+        if drawing is not None:
+            out = sys.stderr if args.json == "-" else sys.stdout
+            _show_stewart(args, run_, drawing, out)
+
+    return run_.result, run_.params, extra, show
+
+
+def _show_stewart(args: argparse.Namespace, run_, drawing: dict, out) -> None:
+    """Write ``--html`` and play ``--meshcat`` (after the summary lines)."""
+    import sys
+
+    from hybridtable.errors import CommandError
+    from hybridtable.stewart.view import open_meshcat, show_live
+
+    motion = run_.motion
+    magnify, force_scale = drawing["magnify"], drawing["force_arrow_n_per_m"]
+    rate = drawing["realtime_rate"]
+    peak_mm = 1e3 * motion.peak_displacement_m
+    print(
+        f"Drawing: the plate's displacement magnified x{magnify:g} (peak {peak_mm:.1f} mm drawn "
+        f"as {magnify * peak_mm:.0f} mm); the contact force as a red arrow, 1 m per "
+        f"{force_scale:g} N (peak {motion.peak_force_n:.0f} N); {rate:g} x real time",
+        file=out,
+    )
+    if args.html:
+        run_.write_html(args.html, magnify=magnify, realtime_rate=rate, overwrite=True)
+        print(f"Recording: {args.html}", file=out)
+    if args.meshcat:
+        try:
+            meshcat = open_meshcat()
+        except RuntimeError as err:
+            raise CommandError(f"--meshcat: could not start a Meshcat server ({err})") from None
+        view = run_.view(meshcat, magnify=magnify, force_scale_n_per_m=force_scale)
+        print(f"Meshcat live view: {meshcat.web_url()}", file=out, flush=True)
+        show_live(
+            view,
+            rate,
+            interactive=sys.stdin.isatty(),
+            say=lambda line: print(line, file=out, flush=True),
+        )
 
 
 def _simulate_with_effects(args: argparse.Namespace, params):

@@ -1,7 +1,7 @@
 """Audit of the rig's computer: what it did, by arithmetic, against what its JSON says.
 
 A record holds the rig computer's own arithmetic (steps 2-4 of
-``measurement-format.md``): the compensated force ``f_comp`` computed from the
+``docs/run-format.md``): the compensated force ``f_comp`` computed from the
 readings ``f_mea``, ``p_act`` and the last command ``p_des``; the spacecraft
 model's velocity ``v_des`` stepped by ``-f_comp / m h``; the command ``p_des``
 stepped by ``v_des h``. None of this is physics, so none of it is fitted: the

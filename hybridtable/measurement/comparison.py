@@ -38,7 +38,11 @@ Definitions (``y`` measured, ``y_hat`` model, residual ``e = y - y_hat``):
   (residual after input). The input is the command increment
   ``p_des[k] - p_des[k-1]`` (mean removed): the command itself is a ramp whose
   trend would dominate any correlation. The band ``+-z / sqrt(N)`` (99 %) holds
-  both under the hypothesis of a white residual.
+  both under the hypothesis of a white residual; more lags outside than chance
+  explains (:func:`~hybridtable.measurement.stats.lags_outside_by_chance`)
+  means a systematic effect the model lacks.
+- within the noise (:meth:`RunComparison.within_noise`): replay RMS error over
+  noise RMS at most :data:`WITHIN_NOISE_RATIO`.
 - CoR (:func:`cor_from_record`): ``|v_des|`` at the end of the record over
   ``|v_des|`` at the last tick before the first non-zero ``f_comp`` (the model
   felt no force yet), the same definition for measurement and model.
@@ -82,10 +86,18 @@ from hybridtable.measurement.stats import (
 from hybridtable.systems.sensor import delay_samples
 
 __all__ = [
+    "WITHIN_NOISE_RATIO",
     "RunComparison",
     "check_comparable",
     "compare_run",
 ]
+
+
+#: Largest replay error / noise RMS ratio that counts as "within the noise".
+#: Model error and noise add in squares, so 1.2 allows a model error of up to
+#: ``sqrt(1.2^2 - 1) = 0.66`` noise RMS, well above the few-percent scatter of
+#: the noise estimate from a few thousand quiet ticks.
+WITHIN_NOISE_RATIO = 1.2
 
 
 # -- one run -------------------------------------------------------------------
@@ -129,6 +141,19 @@ class RunComparison:
             return math.nan
         return self.replay_errors[channel].rms_error / noise
 
+    def within_noise(self, channel: str) -> bool:
+        """True if the replay error of ``channel`` is at most
+        :data:`WITHIN_NOISE_RATIO` times its noise RMS (False if there is no
+        noise estimate)."""
+        return bool(self.error_to_noise(channel) <= WITHIN_NOISE_RATIO)
+
+    def phase_error_to_noise(self, channel: str, phase: str) -> float:
+        """RMS replay error of ``channel`` in ``phase`` over the noise RMS."""
+        noise = self.noise_rms[channel]
+        if not noise > 0.0:
+            return math.nan
+        return self.phases[channel][phase]["rms_error"] / noise
+
     def worst_phase(self, channel: str = "f_mea_n") -> str:
         """The phase with the largest RMS replay error in ``channel``."""
         ph = self.phases[channel]
@@ -161,6 +186,7 @@ class RunComparison:
             "nrmse": {c: rep[c].nrmse for c in chans},
             "fit_percent": {c: rep[c].fit_percent for c in chans},
             "error_to_noise": {c: self.error_to_noise(c) for c in chans},
+            "within_noise": {c: self.within_noise(c) for c in chans},
             "noise_samples": dict(self.noise_samples),
             "no_contact_mean": {"f_mea_n": self.no_contact_mean_f_mea_n},
             "cor_measured": self.cor_measured,

@@ -2,7 +2,7 @@
 
 A run is a CSV time series (:data:`RUN_COLUMNS`) and a JSON file of nominal
 parameters (:data:`RUN_KEYS`) with the same stem; the format is described in
-``measurement-format.md``. A validated run is a :class:`Run` (the time series)
+``docs/run-format.md``. A validated run is a :class:`Run` (the time series)
 holding a :class:`RunInfo` (the parameters); the files are read and checked by
 :mod:`hybridtable.measurement.run_reader`.
 """

@@ -2,7 +2,7 @@
 
 A run is a CSV time series and a JSON file of nominal parameters with the same
 stem (``run1.csv`` + ``run1.json``); the format is described in
-``measurement-format.md``. :func:`read_runs` takes files or folders, checks
+``docs/run-format.md``. :func:`read_runs` takes files or folders, checks
 every pair and returns :class:`~hybridtable.measurement.run_format.Run` objects
 (the format's columns, keys and objects are in
 :mod:`hybridtable.measurement.run_format`); any defect raises
@@ -163,6 +163,55 @@ def run_info_from_dict(raw: object, path: str) -> RunInfo:
 
 
 # -- CSV -----------------------------------------------------------------------
+#: Other names a log may give each format column (lower case), for the
+#: suggestion of a missing column's error.
+_ALIASES = {
+    "time_s": ("time", "t", "timestamp"),
+    "p_des_m": ("p_des", "p_cmd", "position_command", "commanded_position", "command"),
+    "p_act_m": ("p_act", "position", "table_position", "actual_position", "p_table"),
+    "f_mea_n": ("f_mea", "force", "measured_force", "f_measured", "fz"),
+    "f_comp_n": ("f_comp", "compensated_force", "f_compensated", "force_command"),
+    "v_des_m_per_s": ("v_des", "velocity", "v_cmd", "commanded_velocity"),
+}
+
+#: Least :class:`difflib.SequenceMatcher` ratio of a proposed log column.
+_SIMILAR = 0.6
+
+
+def _similarity(column: str, log_name: str) -> float:
+    import difflib
+
+    log = log_name.strip().lower()
+    return max(
+        difflib.SequenceMatcher(None, name, log).ratio() for name in (column, *_ALIASES[column])
+    )
+
+
+def _column_list(header: Sequence[str], most: int = 10) -> str:
+    shown = ", ".join(header[:most])
+    return shown + (", ..." if len(header) > most else "")
+
+
+def _missing_message(missing: list[str], header: list[str], leftover: list[str]) -> str:
+    """One line: the missing format columns, the log's columns and the
+    ``--column-map`` that would read them, with the most similar unmapped log
+    column proposed for each (by name, :data:`_ALIASES`), where one is."""
+    pairs = sorted(
+        ((_similarity(m, c), i, m, c) for i, m in enumerate(missing) for c in leftover),
+        key=lambda x: (-x[0], x[1]),
+    )
+    proposed: dict[str, str] = {}
+    for score, _, m, c in pairs:
+        if score >= _SIMILAR and m not in proposed and c not in proposed.values():
+            proposed[m] = c
+    text = f"missing column(s) {', '.join(missing)} (has: {_column_list(header)})"
+    if not leftover:
+        return text + "; the log has no other column to read it from"
+    them = "it" if len(missing) == 1 else "them"
+    items = ",".join(f"{m}={proposed.get(m, 'LOG_COLUMN')}" for m in missing)
+    return f"{text}; map {them} with --column-map {items}"
+
+
 def _parse_cell(text: str) -> float:
     s = text.strip()
     if not s or "_" in s:
@@ -210,11 +259,14 @@ def _read_series(
     if unmatched:
         raise MeasurementError(
             f"{path} line {header_line}: column map entries not in the header: "
-            f"{', '.join(unmatched)}"
+            f"{', '.join(unmatched)} (has: {_column_list(header)})"
         )
     missing = [c for c in RUN_COLUMNS if c not in seen]
     if missing:
-        raise MeasurementError(f"{path} line {header_line}: missing column(s) {', '.join(missing)}")
+        leftover = [c for c, name in zip(header, names, strict=True) if name not in RUN_COLUMNS]
+        raise MeasurementError(
+            f"{path} line {header_line}: {_missing_message(missing, header, leftover)}"
+        )
     extra = [c for c, name in zip(header, names, strict=True) if name not in RUN_COLUMNS]
     if extra:
         raise MeasurementError(

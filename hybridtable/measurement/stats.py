@@ -1,5 +1,14 @@
 """Error statistics of a residual: RMS, NRMSE and fit, the model-free noise floor
 of force and position, and whiteness tests (auto- and cross-correlation).
+
+Whiteness verdict: under a white residual each lag's correlation lies outside
+the 99 % band with probability ``p = 0.01``, so the number of lags outside is
+(nearly) binomial ``B(L, p)``. More lags outside than a white residual shows
+with probability :data:`WHITENESS_ALPHA` (0.1 %) means the residual is not
+white: e.g. at most 4 of 50 lags may fall outside by chance
+(:func:`lags_outside_by_chance`). A short memory puts few lags outside, each
+far: so is any lag beyond the Bonferroni limit ``z / sqrt(N)``, ``P(|Z| > z) =
+0.1 % / L`` (:func:`peak_limit`, 4.26 / sqrt(N) for 50 lags).
 """
 
 from __future__ import annotations
@@ -13,17 +22,24 @@ from hybridtable.measurement.phases import true_runs
 
 __all__ = [
     "CONFIDENCE_Z",
+    "WHITENESS_ALPHA",
     "ChannelError",
     "Correlation",
     "channel_error",
     "force_noise_rms",
     "position_noise_rms",
     "correlation",
+    "lags_outside_by_chance",
+    "peak_limit",
 ]
 
 
 #: Two-sided 99 % point of the normal distribution (whiteness bands).
 CONFIDENCE_Z = 2.5758293035489004
+
+#: Chance, for a white residual, of more lags outside the band than
+#: :func:`lags_outside_by_chance` allows (the whiteness verdict's false alarms).
+WHITENESS_ALPHA = 1e-3
 
 
 # -- basic error measures ------------------------------------------------------
@@ -42,7 +58,14 @@ class ChannelError:
 
 
 def channel_error(measured: np.ndarray, model: np.ndarray) -> ChannelError:
-    """RMS error, NRMSE, fit %, mean and largest error of ``model`` against ``measured``."""
+    """RMS error, NRMSE, fit %, mean and largest error of ``model`` against ``measured``.
+
+    ``nrmse = ||y - y_hat|| / ||y - mean(y)||`` and ``fit_percent = 100 (1 - nrmse)``
+    (the fit of MATLAB's ``compare``/``goodnessOfFit`` "NRMSE"): 100 % is a
+    perfect model, 0 % no better than the measurement's mean, negative worse
+    than that. Every error is in the unit of the channel (N, m, m/s); a
+    constant measurement has ``nrmse = inf``.
+    """
     y = np.asarray(measured, dtype=float)
     e = y - np.asarray(model, dtype=float)
     spread = float(np.linalg.norm(y - y.mean()))
@@ -98,6 +121,12 @@ class Correlation:
     ``auto[j]`` is at lag ``lags[j]`` (``lags`` from 0); ``cross[j]`` pairs the
     residual at ``k + lags[j]`` with the input at ``k``. ``band`` is the
     confidence half-width ``z / sqrt(N)``.
+
+    A correlation is white (:attr:`auto_white`, :attr:`cross_white`) when no
+    more lags lie outside the band than chance explains
+    (:func:`lags_outside_by_chance`) and no lag exceeds the peak limit
+    (:func:`peak_limit`): the count catches a long memory, the peak a short one
+    (e.g. a residual correlated over 1-3 ticks only).
     """
 
     lags: np.ndarray
@@ -105,21 +134,99 @@ class Correlation:
     cross: np.ndarray
     band: float
     sample_period_s: float
+    z: float = CONFIDENCE_Z
 
-    def summary(self) -> dict[str, float | int]:
+    @property
+    def auto_outside(self) -> int:
+        """Lags ``1..L`` of the autocorrelation outside the band."""
+        return int(np.sum(np.abs(self.auto[1:]) > self.band))
+
+    @property
+    def cross_outside(self) -> int:
+        """Lags ``0..L`` of the cross-correlation with the input outside the band."""
+        return int(np.sum(np.abs(self.cross) > self.band))
+
+    def _peak(self, lags: int) -> float:
+        return self.band * peak_limit(lags) / self.z
+
+    @property
+    def auto_white(self) -> bool:
+        """The autocorrelation is what a white residual shows by chance."""
+        auto = np.abs(self.auto[1:])
+        return bool(
+            self.auto_outside <= lags_outside_by_chance(auto.size, self.z)
+            and (auto.size == 0 or auto.max() <= self._peak(auto.size))
+        )
+
+    @property
+    def cross_white(self) -> bool:
+        """The cross-correlation with the input is what chance gives a white residual."""
+        cross = np.abs(self.cross)
+        return bool(
+            self.cross_outside <= lags_outside_by_chance(cross.size, self.z)
+            and (cross.size == 0 or cross.max() <= self._peak(cross.size))
+        )
+
+    def summary(self) -> dict[str, float | int | bool]:
+        """Counts, largest values and limits of both tests (lags in s)."""
         auto = np.abs(self.auto[1:])
         cross = np.abs(self.cross)
+        h = self.sample_period_s
         return {
-            "max_lag_s": float(self.lags[-1] * self.sample_period_s),
+            "max_lag_s": float(self.lags[-1] * h),
             "band": self.band,
             "auto_lags_outside": int(np.sum(auto > self.band)),
             "auto_lags": int(auto.size),
             "auto_max_abs": float(auto.max()) if auto.size else math.nan,
+            "auto_max_lag_s": float(self.lags[1 + int(np.argmax(auto))] * h)
+            if auto.size
+            else math.nan,
             "cross_lags_outside": int(np.sum(cross > self.band)),
             "cross_lags": int(cross.size),
             "cross_max_abs": float(cross.max()) if cross.size else math.nan,
-            "cross_max_lag_s": float(self.lags[int(np.argmax(cross))] * self.sample_period_s),
+            "cross_max_lag_s": float(self.lags[int(np.argmax(cross))] * h),
+            "auto_chance_limit": lags_outside_by_chance(auto.size, self.z),
+            "cross_chance_limit": lags_outside_by_chance(cross.size, self.z),
+            "auto_peak_limit": self._peak(auto.size),
+            "cross_peak_limit": self._peak(cross.size),
+            "auto_white": self.auto_white,
+            "cross_white": self.cross_white,
         }
+
+
+def peak_limit(lags: int, alpha: float = WHITENESS_ALPHA) -> float:
+    """The largest ``|correlation| sqrt(N)`` that a white residual reaches at any
+    of ``lags`` lags but with probability ``alpha`` (two-sided, Bonferroni):
+    ``z`` with ``P(|Z| > z) = alpha / lags`` (4.26 for 50 lags)."""
+    from statistics import NormalDist
+
+    return NormalDist().inv_cdf(1.0 - alpha / (2.0 * max(lags, 1)))
+
+
+def lags_outside_by_chance(
+    lags: int, z: float = CONFIDENCE_Z, alpha: float = WHITENESS_ALPHA
+) -> int:
+    """The most of ``lags`` correlation lags that a white residual puts outside
+    the band ``+-z / sqrt(N)`` by chance: the smallest ``k`` with
+    ``P(B(lags, p) > k) <= alpha``, ``p = erfc(z / sqrt(2))`` (0.01 for the 99 %
+    band).
+
+    Parameters
+    ----------
+    lags : int
+        Number of lags tested.
+    z : float
+        Half-width of the band in standard deviations of one lag's correlation.
+    alpha : float
+        Accepted chance of calling a white residual not white.
+    """
+    p = math.erfc(z / math.sqrt(2.0))
+    tail = 1.0  # P(X > k - 1) = P(X >= k)
+    for k in range(lags + 1):
+        tail -= math.comb(lags, k) * p**k * (1.0 - p) ** (lags - k)
+        if tail <= alpha:
+            return k
+    return lags
 
 
 def correlation(
@@ -146,4 +253,4 @@ def correlation(
     cross = (
         np.array([e[k:] @ u[: n - k] for k in lags]) / denom if denom > 0 else np.zeros(len(lags))
     )
-    return Correlation(lags, auto, cross, z / math.sqrt(n), sample_period_s)
+    return Correlation(lags, auto, cross, z / math.sqrt(n), sample_period_s, z)

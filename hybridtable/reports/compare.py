@@ -1,45 +1,203 @@
-"""The report of ``hybridtable compare``: a text table and Markdown with PNG figures."""
+"""The report of ``hybridtable compare``: the verdict, the text tables, the
+whiteness in words, and report.md with the figures of
+:mod:`~hybridtable.reports.compare_figures`."""
 
 from __future__ import annotations
 
 import math
-import re
 from collections.abc import Sequence
 from pathlib import Path
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from hybridtable.measurement.comparison import RunComparison  # noqa: E402
+from hybridtable.measurement.comparison import RunComparison
 from hybridtable.measurement.phases import PHASES
-from hybridtable.measurement.run_format import RUN_COLUMNS  # noqa: E402
-from hybridtable.measurement.stats import Correlation
+from hybridtable.measurement.run_format import RUN_COLUMNS
+from hybridtable.reports.compare_figures import (
+    FIGURES,
+    figure_stem,
+    plot_correlation,
+    plot_force_deflection,
+    plot_overlay,
+    plot_residuals,
+)
 
-__all__ = ["REPORT_MARKER", "format_table", "format_error_fall", "write_report", "figure_stem"]
+__all__ = [
+    "format_table",
+    "format_error_fall",
+    "format_whiteness",
+    "verdict",
+    "whiteness_sentence",
+    "write_report",
+    "figure_stem",
+]
 
-#: File that marks a folder as written by ``hybridtable compare --report``
-#: (such a folder may be written again; any other non-empty folder is refused).
-REPORT_MARKER = ".hybridtable-compare-report"
-
-_PHASE_COLORS = {
-    "approach": "tab:blue",
-    "compression": "tab:red",
-    "restitution": "tab:orange",
-    "free_flight": "tab:green",
-}
+#: The replay channels and their plain names.
+_CHANNEL_WORDS = {"f_mea_n": "force", "p_act_m": "position"}
 
 
 def _fmt(x: float, spec: str) -> str:
     return "n/a" if x is None or (isinstance(x, float) and math.isnan(x)) else format(x, spec)
 
 
+def _fit(x: float) -> str:
+    """A fit in %, one decimal, never rounded up to a perfect 100.0."""
+    if not math.isfinite(x):
+        return "n/a"
+    text = f"{x:.1f}"
+    if text == "100.0" and x < 100.0:
+        text = f"{math.floor(x * 100.0) / 100.0:.2f}"
+    return text
+
+
+def _span(values: Sequence[float], fmt) -> str:
+    """``a-b`` from the smallest to the largest value (one value if they print alike)."""
+    finite = [v for v in values if math.isfinite(v)]
+    if not finite:
+        return "n/a"
+    lo, hi = fmt(min(finite)), fmt(max(finite))
+    return lo if lo == hi else f"{lo}-{hi}"
+
+
+def _id_width(comparisons: Sequence[RunComparison]) -> int:
+    return max([3, *(len(c.run_id) for c in comparisons)])
+
+
+def verdict(comparisons: Sequence[RunComparison], subject: str = "The model") -> str:
+    """One plain sentence: does ``subject`` match the runs within the noise,
+    and if not, where is it worst.
+
+    A run is matched when the replay RMS error of force and position is at most
+    :data:`~hybridtable.measurement.comparison.WITHIN_NOISE_RATIO` times its noise
+    RMS. The ratios are printed as ``1.03x`` (error over noise), the fit in %
+    (``100 (1 - NRMSE)``, see :func:`~hybridtable.measurement.stats.channel_error`).
+    """
+    n = len(comparisons)
+    chans = tuple(_CHANNEL_WORDS)
+    unjudged = [
+        c for c in comparisons if not all(math.isfinite(c.error_to_noise(ch)) for ch in chans)
+    ]
+    missed = [
+        c for c in comparisons if c not in unjudged and not all(c.within_noise(ch) for ch in chans)
+    ]
+    if missed:
+        if len(missed) < n:
+            where = f"{len(missed)} of {n} runs"
+        else:
+            where = {1: "the run", 2: "both runs"}.get(n, f"all {n} runs")
+        parts = []
+        for ch in chans:
+            bad = [c for c in missed if not c.within_noise(ch)]
+            if not bad:
+                continue
+            worst = max(bad, key=lambda c: c.error_to_noise(ch))
+            phase = worst.worst_phase(ch)
+            up_to = "" if len(bad) == 1 else "up to "
+            parts.append(
+                f"{_CHANNEL_WORDS[ch]} error {up_to}{worst.error_to_noise(ch):.2f}x the noise, "
+                f"worst in {phase.replace('_', ' ')} "
+                f"({worst.phase_error_to_noise(ch, phase):.1f}x)"
+            )
+        return (
+            f"{subject} misses something in {where}: {'; '.join(parts)}; try hybridtable diagnose"
+        )
+    judged = [c for c in comparisons if c not in unjudged]
+    if not judged:
+        return f"{subject} cannot be judged: no run has a noise estimate (no quiet ticks)"
+    runs = "the run" if len(judged) == 1 else f"the {len(judged)} runs"
+    ratios = {
+        ch: _span([c.error_to_noise(ch) for c in judged], lambda x: f"{x:.2f}") for ch in chans
+    }
+    fits = {ch: _span([c.replay_errors[ch].fit_percent for c in judged], _fit) for ch in chans}
+    text = (
+        f"{subject} matches {runs} within the noise (force error {ratios['f_mea_n']}x, "
+        f"position {ratios['p_act_m']}x the noise; fit {fits['f_mea_n']} % force, "
+        f"{fits['p_act_m']} % position)"
+    )
+    if unjudged:
+        names = ", ".join(c.run_id for c in unjudged)
+        text += f"; {names}: no noise estimate (no quiet ticks), not judged"
+    return text
+
+
+def _why_not_white(s: dict, kind: str) -> str:
+    """Why the ``kind`` ("auto" or "cross") correlation of a summary is not white."""
+    name = {"auto": "autocorrelation", "cross": "command cross-correlation"}[kind]
+    k, n, most = s[f"{kind}_lags_outside"], s[f"{kind}_lags"], s[f"{kind}_chance_limit"]
+    if k > most:
+        return f"{k} of {n} {name} lags lie outside the 99 % band (at most {most} by chance)"
+    return (
+        f"its {name} reaches {s[f'{kind}_max_abs']:.2f} at {s[f'{kind}_max_lag_s'] * 1e3:.0f} ms "
+        f"(a white residual stays below {s[f'{kind}_peak_limit']:.2f})"
+    )
+
+
+def whiteness_sentence(c: RunComparison, channel: str) -> str:
+    """What the whiteness tests of ``channel``'s replay residual imply, in words.
+
+    A correlation beyond what chance gives a white residual
+    (:attr:`~hybridtable.measurement.stats.Correlation.auto_white`) means the
+    residual holds structure: an effect the model lacks. Its size is judged by
+    the error over the noise (:meth:`RunComparison.within_noise`).
+    """
+    corr = c.whiteness[channel]
+    s = corr.summary()
+    ratio = _fmt(c.error_to_noise(channel), ".2f")
+    if corr.auto_white and corr.cross_white:
+        counts = (
+            f"{s['auto_lags_outside']} of {s['auto_lags']} autocorrelation lags, "
+            f"{s['cross_lags_outside']} of {s['cross_lags']} command cross-correlation lags "
+            "outside the 99 % band"
+        )
+        if c.within_noise(channel):
+            return f"the residual is white: what is left is sensor noise ({counts})"
+        return (
+            f"the residual is white but {ratio}x the noise measured while apart: the readings "
+            f"are noisier in contact, or the model misses an effect without memory ({counts})"
+        )
+    if not corr.auto_white and not corr.cross_white:
+        if (
+            s["auto_lags_outside"] > s["auto_chance_limit"]
+            and s["cross_lags_outside"] > s["cross_chance_limit"]
+        ):
+            why = (
+                f"{s['auto_lags_outside']} of {s['auto_lags']} autocorrelation and "
+                f"{s['cross_lags_outside']} of {s['cross_lags']} command cross-correlation lags "
+                f"lie outside the 99 % band (at most {s['auto_chance_limit']} by chance)"
+            )
+        else:
+            why = f"{_why_not_white(s, 'auto')}; {_why_not_white(s, 'cross')}"
+        text = f"the residual is not noise and follows the command: {why}"
+    elif not corr.auto_white:
+        text = f"the residual is not noise: {_why_not_white(s, 'auto')}"
+    else:
+        text = f"the residual follows the command: {_why_not_white(s, 'cross')}"
+    if c.within_noise(channel):
+        return text + f"; a systematic effect but a small one (error {ratio}x the noise)"
+    return text + (
+        f"; so the model misses a systematic effect (error {ratio}x the noise; "
+        "try hybridtable diagnose)"
+    )
+
+
+def format_whiteness(comparisons: Sequence[RunComparison]) -> str:
+    """Per run and channel, what the whiteness of the replay residual implies."""
+    w = _id_width(comparisons)
+    lines = ["whiteness of the replay residuals:"]
+    for c in comparisons:
+        for ch, word in _CHANNEL_WORDS.items():
+            lines.append(f"  {c.run_id:<{w}}  {word + ':':<9} {whiteness_sentence(c, ch)}")
+    return "\n".join(lines)
+
+
 def format_table(comparisons: Sequence[RunComparison]) -> str:
-    """One line per run: replay errors against the noise floor, CoR, worst phase."""
+    """One line per run: replay errors against the noise floor, fit, CoR, worst
+    phase. Run ids are shown whole; the columns widen to the longest."""
+    w = _id_width(comparisons)
+    wc = max([4, *(len(c.run.info.compensator) for c in comparisons)])
     head = (
-        f"{'run':<16} {'comp':<6} {'f_mea rms/noise [N]':>21} {'p_act rms/noise [um]':>22} "
+        f"{'run':<{w}} {'comp':<{wc}} {'f_mea rms/noise [N]':>21} {'p_act rms/noise [um]':>22} "
+        f"{'fit f_mea/p_act [%]':>20} "
         f"{'CoR meas':>9} {'CoR model':>9} {'dCoR':>8}  worst f_mea phase: rms/noise (share)"
     )
     lines = [head, "-" * len(head)]
@@ -51,10 +209,15 @@ def format_table(comparisons: Sequence[RunComparison]) -> str:
         ph = c.phases["f_mea_n"]
         worst = max(PHASES, key=lambda n: np.nan_to_num(ph[n]["rms_error"], nan=-1.0))
         worst_ratio = ph[worst]["rms_error"] / f_noise if f_noise > 0 else math.nan
+        fit = (
+            f"{_fit(c.replay_errors['f_mea_n'].fit_percent)}/"
+            f"{_fit(c.replay_errors['p_act_m'].fit_percent)}"
+        )
         lines.append(
-            f"{c.run_id[:16]:<16} {c.run.info.compensator:<6} "
+            f"{c.run_id:<{w}} {c.run.info.compensator:<{wc}} "
             f"{_fmt(f_err, '#.3g'):>6}/{_fmt(f_noise, '#.3g'):<6} x{_fmt(c.error_to_noise('f_mea_n'), '.2f'):<5} "
             f"{_fmt(p_err, '#.3g'):>7}/{_fmt(p_noise, '#.3g'):<6} x{_fmt(c.error_to_noise('p_act_m'), '.2f'):<5} "
+            f"{fit:>20} "
             f"{_fmt(c.cor_measured, '.5f'):>9} {_fmt(c.cor_model, '.5f'):>9} "
             f"{_fmt(c.cor_model - c.cor_measured, '+.5f'):>8}  {worst} "
             f"x{_fmt(worst_ratio, '.2f')} ({_fmt(ph[worst]['share'], '.0%')} of the error)"
@@ -62,163 +225,32 @@ def format_table(comparisons: Sequence[RunComparison]) -> str:
     return "\n".join(lines)
 
 
-def figure_stem(index: int, run_id: str) -> str:
-    """A file-name-safe, unique stem for a run's figures."""
-    return f"{index:02d}_" + (re.sub(r"[^A-Za-z0-9._-]+", "_", run_id).strip("._") or "run")
-
-
-def _save(fig, path: Path) -> Path:
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
-
-
-def _contact_window(c: RunComparison, margin_s: float = 0.06) -> tuple[float, float]:
-    t = c.run.time_s
-    idx = np.flatnonzero((c.labels == 1) | (c.labels == 2))
-    a = t[idx[0]] - margin_s
-    b = t[min(idx[-1] + c.delay_ticks, len(t) - 1)] + margin_s
-    return max(a, t[0]), min(b, t[-1])
-
-
-def plot_overlay(c: RunComparison, path: Path) -> Path:
-    """Measured and model signals: replay (p_act, f_mea), closed loop (v_des, f_comp)."""
-    r, rp, cl = c.run, c.replay, c.closed_loop
-    t = r.time_s
-    fig, ax = plt.subplots(4, 1, figsize=(8, 10), sharex=True)
-    ax[0].plot(t, r.p_des_m * 1e3, color="0.6", lw=1, label="p_des (recorded command)")
-    ax[0].plot(t, r.p_act_m * 1e3, ".", ms=2, label="p_act measured")
-    ax[0].plot(t, rp.p_act_m * 1e3, lw=1.2, label="p_act replay")
-    ax[0].set_ylabel("position [mm]")
-    ax[1].plot(t, r.f_mea_n, ".", ms=2, label="f_mea measured")
-    ax[1].plot(t, rp.f_mea_n, lw=1.2, label="f_mea replay")
-    ax[1].set_ylabel("force [N]")
-    ax[2].plot(t, r.v_des_m_per_s, lw=1.5, label="v_des measured")
-    ax[2].plot(t, cl.v_des_m_per_s, "--", lw=1.2, label="v_des closed-loop model")
-    ax[2].set_ylabel("velocity [m/s]")
-    ax[3].plot(t, r.f_comp_n, lw=1.5, label="f_comp measured")
-    ax[3].plot(t, cl.f_comp_n, "--", lw=1.2, label="f_comp closed-loop model")
-    ax[3].set_ylabel("force [N]")
-    ax[3].set_xlabel("time [s]")
-    for a in ax:
-        a.grid(True, alpha=0.3)
-        a.legend(loc="best", fontsize=7)
-    ax[0].set_title(
-        f"{c.run_id}: replay (top two) and closed loop (bottom two); "
-        f"CoR {c.cor_measured:.4f} measured, {c.cor_model:.4f} model",
-        fontsize=9,
-    )
-    return _save(fig, path)
-
-
-def plot_residuals(c: RunComparison, path: Path) -> Path:
-    """Replay residuals against time coloured by phase, and each phase's share."""
-    r, rp = c.run, c.replay
-    t = r.time_s
-    fig = plt.figure(figsize=(9, 7))
-    grid = fig.add_gridspec(2, 3)
-    chans = (
-        ("f_mea_n", r.f_mea_n - rp.f_mea_n, c.f_labels, 1.0, "f_mea residual [N]"),
-        ("p_act_m", r.p_act_m - rp.p_act_m, c.labels, 1e6, "p_act residual [um]"),
-    )
-    for row, (name, e, labels, scale, ylabel) in enumerate(chans):
-        ax = fig.add_subplot(grid[row, :2])
-        for i, ph in enumerate(PHASES):
-            sel = labels == i
-            ax.plot(t[sel], e[sel] * scale, ".", ms=2, color=_PHASE_COLORS[ph], label=ph)
-        noise = c.noise_rms[name] * scale
-        if math.isfinite(noise):
-            for s in (-2, 2):
-                ax.axhline(s * noise, color="k", lw=0.8, ls=":")
-        ax.set_ylabel(ylabel)
-        ax.grid(True, alpha=0.3)
-        if row == 0:
-            ax.legend(loc="best", fontsize=7, markerscale=4)
-            ax.set_title(f"{c.run_id}: replay residuals (dotted: +-2 noise RMS)", fontsize=9)
-        else:
-            ax.set_xlabel("time [s]")
-        bx = fig.add_subplot(grid[row, 2])
-        shares = [np.nan_to_num(c.phases[name][ph]["share"]) for ph in PHASES]
-        fracs = [c.phases[name][ph]["time_fraction"] for ph in PHASES]
-        x = np.arange(len(PHASES))
-        bx.bar(x - 0.2, shares, 0.4, color=[_PHASE_COLORS[p] for p in PHASES], label="error share")
-        bx.bar(x + 0.2, fracs, 0.4, color="0.75", label="time share")
-        bx.set_xticks(x, [p.replace("_", "\n") for p in PHASES], fontsize=7)
-        bx.set_ylim(0, 1)
-        bx.set_title(f"{name}: share of squared error", fontsize=8)
-        bx.legend(fontsize=6)
-    return _save(fig, path)
-
-
-def _corr_panel(ax, corr: Correlation, values: np.ndarray, lags: np.ndarray, title: str) -> None:
-    h = corr.sample_period_s * 1e3
-    ax.vlines(lags * h, 0, values, lw=1.2)
-    ax.plot(lags * h, values, ".", ms=3)
-    ax.axhspan(-corr.band, corr.band, color="tab:blue", alpha=0.15, label="99 % band")
-    ax.axhline(0, color="k", lw=0.6)
-    ax.set_title(title, fontsize=8)
-    ax.set_xlabel("lag [ms]")
-    ax.grid(True, alpha=0.3)
-
-
-def plot_correlation(c: RunComparison, path: Path) -> Path:
-    """Residual autocorrelation and cross-correlation with the input, with bands."""
-    fig, ax = plt.subplots(2, 2, figsize=(9, 6))
-    for row, name in enumerate(("f_mea_n", "p_act_m")):
-        corr = c.whiteness[name]
-        _corr_panel(
-            ax[row, 0], corr, corr.auto[1:], corr.lags[1:], f"{name} residual autocorrelation"
-        )
-        _corr_panel(
-            ax[row, 1], corr, corr.cross, corr.lags, f"{name} residual vs input (command increment)"
-        )
-    ax[0, 0].legend(fontsize=7)
-    fig.suptitle(f"{c.run_id}: whiteness of the replay residuals", fontsize=9)
-    return _save(fig, path)
-
-
-def plot_force_deflection(c: RunComparison, path: Path) -> Path:
-    """Force against penetration: measured (reading M ticks later) and replay model."""
-    r, rp, m = c.run, c.replay, c.delay_ticks
-    n = len(r.time_s)
-    window = np.flatnonzero((c.labels == 1) | (c.labels == 2))
-    a, b = max(window[0] - 3, 0), min(window[-1] + 3, n - 1 - m)
-    fig, ax = plt.subplots(figsize=(6, 5))
-    ax.plot(
-        r.p_act_m[a : b + 1] * 1e3,
-        r.f_mea_n[a + m : b + 1 + m],
-        ".-",
-        ms=2,
-        lw=0.6,
-        label=f"measured (loop energy {c.loop_energy_j['measured']:+.3g} J)",
-    )
-    ax.plot(
-        rp.p_act_m[a : b + 1] * 1e3,
-        rp.f_act_n[a : b + 1],
-        lw=1.4,
-        label=f"model (loop energy {c.loop_energy_j['model']:+.3g} J)",
-    )
-    ax.set_xlabel("penetration p_act [mm]")
-    ax.set_ylabel("contact force [N]")
-    ax.set_title(f"{c.run_id}: force-deflection loop", fontsize=9)
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=7)
-    return _save(fig, path)
-
-
 def _md_num(x: float, spec: str) -> str:
     return _fmt(x, spec)
 
 
-def write_report(comparisons: Sequence[RunComparison], folder: str | Path) -> list[Path]:
-    """Write ``report.md`` and the figures into ``folder``; returns the files written."""
+def write_report(
+    comparisons: Sequence[RunComparison],
+    folder: str | Path,
+    verdict_text: str | None = None,
+) -> list[Path]:
+    """Write ``report.md`` (and ``report.html``) and the figures into ``folder``;
+    returns the files written.
+
+    Parameters
+    ----------
+    comparisons : sequence of RunComparison
+    folder : path
+    verdict_text : str, optional
+        The report's opening sentence (default: :func:`verdict` of ``comparisons``).
+    """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    (folder / REPORT_MARKER).write_text("written by hybridtable compare --report\n")
     written: list[Path] = []
     md = [
         "# Model against measured runs",
+        "",
+        f"**{verdict_text or verdict(comparisons)}.**",
         "",
         "Replay: the rig's physical part (table, contact, force sensor) driven by the recorded "
         "command; closed loop: the whole rig loop re-run from the run's initial state. "
@@ -285,36 +317,40 @@ def write_report(comparisons: Sequence[RunComparison], folder: str | Path) -> li
                 f"{_md_num(f['share'], '.1%')} | {_md_num(p['rms_error'] * 1e6, '.3g')} | "
                 f"{_md_num(p['share'], '.1%')} |"
             )
-        md += ["", "Whiteness (99 % band):", ""]
-        for ch in ("f_mea_n", "p_act_m"):
+        md += ["", "Whiteness of the replay residuals (99 % band):", ""]
+        for ch, word in _CHANNEL_WORDS.items():
             s = c.whiteness[ch].summary()
             md.append(
-                f"- {ch}: autocorrelation outside the band at {s['auto_lags_outside']} of "
-                f"{s['auto_lags']} lags (max {s['auto_max_abs']:.3f}, band {s['band']:.3f}); "
-                f"cross-correlation with the input at {s['cross_lags_outside']} of "
-                f"{s['cross_lags']} lags (max {s['cross_max_abs']:.3f} at "
-                f"{s['cross_max_lag_s'] * 1e3:.0f} ms)."
+                f"- {word} ({ch}): {whiteness_sentence(c, ch)}. Largest autocorrelation "
+                f"{s['auto_max_abs']:.3f}, largest cross-correlation {s['cross_max_abs']:.3f} at "
+                f"{s['cross_max_lag_s'] * 1e3:.0f} ms (band {s['band']:.3f})."
             )
         md += [
-            f"- force-deflection loop energy: measured {c.loop_energy_j['measured']:+.4g} J, "
+            "",
+            f"Force-deflection loop energy: measured {c.loop_energy_j['measured']:+.4g} J, "
             f"model {c.loop_energy_j['model']:+.4g} J (> 0: the contact dissipates).",
             "",
         ]
         if c.notes:
             md += [f"Note: {n}" for n in c.notes] + [""]
-        for title, p in figs.items():
-            md += [f"![{c.run_id} {title}]({p.name})", ""]
+        for key, p in figs.items():
+            title, caption = FIGURES[key]
+            md += [f"![{title}, {c.run_id}]({p.name})", f"*{caption}*", ""]
     report = folder / "report.md"
     report.write_text("\n".join(md))
     written.insert(0, report)
+    from hybridtable.reports.html import write_html_report
+
+    write_html_report(report)  # report.html beside it: the same text, figures embedded
     return written
 
 
 def format_error_fall(nominal, with_effect, label: str) -> str:
     """Per run: replay errors over the noise and closed-loop errors, nominal
     model -> model with the effect."""
+    w = _id_width(nominal)
     head = (
-        f"{'run':<16} {'f_mea rms/noise':>17} {'p_act rms/noise':>17} "
+        f"{'run':<{w}} {'f_mea rms/noise':>17} {'p_act rms/noise':>17} "
         f"{'v_des rms [mm/s]':>19} {'CoR error':>21}"
     )
     lines = [f"error fall with {label}:", head, "-" * len(head)]
@@ -322,7 +358,7 @@ def format_error_fall(nominal, with_effect, label: str) -> str:
         va = a.closed_loop_errors["v_des_m_per_s"].rms_error * 1e3
         vb = b.closed_loop_errors["v_des_m_per_s"].rms_error * 1e3
         lines.append(
-            f"{a.run_id[:16]:<16} {a.error_to_noise('f_mea_n'):7.3f} -> {b.error_to_noise('f_mea_n'):<6.3f} "
+            f"{a.run_id:<{w}} {a.error_to_noise('f_mea_n'):7.3f} -> {b.error_to_noise('f_mea_n'):<6.3f} "
             f"{a.error_to_noise('p_act_m'):7.3f} -> {b.error_to_noise('p_act_m'):<6.3f} "
             f"{va:8.3g} -> {vb:<8.3g} "
             f"{a.cor_model - a.cor_measured:+9.5f} -> {b.cor_model - b.cor_measured:<+9.5f}"

@@ -24,7 +24,6 @@ from hybridtable.measurement.phases import PHASES, contact_mask, loop_energy  # 
 from hybridtable.reports.compare import figure_stem  # noqa: E402
 
 __all__ = [
-    "REPORT_MARKER",
     "summary_sentence",
     "format_audit",
     "format_remaining",
@@ -35,7 +34,6 @@ __all__ = [
 ]
 
 #: File that marks a folder as written by ``hybridtable diagnose --report``.
-REPORT_MARKER = ".hybridtable-diagnose-report"
 
 
 def _fmt(x, spec: str) -> str:
@@ -81,9 +79,13 @@ def _where_words(w) -> str:
     phase = _PHASE_WORDS.get(w.phase, w.phase)
     if w.phase == "compression" and w.misfit_start_s <= w.start_s + 0.1 * (w.end_s - w.start_s):
         phase = "at the touch"
+    if w.misfit_end_s > w.misfit_start_s:
+        when = f"{w.misfit_start_s:.3f}-{w.misfit_end_s:.3f} s"
+    else:  # a window of one tick, at the phase's end
+        when = f"at {w.misfit_start_s:.3f} s"
     return (
         f"the {_CHANNEL_WORDS.get(w.channel, w.channel)} error {phase} of {w.run_id} "
-        f"({w.misfit_start_s:.3f}-{w.misfit_end_s:.3f} s, {w.band_hz[0]:.3g}-{w.band_hz[1]:.3g} Hz) "
+        f"({when}, {w.band_hz[0]:.3g}-{w.band_hz[1]:.3g} Hz) "
         f"is {w.error:.3g}x the noise"
     )
 
@@ -248,7 +250,7 @@ def plot_staircase(d: Diagnosis, path: Path) -> Path:
         ax.annotate(f"{e:.3g}", (xi - 0.18, e), ha="center", va="bottom", fontsize=8)
     ax.axhline(1.0, color="k", ls=":", lw=1, label="noise floor")
     ax.set_xticks(x, labels, fontsize=8)
-    ax.set_ylabel("RMS error / noise RMS")
+    ax.set_ylabel("RMS error / noise RMS [1]")
     ax.set_ylim(0, max(1.2, 1.12 * max(s["error"] for s in steps)))
     ax.grid(True, alpha=0.3, axis="y")
     ax.legend(fontsize=8)
@@ -319,7 +321,7 @@ def plot_phases(d: Diagnosis, i: int, path: Path) -> Path:
         ax[k].bar(x + 0.2, after, 0.4, label="diagnosed")
         ax[k].axhline(1.0, color="k", ls=":", lw=1)
         ax[k].set_xticks(x, [p.replace("_", "\n") for p in PHASES], fontsize=8)
-        ax[k].set_ylabel("RMS residual / noise RMS")
+        ax[k].set_ylabel("RMS residual / noise RMS [1]")
         ax[k].set_title(f"{ch} residual by phase", fontsize=9)
         ax[k].grid(True, alpha=0.3, axis="y")
         ax[k].legend(fontsize=7)
@@ -359,11 +361,22 @@ def plot_force_deflection(d: Diagnosis, i: int, path: Path) -> Path:
     return _save(fig, path)
 
 
+#: The caption line under each figure of a run in ``report.md``.
+_CAPTIONS = {
+    "overlay": "Measured force and the nominal and diagnosed models' replays [N] against "
+    "time [s], with the force residual [N] and the table-position residual [um] of each.",
+    "phases": "RMS residual per contact phase in units of the noise RMS [1], nominal against "
+    "diagnosed model, force and table position.",
+    "force_deflection": "Force reading [N] against penetration [mm] over the contact: the "
+    "area a loop encloses is the energy [J] the contact (and the loop's delay) dissipates "
+    "or creates.",
+}
+
+
 def write_report(d: Diagnosis, folder: str | Path) -> list[Path]:
     """Write ``report.md`` and the figures into ``folder``; returns the files written."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    (folder / REPORT_MARKER).write_text("written by hybridtable diagnose --report\n")
     written = [plot_staircase(d, folder / "staircase.png")]
     md = [
         "# Which physical effect is missing",
@@ -420,7 +433,16 @@ def write_report(d: Diagnosis, folder: str | Path) -> list[Path]:
             f"| {' + '.join(s['effects']) or 'nominal'} | {_fmt(s['error'], '.4g')} "
             f"| {_fmt(s['heldout_error'], '.4g')} | {_fmt(s['delta_bic'], '.1f')} |"
         )
-    md += ["", "![staircase](staircase.png)", "", "## Closed loop", ""]
+    md += [
+        "",
+        "![staircase](staircase.png)",
+        "*The error of each model of the staircase (nominal, then one effect added at a "
+        "time), RMS residual over the runs in units of the noise RMS [1]: 1 is the noise "
+        "floor.*",
+        "",
+        "## Closed loop",
+        "",
+    ]
     md += [
         "| run | CoR measured | CoR nominal | CoR diagnosed | v_des RMS error nominal -> diagnosed [m/s] |"
     ]
@@ -454,9 +476,12 @@ def write_report(d: Diagnosis, folder: str | Path) -> list[Path]:
         ]
         md += [f"Note: {n}" for n in rd.notes]
         for title, p in figs.items():
-            md += [f"![{rd.run_id} {title}]({p.name})", ""]
+            md += [f"![{rd.run_id} {title}]({p.name})", f"*{_CAPTIONS[title]}*", ""]
     if d.notes:
         md += ["", *[f"Note: {n}" for n in d.notes]]
     report = folder / "report.md"
     report.write_text("\n".join(md) + "\n")
+    from hybridtable.reports.html import write_html_report
+
+    write_html_report(report)  # report.html beside it: the same text, figures embedded
     return [report, *written]

@@ -15,6 +15,10 @@ from hybridtable.loop.simulation import SimulationResult  # noqa: E402
 __all__ = ["plot_run", "plot_velocities", "plot_forces"]
 
 
+#: Line styles of overlaid runs, so that coinciding curves stay visible.
+_STYLES = ("-", "--", "-.", ":")
+
+
 def _contact_window(results: Sequence[SimulationResult], margin_s: float = 0.1):
     starts, ends = [], []
     for r in results:
@@ -46,8 +50,8 @@ def _overlay(
 ) -> Path:
     """Curves ``(label, (t, y))`` of several runs on one axis, zoomed on the contact."""
     fig, ax = plt.subplots(figsize=(7, 4))
-    for label, (t, y), *style in series:
-        ax.plot(t, y, *style, label=label)
+    for i, (label, (t, y)) in enumerate(series):
+        ax.plot(t, y, ls=_STYLES[i % len(_STYLES)], lw=1.6, label=label)
     window = _contact_window(results, margin_s)
     if window:
         ax.set_xlim(*window)
@@ -75,15 +79,34 @@ def plot_forces(
     results: Sequence[SimulationResult], labels: Sequence[str], path: str | Path, title: str
 ) -> Path:
     """Compensated force of several runs with the actual force of the first
-    (the paper's Fig. 7)."""
-    series = [
-        (f"{label}: f_comp", (r.time_s, r.f_comp_n))
-        for r, label in zip(results, labels, strict=True)
-    ]
+    (the paper's Fig. 7), and below it each run's compensated minus actual force.
+
+    The actual force is drawn wide and grey beneath the compensated forces
+    (one line style each), so that a compensated force on top of it (SDC's)
+    stays visible; the lower panel shows what each compensator adds.
+    """
+    fig, (ax, dax) = plt.subplots(
+        2, 1, figsize=(7, 6), sharex=True, gridspec_kw=dict(height_ratios=(2, 1))
+    )
     if results:
         first = f"actual force f_act ({labels[0]} run)"
-        series.append((first, (results[0].time_s, results[0].f_act_n), "k--"))
-    return _overlay(results, series, path, title, "force [N]", 0.05)
+        ax.plot(results[0].time_s, results[0].f_act_n, color="0.55", lw=5, alpha=0.5, label=first)
+    for i, (r, label) in enumerate(zip(results, labels, strict=True)):
+        style = dict(color=f"C{i}", ls=_STYLES[i % len(_STYLES)], lw=1.6, zorder=3)
+        ax.plot(r.time_s, r.f_comp_n, label=f"{label}: f_comp", **style)
+        dax.plot(r.time_s, r.f_comp_n - r.f_act_n, label=f"{label}: f_comp - f_act", **style)
+    window = _contact_window(results, 0.05)
+    for a in (ax, dax):
+        if window:
+            a.set_xlim(*window)
+        a.axhline(0.0, color="0.6", lw=0.8)
+        a.grid(True, alpha=0.3)
+        a.legend(loc="best", fontsize=8)
+    ax.set_ylabel("force [N]")
+    dax.set_ylabel("f_comp - f_act [N]")
+    dax.set_xlabel("time [s]")
+    ax.set_title(title)
+    return _save(fig, path)
 
 
 def plot_run(result: SimulationResult, path: str | Path) -> Path:

@@ -4,8 +4,10 @@
 - :func:`plot_cor_heatmaps` (``cor_heatmaps.png``): predicted CoR over (table
   frequency, sensor delay) per compensator, the CoR = 1 contour, the paper's
   operating points (Tables 1-2, :func:`paper_points`) and the validated points;
-- :func:`plot_critical` (``critical.png``): critical sensor delay against table
-  frequency and critical table frequency against sensor delay, per compensator;
+- :func:`plot_critical` (``critical.png``): the sensor delay the loop takes per
+  table frequency and the table frequency it needs per sensor delay, per
+  compensator: the stability boundary (damped contact) and where the predicted
+  CoR reaches a limit (read off the grid);
 - :func:`plot_energy_growth` (``energy_growth.png``): energy growth per contact
   ``CoR^2 - 1`` against delay (at 25 Hz) and table frequency (at 5 ms), the
   useful figure for an undamped contact;
@@ -25,10 +27,15 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.colors import TwoSlopeNorm  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
 
 from hybridtable.analysis.blockwise import ContactLoopLinearizer  # noqa: E402
 from hybridtable.analysis.exact_delay import exact_open_loop  # noqa: E402
 from hybridtable.analysis.margins import loop_margins  # noqa: E402
+from hybridtable.analysis.robustness import (  # noqa: E402
+    DEFAULT_COR_LIMIT,
+    grid_cor_limits,
+)
 from hybridtable.analysis.sampled import SampledLoopLinearizer  # noqa: E402
 from hybridtable.analysis.sweep import SweepResult  # noqa: E402
 from hybridtable.loop.params import HybridLoopParams  # noqa: E402
@@ -116,7 +123,7 @@ def plot_cor_heatmaps(result: SweepResult, path: str | Path) -> Path:
         ax.set_title(f"{c}: predicted CoR")
         ax.set_xlabel("table response frequency [Hz]")
         ax.set_ylabel("sensor delay [ms]")
-        fig.colorbar(mesh, ax=ax)
+        fig.colorbar(mesh, ax=ax, label="predicted CoR [1]")
     for k in range(len(comps), nrow * ncol):
         axes[k // ncol][k % ncol].set_axis_off()
     fig.suptitle(
@@ -143,60 +150,92 @@ def plot_energy_growth(result: SweepResult, path: str | Path) -> Path:
         a1.plot(result.sensor_delay_s * 1e3, cs.energy_growth_per_contact[:, j], label=c)
         a2.plot(result.table_response_hz, cs.energy_growth_per_contact[i, :], label=c)
     a1.set_xlabel("sensor delay [ms]")
-    a1.set_title(f"table {result.table_response_hz[j]:g} Hz")
+    a1.set_title(f"table {result.table_response_hz[j]:.4g} Hz")
     a2.set_xlabel("table response frequency [Hz]")
-    a2.set_title(f"sensor delay {result.sensor_delay_s[i] * 1e3:g} ms")
+    a2.set_title(f"sensor delay {result.sensor_delay_s[i] * 1e3:.4g} ms")
     for ax in (a1, a2):
         ax.axhline(0.0, color="0.5", lw=0.8)
-        ax.set_ylabel("energy growth per contact, CoR^2 - 1")
+        ax.set_ylabel("energy growth per contact CoR^2 - 1 [1]")
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8)
     return _save(fig, Path(path))
 
 
-def _finite_or_clip(y: np.ndarray, top: float) -> tuple[np.ndarray, np.ndarray]:
+def _linear_base(result: SweepResult) -> HybridLoopParams:
+    return result.base if result.transform is None else result.transform(result.base)
+
+
+def _clip(y: np.ndarray, bottom: float, top: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``y`` with ``inf`` at ``top`` and 0 at ``bottom``, and where each was."""
     y = np.asarray(y, dtype=float)
-    inf = np.isinf(y)
-    out = np.where(inf, top, y)
-    return out, inf
+    inf, zero = np.isinf(y), y == 0.0
+    return np.where(inf, top, np.where(zero, bottom, y)), inf, zero
 
 
-def plot_critical(result: SweepResult, path: str | Path) -> Path:
-    """Critical sensor delay vs table frequency and critical table frequency
-    vs sensor delay (``inf`` drawn at the top edge with a triangle, a table
-    frequency of 0, stable over the whole search, at the bottom edge)."""
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4.5))
+def plot_critical(
+    result: SweepResult, path: str | Path, cor_limit: float = DEFAULT_COR_LIMIT
+) -> Path:
+    """How much sensor delay the loop takes (per table frequency) and how fast
+    the table must be (per sensor delay), per compensator: stability (solid,
+    the critical delay / table frequency; drawn for a damped contact only, an
+    undamped one being marginal at best) and the predicted CoR within
+    ``cor_limit`` (dashed, read off the grid). Triangles up: beyond the search
+    (solid, drawn at the top edge) or the grid (dashed, drawn at the grid's
+    largest delay or table frequency): left, stable / within the limit at
+    every delay; right, no table fast enough. Triangles down (right): every
+    table frequency will do (drawn at the search's or the grid's lowest)."""
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4.8))
     f = result.table_response_hz
     d_ms = result.sensor_delay_s * 1e3
-    top_d = 0.25 / result.base.contact_frequency_hz * 1e3
-    top_f = 1000.0 * result.base.contact_frequency_hz
-    bottom_f = 0.5 * result.base.contact_frequency_hz
+    damped = _linear_base(result).contact_damping_n_s_per_m > 0.0
+    limits = grid_cor_limits(result, cor_limit)
+    cols = {c: f"C{k}" for k, c in enumerate(result.compensators)}
+    delays, tables = [], []
     for c, cs in result.compensators.items():
-        y, inf = _finite_or_clip(cs.critical_delay_s * 1e3, top_d)
-        (line,) = a1.plot(f, y, "-", label=c)
-        a1.plot(f[inf], y[inf], "^", color=line.get_color())
-        y, inf = _finite_or_clip(cs.critical_table_hz, top_f)
-        zero = y == 0.0
-        y = np.where(zero, bottom_f, y)
-        (line,) = a2.plot(d_ms, y, "-", label=c)
-        a2.plot(d_ms[inf], y[inf], "^", color=line.get_color())
-        a2.plot(d_ms[zero], y[zero], "v", color=line.get_color())
+        lim = limits[c]
+        pairs = [(lim["cor_limited_delay_s"], lim["cor_limited_table_hz"], "--")]
+        if damped:
+            pairs.insert(0, (cs.critical_delay_s, cs.critical_table_hz, "-"))
+        for delay_s, table_hz, style in pairs:
+            delays.append((c, style, np.asarray(delay_s, dtype=float) * 1e3))
+            tables.append((c, style, np.asarray(table_hz, dtype=float)))
+    # the edges: the grid's range, or the finite values beyond it
+    fin = np.concatenate([d_ms, *(y[np.isfinite(y)] for _, _, y in delays)])
+    top_d = 1.06 * float(fin.max()) if fin.max() > 0 else 1.0
+    ff = f[np.isfinite(f) & (f > 0)]
+    fin = np.concatenate([ff, *(y[np.isfinite(y) & (y > 0)] for _, _, y in tables)])
+    top_f = 1.25 * float(fin.max()) if fin.size else 1.0
+    bottom_f = float(fin.min()) / 1.25 if fin.size else 0.1
+    # inf / 0 of a curve read off the grid sit at the grid's edges, the searches' at the axes'
+    grid_d = float(d_ms.max())
+    grid_f = (float(ff.min()), float(ff.max())) if ff.size else (bottom_f, top_f)
+    for c, style, y in delays:
+        y, inf, _ = _clip(y, 0.0, grid_d if style == "--" else top_d)
+        a1.plot(f, y, style, color=cols[c])
+        a1.plot(f[inf], y[inf], "^", color=cols[c], ms=5)
+    for c, style, y in tables:
+        y, inf, zero = _clip(y, *(grid_f if style == "--" else (bottom_f, top_f)))
+        a2.plot(d_ms, y, style, color=cols[c])
+        a2.plot(d_ms[inf], y[inf], "^", color=cols[c], ms=5)
+        a2.plot(d_ms[zero], y[zero], "v", color=cols[c], ms=5)
+    a1.set_ylim(-0.03 * top_d, 1.04 * top_d)
+    a2.set_ylim(bottom_f / 1.1, top_f * 1.1)
     a1.set_xlabel("table response frequency [Hz]")
-    a1.set_ylabel("critical sensor delay [ms]")
-    a1.set_title("loop unstable above the curve (triangle: stable up to the search limit)")
+    a1.set_ylabel("sensor delay [ms]")
+    a1.set_title("Sensor delay the loop takes")
     a2.set_xlabel("sensor delay [ms]")
-    a2.set_ylabel("critical table frequency [Hz]")
+    a2.set_ylabel("table response frequency [Hz]")
     a2.set_yscale("log")
-    a2.set_title("unstable below the curve (^: no table fast enough, v: stable down to f_con/2)")
+    a2.set_title("Table frequency the loop needs")
+    handles = [Line2D([], [], color=cols[c], label=c) for c in result.compensators]
+    if damped:
+        handles.append(Line2D([], [], color="0.3", ls="-", label="stability boundary"))
+    else:
+        handles.append(Line2D([], [], ls="none", label="undamped: no stability boundary"))
+    handles.append(Line2D([], [], color="0.3", ls="--", label=f"CoR = {cor_limit:g}"))
     for ax in (a1, a2):
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=8)
-    if result.base.contact_damping_n_s_per_m == 0.0:
-        fig.suptitle(
-            "Undamped contact: the loop is at best marginally stable, see the energy growth per "
-            "contact (summary.md)",
-            fontsize=10,
-        )
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(handles=handles, fontsize=8)
     return _save(fig, Path(path))
 
 
@@ -247,11 +286,12 @@ def plot_bode(point: dict[str, HybridLoopParams], path: str | Path, pade_order: 
     am.axhline(1.0, color="0.5", lw=0.8)
     ap.axhline(-180.0, color="0.5", lw=0.8)
     az.axhline(0.0, color="0.5", lw=0.8)
-    am.set_ylabel("|L|")
+    am.set_ylabel("|L| [1]")
     ap.set_ylabel("phase of L [deg]")
     az.set_ylabel("phase of L + 180 [deg]")
     az.set_xlabel("frequency [Hz]")
     ap.set_xlabel("frequency [Hz]")
+    am.set_xlabel("frequency [Hz]")
     az.set_title("near the contact crossover (dots: phase margin at the crossover)", fontsize=9)
     am.legend(fontsize=8)
     p = any_p

@@ -6,26 +6,27 @@
 - ``cor_heatmaps.png``: predicted CoR over (table frequency, sensor delay) per
   compensator, the CoR = 1 contour, the paper's operating points (Tables 1-2)
   and the validated points;
-- ``critical.png``: critical sensor delay against table frequency and critical
-  table frequency against sensor delay, per compensator;
+- ``critical.png``: the sensor delay the loop takes per table frequency and
+  the table frequency it needs per sensor delay, per compensator: stability
+  (damped contact) and the predicted CoR within a limit;
 - ``energy_growth.png``: energy growth per contact ``CoR^2 - 1`` against
   delay (at 25 Hz) and table frequency (at 5 ms), the useful figure for an
   undamped contact;
 - ``bode_table1.png``: the loop ``L = -G`` at the paper's Table 1 point, Pade
   model and exact delay (and the sampled model when the sweep is sampled);
-- ``summary.md``: what the numbers mean, the Table 1 point, the grid, the
-  validation (and, with a model file, its rig's operating point).
+- ``report.md``: what the numbers mean, the margins at the operating point
+  (:mod:`hybridtable.reports.margin_point`), the Table 1 point, the grid, the
+  figures with their captions, the validation (and, with a model file, its
+  rig's operating point).
 
-With a model file (``margins --model``), :func:`model_operating_point` sets,
-at the rig's own operating point, the nominal model's predicted CoR against
-the model's, and the model's against a simulation of the whole model.
+With a model file (``margins --model``), the rig's own operating point is set
+by :mod:`hybridtable.reports.margin_model` (re-exported here).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, fields
-from functools import partial
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -38,16 +39,24 @@ from hybridtable.analysis.margins import (
     growth_of,
     loop_margins,
 )
+from hybridtable.analysis.robustness import DEFAULT_COR_LIMIT, grid_cor_limits
 from hybridtable.analysis.sampled import SampledLoopLinearizer
-from hybridtable.analysis.sweep import SweepResult, ValidationPoint, model_function
-from hybridtable.analysis.validation import EXPLAIN_ABOVE, validate_point
+from hybridtable.analysis.sweep import SweepResult
+from hybridtable.analysis.validation import EXPLAIN_ABOVE
 from hybridtable.loop.params import HybridLoopParams
+from hybridtable.reports.margin_model import (
+    ModelPoint,
+    format_model_point,
+    model_operating_point,
+    model_verdict,
+)
 from hybridtable.reports.margin_plots import (
     plot_bode,
     plot_cor_heatmaps,
     plot_critical,
     plot_energy_growth,
 )
+from hybridtable.reports.margin_point import PointMargins, point_markdown
 
 __all__ = [
     "REPORT_FILES",
@@ -68,7 +77,7 @@ REPORT_FILES: tuple[str, ...] = (
     "critical.png",
     "energy_growth.png",
     "bode_table1.png",
-    "summary.md",
+    "report.md",
 )
 
 
@@ -151,17 +160,71 @@ def _fmt(x, spec: str = ".5f") -> str:
     return format(x, spec)
 
 
+def _figures(
+    result: SweepResult, table1: OperatingPoint | None, cor_limit: float, undamped: bool
+) -> list[str]:
+    """The figures of :func:`write_report`, each with its caption line."""
+    f = result.table_response_hz
+    j = int(np.argmin(np.abs(f - 25.0)))
+    i = int(np.argmin(np.abs(result.sensor_delay_s - 0.005)))
+    model = "sampled model" if result.sampled else f"Pade order {result.pade_order}"
+    critical = (
+        f"Dashed: where the predicted CoR reaches {cor_limit:g} (read off the grid); an "
+        "undamped contact has no stability boundary to draw (critical delay 0)."
+        if undamped
+        else f"Solid: the stability boundary (critical delay, critical table frequency); dashed: "
+        f"where the predicted CoR reaches {cor_limit:g} (read off the grid)."
+    )
+    L = [
+        "## Figures",
+        "",
+        "![Predicted CoR over the grid](cor_heatmaps.png)",
+        f"*Predicted CoR [1] per compensator over table response frequency [Hz] and sensor "
+        f"delay [ms] ({model}); white at CoR = 1, black line CoR = 1, star: the paper's Table 1 "
+        "point, dots: its Table 2 points, x: the validated points.*",
+        "",
+        "![Sensor delay and table frequency the loop allows](critical.png)",
+        "*Left: sensor delay [ms] the loop takes against table response frequency [Hz]; right: "
+        f"table response frequency [Hz] it needs against sensor delay [ms]. {critical} "
+        "Triangles up: beyond the search or the grid; down: at every table frequency.*",
+        "",
+        "![Energy growth per contact](energy_growth.png)",
+        f"*Energy growth per contact CoR^2 - 1 [1] against sensor delay [ms] at table "
+        f"{f[j]:.4g} Hz (left) and against table response frequency [Hz] at sensor delay "
+        f"{result.sensor_delay_s[i] * 1e3:.4g} ms (right).*",
+        "",
+    ]
+    if table1 is not None:
+        p0 = next(iter(table1.params.values()))
+        L += [
+            "![Bode plot at the Table 1 point](bode_table1.png)",
+            f"*Loop L = -G at sensor delay {p0.sensor_delay_s * 1e3:g} ms, table "
+            f"{p0.table_response_hz:g} Hz: magnitude [1] and phase [deg] against frequency [Hz], "
+            "Pade (solid) and exact delay (dashed); bottom: phase + 180 [deg] near the contact "
+            "crossover, dots at the phase margin.*",
+            "",
+        ]
+    return L
+
+
 def write_summary(
     result: SweepResult,
     table1: OperatingPoint | None,
     path: str | Path,
     model_lines: list[str] | None = None,
+    point: PointMargins | None = None,
+    cor_limit: float = DEFAULT_COR_LIMIT,
+    verdict: str | None = None,
 ) -> Path:
-    """The Markdown summary of a sweep (see :func:`write_report`);
-    ``model_lines``: the text of :func:`format_model_point`, a section of its own."""
+    """The Markdown report of a sweep (see :func:`write_report`);
+    ``model_lines``: the text of :func:`format_model_point`, a section of its
+    own; ``point``: the margins at the operating point; ``verdict``: the
+    sentence the report opens with."""
     b = result.base if result.transform is None else result.transform(result.base)
     undamped = b.contact_damping_n_s_per_m == 0.0
     L: list[str] = ["# Stability margins of the hybrid loop", ""]
+    if verdict:
+        L += [verdict[:1].upper() + verdict[1:] + ".", ""]
     kind = (
         f"sampled-data at {b.sample_rate_hz:g} Hz (ZOH plant, z^-M delay)"
         if result.sampled
@@ -186,12 +249,15 @@ def write_summary(
     if undamped:
         L += [
             "The contact is undamped: the ideal loop is marginally stable (CoR = 1), so any "
-            "net delay makes it unstable and the critical delays are 0. The useful figure is "
-            "the energy growth per contact.",
+            "net delay makes it unstable and the critical delays are 0. The useful figures are "
+            f"the energy growth per contact and the delay up to which the CoR stays within "
+            f"{cor_limit:g}.",
             "",
         ]
     if model_lines:
         L += ["## The modelled rig", "", "```", *model_lines, "```", ""]
+    if point is not None:
+        L += point_markdown(point)
     if table1 is not None:
         p0 = next(iter(table1.params.values()))
         L += [
@@ -238,23 +304,36 @@ def write_summary(
             f"relative difference {result.verification_error:.1e}.",
             "",
         ]
-    L += [
-        "| compensator | CoR min | CoR max | stable points | max energy growth | "
-        "crit. delay range [ms] |",
-        "|---|---|---|---|---|---|",
-    ]
+    limits = grid_cor_limits(result, cor_limit)
+    dmax = float(result.sensor_delay_s.max()) * 1e3
+    head = ["compensator", "CoR min", "CoR max", "max energy growth [1]"]
+    head.append(f"CoR <= {cor_limit:g} up to [ms] (range over the tables)")
+    if not undamped:
+        head += ["stable points", "crit. delay range [ms]"]
+    L += ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for c, cs in result.compensators.items():
         cor = cs.predicted_cor[np.isfinite(cs.predicted_cor)]
-        cd = cs.critical_delay_s[~np.isnan(cs.critical_delay_s)] * 1e3
-        L.append(
-            f"| {c} | {_fmt(float(cor.min()) if cor.size else None)} | "
-            f"{_fmt(float(cor.max()) if cor.size else None)} | "
-            f"{int(cs.stable.sum())}/{cs.stable.size} | "
-            f"{_fmt(float(np.nanmax(cs.energy_growth_per_contact)), '.4f')} | "
-            f"{_fmt(float(cd.min()) if cd.size else None, '.3f')}-"
-            f"{_fmt(float(cd.max()) if cd.size else None, '.3f')} |"
-        )
+        lim = limits[c]["cor_limited_delay_s"] * 1e3
+        row = [
+            c,
+            _fmt(float(cor.min()) if cor.size else None),
+            _fmt(float(cor.max()) if cor.size else None),
+            _fmt(float(np.nanmax(cs.energy_growth_per_contact)), ".4f"),
+            "-".join(
+                f"> {dmax:g}" if math.isinf(x) else f"{x:.3f}"
+                for x in sorted({float(np.nanmin(lim)), float(np.nanmax(lim))})
+            ),
+        ]
+        if not undamped:
+            cd = cs.critical_delay_s[~np.isnan(cs.critical_delay_s)] * 1e3
+            row += [
+                f"{int(cs.stable.sum())}/{cs.stable.size}",
+                f"{_fmt(float(cd.min()) if cd.size else None, '.3f')}-"
+                f"{_fmt(float(cd.max()) if cd.size else None, '.3f')}",
+            ]
+        L.append("| " + " | ".join(row) + " |")
     L.append("")
+    L += _figures(result, table1, cor_limit, undamped)
     if result.validation:
         ok = [v for v in result.validation if v.abs_error is not None]
         failed = [v for v in result.validation if v.abs_error is None]
@@ -333,11 +412,15 @@ def write_report(
     directory: str | Path,
     table1: OperatingPoint | None = None,
     model_lines: list[str] | None = None,
+    point: PointMargins | None = None,
+    cor_limit: float = DEFAULT_COR_LIMIT,
+    verdict: str | None = None,
 ) -> list[Path]:
     """Write :data:`REPORT_FILES` into ``directory`` (created if needed).
 
     ``table1``: figures at the paper's Table 1 point (computed, without
-    simulations, if not given); ``model_lines``: see :func:`write_summary`.
+    simulations, if not given); ``model_lines``, ``point``, ``verdict``: see
+    :func:`write_summary`; ``cor_limit``: the CoR limit of the critical figure.
     """
     d = Path(directory)
     d.mkdir(parents=True, exist_ok=True)
@@ -349,152 +432,12 @@ def write_report(
         )
     files = [
         plot_cor_heatmaps(result, d / "cor_heatmaps.png"),
-        plot_critical(result, d / "critical.png"),
+        plot_critical(result, d / "critical.png", cor_limit),
         plot_energy_growth(result, d / "energy_growth.png"),
         plot_bode(table1.params, d / "bode_table1.png", result.pade_order or 3),
-        write_summary(result, table1, d / "summary.md", model_lines),
+        write_summary(result, table1, d / "report.md", model_lines, point, cor_limit, verdict),
     ]
+    from hybridtable.reports.html import write_html_report
+
+    files.append(write_html_report(files[-1]))  # report.html: the same text, figures embedded
     return files
-
-
-# -- margins --model -----------------------------------------------------------
-@dataclass
-class ModelPoint:
-    """The rig's operating point with and without the model, per compensator:
-    ``params`` (nominal physics), the linear figures (``nominal``, ``model``),
-    the linear CoR against the nonlinear loop (``nominal_sim``, ``model_sim``:
-    the whole model), what the linear models leave out (``left_out``, words)
-    and the linear loop's parameters the model changes (name -> (nominal, model))."""
-
-    params: dict[str, HybridLoopParams]
-    nominal: dict[str, dict]
-    model: dict[str, dict]
-    nominal_sim: dict[str, ValidationPoint]
-    model_sim: dict[str, ValidationPoint]
-    left_out: list[str]
-    linear_changes: dict[str, tuple]
-
-    def to_dict(self) -> dict:
-        return {
-            c: {
-                "cor_nominal": self.nominal[c]["predicted_cor"],
-                "cor_model": self.model[c]["predicted_cor"],
-                "cor_model_simulated": self.model_sim[c].cor_sim,
-                "cor_nominal_simulated": self.nominal_sim[c].cor_sim,
-                "stable_nominal": self.nominal[c]["stable"],
-                "stable_model": self.model[c]["stable"],
-                "model_simulation": self.model_sim[c].to_dict(),
-            }
-            for c in self.params
-        }
-
-
-def model_operating_point(
-    model, base: HybridLoopParams, compensators, pade_order: int = 3
-) -> ModelPoint:
-    """Linear figures of the nominal model and of ``model`` at the model's nominal
-    delay and table frequency (the rest from ``base``), each against its nonlinear
-    loop (``validate_point``; the model's: ``simulate_model``)."""
-    from hybridtable.studies.model_compensators import model_transform, simulate_model
-
-    point = base.with_(
-        sensor_delay_s=model.nominal.sensor_delay_s,
-        table_response_hz=model.nominal.table_natural_frequency_hz,
-    )
-    fn, lin = model_function(point, pade_order)
-    transform = model_transform(model)
-    left = list(model.linear_params(point.with_(sample_rate_hz=None))[1])
-    lin_point, exact = transform(point), transform(point.with_(sample_rate_hz=None))
-    if lin_point.sensor_delay_s != exact.sensor_delay_s:
-        left.append(
-            f"the sensor delay's fraction of a tick ({exact.sensor_delay_s * 1e3:.4g} ms taken "
-            f"as {lin_point.sensor_delay_s * 1e3:.4g} ms, whole ticks of the sampled model)"
-        )
-    changes = {
-        f.name: (getattr(point, f.name), getattr(lin_point, f.name))
-        for f in fields(point)
-        if getattr(point, f.name) != getattr(lin_point, f.name)
-    }
-    out = ModelPoint({}, {}, {}, {}, {}, left, changes)
-    for c in compensators:
-        p = point.with_(compensator=c)
-        q = transform(p)
-        out.params[c] = p
-        out.nominal[c] = loop_margins(fn(p), pm_method="fast").to_dict()
-        out.model[c] = loop_margins(fn(q), pm_method="fast").to_dict()
-        out.nominal_sim[c] = validate_point(p, out.nominal[c]["predicted_cor"], lin)
-        sim = partial(lambda p, _q: simulate_model(model, p), p)
-        out.model_sim[c] = validate_point(q, out.model[c]["predicted_cor"], lin, simulate_fn=sim)
-    return out
-
-
-def model_verdict(point: ModelPoint, model) -> str:
-    """One plain line: where the model moves the predicted CoR, and with
-    which compensators the modelled rig is stable at its operating point."""
-    comps = list(point.params)
-    p0 = point.params[comps[0]]
-    delta = {c: point.model[c]["predicted_cor"] - point.nominal[c]["predicted_cor"] for c in comps}
-    if all(d < 0 for d in delta.values()):
-        moves = "lowers the predicted CoR of every compensator"
-    elif all(d > 0 for d in delta.values()):
-        moves = "raises the predicted CoR of every compensator"
-    elif all(abs(d) < 5e-5 for d in delta.values()):
-        moves = "leaves the predicted CoR where the nominal model has it"
-    else:
-        moves = "moves the predicted CoR (" + ", ".join(f"{c} {delta[c]:+.4f}" for c in comps) + ")"
-    show = model.nominal.compensator if model.nominal.compensator in comps else comps[-1]
-    unstable = [c for c in comps if not point.model[c]["stable"]]
-    stable = ", ".join(c for c in comps if c not in unstable) or "no compensator"
-    line = (
-        f"The model {moves} at the rig's operating point ({p0.sensor_delay_s * 1e3:g} ms, table "
-        f"{p0.table_response_hz:g} Hz; {show} {point.nominal[show]['predicted_cor']:.4f} -> "
-        f"{point.model[show]['predicted_cor']:.4f}): the loop is stable with {stable}"
-        + (f" and unstable with {', '.join(unstable)}" if unstable else "")
-    )
-    if point.left_out:
-        line += f"; the linear model leaves {len(point.left_out)} part(s) of the model out"
-    return line
-
-
-def format_model_point(point: ModelPoint, model, path: str) -> list[str]:
-    """The verdict and the operating point, as text lines."""
-    comps = list(point.params)
-    p0 = point.params[comps[0]]
-    kind = f"sampled at {p0.sample_rate_hz:g} Hz" if p0.sample_rate_hz else "continuous"
-    lead, changed = p0.lead_time_s, point.linear_changes.items()
-    lines = [
-        model_verdict(point, model),
-        f"model {path}: {model.describe()}",
-        f"operating point: sensor delay {p0.sensor_delay_s * 1e3:g} ms, table "
-        f"{p0.table_response_hz:g} Hz / {p0.table_damping_ratio:g}, k "
-        f"{p0.contact_stiffness_n_per_m:g} N/m, m {p0.spacecraft_mass_kg:g} kg, lead "
-        + ("= delay" if lead is None else f"{lead * 1e3:g} ms")
-        + f", approach {p0.initial_velocity_m_per_s:g} m/s, {kind}",
-        "predicted CoR, nominal -> model (linear); simulated (nonlinear loop: nominal, whole "
-        "model; the model's simulated minus linear CoR):",
-    ]
-    for c in comps:
-        sim, nom = point.model_sim[c], point.nominal_sim[c].cor_sim
-        simulated = "simulated: nominal " + ("failed" if nom is None else f"{nom:.4f}")
-        if sim.cor_sim is None:
-            simulated += f", model failed ({sim.error})"
-        else:
-            simulated += f", model {sim.cor_sim:.4f} ({sim.cor_sim - sim.cor_linear:+.4f}"
-            cause = sim.cause or ""
-            if cause and point.left_out:
-                cause = "what the linear model leaves out, " + cause
-            simulated += f": {cause})" if sim.abs_error > EXPLAIN_ABOVE and cause else ")"
-        lines.append(
-            f"  {c}: nominal {point.nominal[c]['predicted_cor']:.4f} -> model "
-            f"{point.model[c]['predicted_cor']:.4f}; {simulated}"
-        )
-    lines.append(
-        "linear loop: "
-        + (
-            ", ".join(f"{k} {_fmt(a, 'g')} -> {_fmt(b, 'g')}" for k, (a, b) in changed)
-            or "the nominal one"
-        )
-        + "; left out: "
-        + ("; ".join(point.left_out) or "nothing (every effect is in it)")
-    )
-    return lines

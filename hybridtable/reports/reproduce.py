@@ -19,7 +19,17 @@ from hybridtable.studies.paper import (
     table2_rows,
 )
 
-__all__ = ["Reproduction", "reproduce", "format_tables", "FIGURES"]
+__all__ = [
+    "Reproduction",
+    "reproduce",
+    "verdict",
+    "format_tables",
+    "FIGURES",
+    "TOLERANCE",
+]
+
+#: Largest |CoR difference| from the paper that counts as reproduced [1].
+TOLERANCE = 0.01
 
 
 @dataclass
@@ -40,6 +50,7 @@ class Reproduction:
             "table1_paper": self.table1_paper,
             "table1_half_step": self.table1_half_step,
             "table2": self.table2,
+            "verdict": verdict(self),
             "figures": self.figures,
             "time_step_s": self.time_step_s,
             "contact_gate": self.contact_gate,
@@ -120,7 +131,7 @@ def reproduce(
     out_dir : path, optional
         Where the PNG figures go; no figures when None.
     tables_path : path, optional
-        The paper's ``tables.json`` (default: ``../shared/paper`` or the
+        The paper's ``tables.json`` (default: the
         packaged copy).
     time_step_s : float or None
         Step of the continuous loop (None: :attr:`HybridLoopParams.step_s`'s
@@ -177,6 +188,53 @@ def reproduce(
         time_step_s=time_step_s,
         contact_gate=contact_gate,
     )
+
+
+#: How a Table 2 row that differs from the Table 1 point is named, per column.
+_ROW_WORDS = {
+    "sensor_delay_ms": "{:g} ms sensor delay",
+    "table_response_hz": "{:g} Hz table",
+    "contact_frequency_hz": "{:g} Hz contact",
+    "contact_stiffness_n_per_mm": "{:g} N/mm contact",
+    "initial_velocity_mm_per_s": "{:g} mm/s approach",
+}
+
+
+def _row_name(row: dict[str, float], rows: list[dict[str, float]]) -> str:
+    """What sets a Table 2 row apart from the most common value of each column
+    (the Table 1 point), e.g. ``5 Hz contact``."""
+    words = []
+    for key, word in _ROW_WORDS.items():
+        values = [r[key] for r in rows]
+        common = max(set(values), key=values.count)
+        if row[key] != common:
+            words.append(word.format(row[key]))
+    return ", ".join(words) or "the Table 1 point"
+
+
+def verdict(rep: Reproduction) -> str:
+    """One sentence: whether the model reproduces the paper's CoRs within
+    :data:`TOLERANCE`, where it differs most, and what SDMDC does against no
+    compensation at the Table 1 point."""
+    diffs = [(cor - rep.table1_paper[c], f"Table 1, {c}") for c, cor in rep.table1.items()]
+    diffs += [(r["difference"], f"Table 2, {_row_name(r, rep.table2)}") for r in rep.table2]
+    largest, where = max(diffs, key=lambda d: abs(d[0]))
+    bound = math.ceil(round(abs(largest) * 1e4, 6)) / 1e4  # rounded up
+    if abs(largest) <= TOLERANCE:
+        line = f"Reproduced the paper's Tables 1-2 within {bound:.4f} of its CoRs"
+    else:
+        line = (
+            f"Did not reproduce the paper's Tables 1-2 within {TOLERANCE:g}: the CoR differs "
+            f"by up to {bound:.4f}"
+        )
+    line += f" (largest difference: {where}, {largest:+.4f})"
+    if "SDMDC" in rep.table1 and "none" in rep.table1:
+        none = rep.table1["none"]
+        line += (
+            f"; SDMDC keeps CoR at {rep.table1['SDMDC']:.3f} where no compensation gives "
+            f"{none:.3f} (energy {none**2 - 1:+.0%})"
+        )
+    return line
 
 
 def format_tables(rep: Reproduction) -> str:

@@ -261,6 +261,9 @@ class StewartTable(Diagram):
         backward difference over one time step.
     Output ``sensor_wrench`` (6: N m, N)
         The weld's raw reaction wrench (see :class:`DeviceSensor`).
+    Output ``plate_pose`` (7: 1, m)
+        The plate's pose in the world: quaternion ``[w, x, y, z]`` and
+        position ``[x, y, z]`` (what :mod:`hybridtable.stewart.view` draws).
 
     Parameters
     ----------
@@ -330,6 +333,11 @@ class StewartTable(Diagram):
         builder.ExportOutput(motion.get_output_port(), "motion")
         builder.ExportOutput(mux.get_output_port(), "sensed_force")
         builder.ExportOutput(sensor.GetOutputPort("wrench"), "sensor_wrench")
+        select = np.zeros((7, plant.num_multibody_states()))
+        select[:, handles.plate_position_start : handles.plate_position_start + 7] = np.eye(7)
+        pose = builder.AddNamedSystem("plate_pose", MatrixGain(select))
+        builder.Connect(plant.get_state_output_port(), pose.get_input_port())
+        builder.ExportOutput(pose.get_output_port(), "plate_pose")
         self.visualizer = None
         if meshcat is not None:
             self.visualizer = MeshcatVisualizer.AddToBuilder(

@@ -29,6 +29,7 @@ from hybridtable._validation import check_nonnegative, check_positive
 from hybridtable.errors import ParameterError
 from hybridtable.stewart.backend import StewartTable
 from hybridtable.stewart.params import StewartParams, heave_servo_gains
+from hybridtable.stewart.progress import add_progress_ticker
 from hybridtable.systems.table import TableParams
 
 __all__ = [
@@ -85,6 +86,7 @@ def drive_table(
     command_m: np.ndarray,
     initial_offset_m: float,
     contact_stiffness_n_per_m: float = 1e5,
+    label: str = "Stewart table",
 ) -> np.ndarray:
     """Drive the table with a sampled command and return its sampled motion.
 
@@ -98,6 +100,11 @@ def drive_table(
         second-order table would follow it during ``(k h, (k + 1) h]``.
     initial_offset_m : float
         Initial position of the device (at rest).
+    contact_stiffness_n_per_m : float
+        Stiffness of the contact (the devices stay apart; it only builds the plant).
+    label : str
+        Name of the progress bar inside a
+        :class:`~hybridtable.stewart.progress.SimulatedTimeProgress` block.
 
     Returns
     -------
@@ -121,6 +128,7 @@ def drive_table(
     builder.Connect(computer.get_output_port(), table.GetInputPort("commanded_state"))
     log = LogVectorOutput(table.GetOutputPort("motion"), builder, h)
     force_log = LogVectorOutput(table.GetOutputPort("sensed_force"), builder, h)
+    add_progress_ticker(builder, label, (n - 1) * h)
     diagram = builder.Build()
     simulator = Simulator(diagram)
     context = simulator.get_mutable_context()
@@ -225,7 +233,7 @@ def identify_step(
     start = -2.0 * a
     u = np.full(n, start)
     u[n0:] -= a
-    motion, _ = drive_table(params, u, start)
+    motion, _ = drive_table(params, u, start, label="Stewart table: step response")
     p = motion[:, 0]
     base = p[n0]
     return fit_second_order(u[n0:] - start, p[n0:] - base, h, initial_guess, "step")
@@ -258,7 +266,7 @@ def identify_chirp(
     phase = 2.0 * math.pi * f0 * (np.exp(rate * t) - 1.0) / rate
     center = -3.0 * a
     u = np.concatenate([np.full(n0, center), center + a * np.sin(phase)])
-    motion, _ = drive_table(params, u, center)
+    motion, _ = drive_table(params, u, center, label="Stewart table: chirp response")
     p = motion[:, 0]
     return fit_second_order(u[n0:] - center, p[n0:] - p[n0], h, initial_guess, "chirp")
 

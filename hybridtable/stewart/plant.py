@@ -59,7 +59,7 @@ from pydrake.systems.framework import DiagramBuilder
 
 from hybridtable._validation import check_finite, check_nonnegative, check_positive
 from hybridtable.errors import ParameterError
-from hybridtable.stewart.geometry import StewartGeometry
+from hybridtable.stewart.geometry import StewartGeometry, rpy_from_rotation
 from hybridtable.stewart.params import StewartParams
 
 __all__ = [
@@ -149,10 +149,29 @@ class StewartPlant:
             self.universal_joints[i].set_angles(plant_context, u_angles[i])
             self.universal_joints[i].set_angular_rates(plant_context, udot[i])
 
+    def set_drawn_pose(
+        self, plant_context, position_m: np.ndarray, rotation: RotationMatrix
+    ) -> None:
+        """Put the platform at rest with the plate at ``position_m`` (world, m)
+        and ``rotation``: leg lengths and joint angles from the inverse
+        kinematics of that pose, without the workspace check (for drawing a
+        magnified pose, see :mod:`hybridtable.stewart.view`)."""
+        pose = np.concatenate([position_m, rpy_from_rotation(rotation.matrix())])
+        lengths, angles = self._leg_coordinates_at(pose)
+        self.plant.SetFreeBodyPose(
+            plant_context, self.plate, RigidTransform(rotation, np.asarray(position_m))
+        )
+        for i in range(6):
+            self.leg_joints[i].set_translation(plant_context, lengths[i])
+            self.universal_joints[i].set_angles(plant_context, angles[i])
+
     def _leg_coordinates(self, offset_m: float) -> tuple[np.ndarray, np.ndarray]:
         """Leg lengths (6,) and universal-joint angles (6, 2) at an axis offset."""
-        g = self.geometry
-        legs = g.leg_vectors(g.axis_pose(offset_m))
+        return self._leg_coordinates_at(self.geometry.axis_pose(offset_m))
+
+    def _leg_coordinates_at(self, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Leg lengths (6,) and universal-joint angles (6, 2) at a 6-D pose."""
+        legs = self.geometry.leg_vectors(pose)
         lengths = np.linalg.norm(legs, axis=1)
         angles = np.zeros((6, 2))
         for i in range(6):

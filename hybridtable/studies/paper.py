@@ -1,7 +1,7 @@
-"""The seed paper's parameter sets and tables (``../shared/paper/tables.json``).
+"""The seed paper's parameter sets and tables.
 
-The package ships a copy of ``tables.json``; a file given explicitly, or
-``../shared/paper/tables.json`` beside the repository, is preferred.
+The package ships the paper's tables (``hybridtable/data/paper_tables.json``,
+schema in ``docs/paper.md``); a file given explicitly is preferred.
 """
 
 from __future__ import annotations
@@ -35,14 +35,9 @@ TABLE1_DEFAULTS: dict[str, float] = {
 }
 
 
-def _default_tables_path() -> Path | None:
-    here = Path(__file__).resolve().parent.parent.parent / "shared" / "paper" / "tables.json"
-    return here if here.is_file() else None
-
-
 def load_tables(path: str | Path | None = None) -> dict[str, Any]:
-    """The paper's tables as a dict (the ``tables.json`` schema)."""
-    path = Path(path) if path is not None else _default_tables_path()
+    """The paper's tables as a dict (the ``tables.json`` schema): ``path``, or
+    the copy the package ships."""
     if path is not None:
         return json.loads(Path(path).read_text())
     return json.loads(resources.files("hybridtable.data").joinpath("paper_tables.json").read_text())

@@ -1,6 +1,6 @@
 """The spacecraft numerical model, Eq. 1 of the paper: m d2p_des/dt2 = -f_sim.
 
-Sign convention (``../shared/measurement-format.md``): ``p > 0`` is penetration,
+Sign convention (``docs/run-format.md``): ``p > 0`` is penetration,
 the spacecraft approaches with positive velocity, and a compression force
 ``f_sim > 0`` pushes the spacecraft back, so its acceleration is ``-f_sim / m``.
 """

@@ -78,7 +78,7 @@ def test_report_and_validation(tmp_path, capsys):
     assert rc == 0
     for name in ("cor_heatmaps.png", "critical.png", "energy_growth.png", "bode_table1.png"):
         assert (rep / name).stat().st_size > 10_000
-    summary = (rep / "summary.md").read_text()
+    summary = (rep / "report.md").read_text()
     assert "Table 1 point" in summary and "Validation" in summary
     d = json.loads((tmp_path / "m.json").read_text())
     assert len(d["validation"]) == 4  # one point x four compensators

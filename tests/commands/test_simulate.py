@@ -14,7 +14,9 @@ def test_simulate_command_takes_a_plugin_the_prior_stiffness_and_passivity(tmp_p
     argv = ["simulate", "--compensator", "smith", "--compensator-stiffness-n-per-m", "5e4"]
     assert main([*argv, "--json", str(out)]) == 0
     assert json.loads(out.read_text())["cor"] > 1.05  # the model stiffness is half the true one
-    assert main([*argv, "--passivity", "--json", str(out)]) == 0
+    assert main([*argv, "--passivity", "--json", str(out)]) == 2  # exists: needs --force
+    assert "give --force" in capsys.readouterr().err
+    assert main([*argv, "--passivity", "--json", str(out), "--force"]) == 0
     assert json.loads(out.read_text())["cor"] <= 1.0 + 1e-6
     assert main(["simulate", "--compensator", "nonesuch"]) == 2
     err = capsys.readouterr().err.strip().splitlines()

@@ -41,7 +41,7 @@ BACKLASH = EXAMPLE / "backlash.py"
 #: The plug-in as a user gives it: ``--plugin path/to/backlash.py:EFFECT``.
 PLUGIN = f"{BACKLASH}:EFFECT"
 
-#: The rig of ``../shared/examples/nominal`` (its run1.json).
+#: The rig of ``examples/nominal`` (its run1.json).
 INFO = RunInfo(
     run_id="backlash-run1",
     sample_rate_hz=1000.0,

@@ -37,7 +37,7 @@ NOMINAL = {
 
 def compensate(info: dict, f_read: float, f_prev: float, p_read: float, cmd_prev: float) -> float:
     """The rig computer's compensated force at one tick, as
-    ``measurement-format.md`` defines it (written out independently of the
+    ``docs/run-format.md`` defines it (written out independently of the
     package's Compensator)."""
     if f_read <= info["force_deadband_n"]:
         return 0.0

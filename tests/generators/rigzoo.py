@@ -1,6 +1,6 @@
 """Rig zoo: an independent generator of recorded hybrid-table runs with hidden effects.
 
-Written from the physics and the run format (``measurement-format.md``) alone:
+Written from the physics and the run format (``docs/run-format.md``) alone:
 nothing here imports ``hybridtable`` or the other generators of this folder, so
 a study built on it cannot be tuned to the model's own code.
 

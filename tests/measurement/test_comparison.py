@@ -1,19 +1,17 @@
 """Comparison metrics (closed forms), the acceptance on the example runs, a
-hidden physical effect found in the phases where it acts, and the command."""
+hidden physical effect found in the phases where it acts. The command is
+tested in ``tests/commands/test_compare.py``."""
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from hybridtable.cli import main
 from hybridtable.measurement.comparison import compare_run
 from hybridtable.measurement.phases import (
-    PHASES,
     contact_duration,
     cor_from_record,
     delayed_labels,
@@ -25,11 +23,12 @@ from hybridtable.measurement.stats import (
     channel_error,
     correlation,
     force_noise_rms,
+    lags_outside_by_chance,
     position_noise_rms,
 )
 from tests.generators.rigsim import NOMINAL, damped_spring, simulate_record, write_run
 
-EXAMPLES = Path("/work/shared/examples/nominal")
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "nominal"
 needs_examples = pytest.mark.skipif(not EXAMPLES.is_dir(), reason="example runs not available")
 
 
@@ -43,6 +42,49 @@ def test_channel_error_closed_forms():
     assert e.fit_percent == pytest.approx(100 * (1 - e.nrmse))
     assert channel_error(y, np.full_like(y, y.mean())).fit_percent == pytest.approx(0.0)
     assert channel_error(y, y).fit_percent == 100.0
+
+
+def test_fit_percent_by_hand():
+    # ||e|| = 1, ||y - mean(y)|| = sqrt(1.5^2 + 0.5^2 + 0.5^2 + 1.5^2) = sqrt(5).
+    e = channel_error(np.array([1.0, 2.0, 3.0, 4.0]), np.array([1.0, 2.0, 3.0, 5.0]))
+    assert e.nrmse == pytest.approx(1.0 / math.sqrt(5.0))
+    assert e.fit_percent == pytest.approx(55.278640450004204)
+    assert e.rms_error == pytest.approx(0.5) and e.mean_error == pytest.approx(-0.25)
+    # The mean of the measurement fits 0 %; a model worse than it fits < 0 %.
+    y = np.array([3.0, -1.0, 4.0, 1.0, 5.0])
+    assert channel_error(y, np.full(5, y.mean())).fit_percent == pytest.approx(0.0, abs=1e-12)
+    assert channel_error(y, y).fit_percent == 100.0
+    assert channel_error(y, -y).fit_percent < 0.0
+
+
+def test_lags_outside_by_chance_is_the_binomial_tail():
+    # B(50, 0.01): P(X > 3) = 1.6e-3 > 0.1 %, P(X > 4) = 1.5e-4 <= 0.1 %.
+    def tail(k, n=50, p=0.01):
+        return 1.0 - sum(math.comb(n, j) * p**j * (1 - p) ** (n - j) for j in range(k + 1))
+
+    assert tail(3) > 1e-3 >= tail(4)
+    assert lags_outside_by_chance(50) == 4
+    assert lags_outside_by_chance(1) == 1  # P(X > 0) = 1 % > 0.1 %
+    assert lags_outside_by_chance(500) > lags_outside_by_chance(50)
+
+
+def test_whiteness_verdict_false_alarms_and_a_coloured_residual():
+    rng = np.random.default_rng(11)
+    u = rng.standard_normal(2000)
+    alarms = 0
+    for _ in range(300):
+        c = correlation(rng.standard_normal(2000), u, 50)
+        alarms += not (c.auto_white and c.cross_white)
+    assert alarms <= 3  # two tests of 0.1 % each: about 0.6 of 300 expected
+    # AR(1) with coefficient 0.5: autocorrelation 0.5^k, far outside the band.
+    w = rng.standard_normal(2000)
+    e = np.zeros(2000)
+    for k in range(1, 2000):
+        e[k] = 0.5 * e[k - 1] + w[k]
+    c = correlation(e, u, 50)
+    assert not c.auto_white and c.cross_white
+    s = c.summary()
+    assert s["auto_white"] is False and s["auto_chance_limit"] == 4
 
 
 def test_noise_estimators_recover_known_noise():
@@ -184,30 +226,3 @@ def test_hardening_contact_adds_force_in_both_contact_phases(tmp_path):
     assert ph["restitution"]["mean_error"] > 5 * noise
     # Elastic: no loop energy beyond noise.
     assert abs(c.loop_energy_j["measured"]) < 0.05
-
-
-# -- the command ---------------------------------------------------------------
-@needs_examples
-def test_compare_command_json_and_report(tmp_path, capsys):
-    out = tmp_path / "result.json"
-    report = tmp_path / "report"
-    args = ["compare", str(EXAMPLES / "run2.csv"), "--json", str(out), "--report", str(report)]
-    assert main(args) == 0
-    table = capsys.readouterr().out
-    assert "nominal-run2" in table and "SDMDC" in table
-    data = json.loads(out.read_text())
-    (entry,) = data["runs"]
-    assert entry["run_id"] == "nominal-run2"
-    for key in ("rms_error", "noise_rms", "nrmse"):
-        assert set(entry[key]) == {"f_mea_n", "p_act_m"}
-        assert all(isinstance(x, float) for x in entry[key].values())
-    assert set(entry["phases"]) == set(PHASES)
-    for ph in entry["phases"].values():
-        assert {"rms_error_f_mea_n", "share"} <= set(ph)
-    assert sum(ph["share"] for ph in entry["phases"].values()) == pytest.approx(1.0)
-    assert abs(entry["cor_model"] - entry["cor_measured"]) < 0.005
-    md = (report / "report.md").read_text()
-    figures = [line[line.index("(") + 1 : -1] for line in md.splitlines() if line.startswith("![")]
-    assert len(figures) == 4 and all((report / f).stat().st_size > 1000 for f in figures)
-    # Writing the same report folder again is allowed (it is ours).
-    assert main(args) == 0

@@ -15,10 +15,8 @@ from hybridtable.errors import MeasurementError
 from hybridtable.measurement.run_format import RUN_COLUMNS
 from hybridtable.measurement.run_reader import parse_column_map, read_run, read_runs
 
-EXAMPLES = Path("/work/shared/examples/nominal")
-if not EXAMPLES.is_dir():  # the repository's copy of the shared folder
-    EXAMPLES = Path(__file__).resolve().parents[2] / "shared" / "examples" / "nominal"
-pytestmark = pytest.mark.skipif(not EXAMPLES.is_dir(), reason="example runs not available")
+#: The example runs the repository ships.
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "nominal"
 
 
 def _pair(tmp_path: Path, stem: str = "run1") -> tuple[Path, Path]:
@@ -283,7 +281,7 @@ def test_outputs_never_write_over_inputs(tmp_path, capsys):
     before = _snapshot([c, j])
     for args, expect in (
         (["--json", str(j)], "is one of the input files"),
-        (["--report", str(c.parent)], "holds input runs"),
+        (["--report", str(c.parent)], "holds input files"),
         (["--report", str(c)], "is a file, not a folder"),
     ):
         assert main(["compare", str(c), *args]) == 2
@@ -294,6 +292,9 @@ def test_outputs_never_write_over_inputs(tmp_path, capsys):
     (user / "thesis.md").write_text("mine")
     assert main(["compare", str(c), "--report", str(user)]) == 2
     assert "not empty" in capsys.readouterr().err
+    # --force writes into the user's folder but leaves their other files alone.
+    assert main(["compare", str(c), "--report", str(user), "--force", "--no-progress"]) == 0
+    assert (user / "report.md").is_file()
     assert _snapshot([c, j]) == before
     assert (user / "thesis.md").read_text() == "mine"
 

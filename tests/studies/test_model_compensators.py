@@ -16,7 +16,7 @@ from hybridtable.measurement.recorder import record_run, write_run
 from hybridtable.measurement.run_format import RunInfo
 from hybridtable.measurement.run_reader import read_runs
 
-#: The rig of ``../shared/examples``: k = 6e4 N/m, m = 675.475 kg (1.5 Hz),
+#: The rig of ``examples/nominal``: k = 6e4 N/m, m = 675.475 kg (1.5 Hz),
 #: 4 ms delay, 1 kHz computer, table 30 Hz / 0.7.
 RIG = dict(
     sample_rate_hz=1000.0,

@@ -1,0 +1,78 @@
+"""One overwrite policy for every command: an existing output is replaced only
+with ``--force``, an input never, and the refusal comes before any work."""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import pytest
+
+from hybridtable.cli import COMMANDS, build_parser, main
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "nominal"
+
+#: A cheap invocation of every command (the check runs before the work).
+INVOCATIONS = {
+    "simulate": ["simulate"],
+    "reproduce": ["reproduce"],
+    "compare": ["compare", str(EXAMPLES / "run1.csv")],
+    "diagnose": ["diagnose", str(EXAMPLES / "run1.csv")],
+    "effects": ["effects"],
+    "compensators": ["compensators", "--quick"],
+    "margins": ["margins"],
+}
+
+
+def _sub_parsers():
+    parser = build_parser()
+    action = next(a for a in parser._actions if a.dest == "command")
+    return action.choices
+
+
+def test_every_command_has_force():
+    names = {c.__name__.rsplit(".", 1)[-1] for c in COMMANDS}
+    assert set(INVOCATIONS) <= names
+    for name, sub in _sub_parsers().items():
+        flags = {s for a in sub._actions for s in a.option_strings}
+        assert "--force" in flags, name
+
+
+@pytest.mark.parametrize("command", sorted(INVOCATIONS))
+def test_existing_json_is_refused_quickly_and_left_alone(command, tmp_path, capsys):
+    out = tmp_path / "out.json"
+    out.write_text("mine")
+    t0 = time.perf_counter()
+    assert main([*INVOCATIONS[command], "--json", str(out)]) == 2
+    elapsed = time.perf_counter() - t0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--json" in err and "--force" in err, err
+    assert out.read_text() == "mine"
+    assert elapsed < 30.0  # refused before the work, not after it
+
+
+def test_force_replaces_and_a_non_empty_folder_needs_it(tmp_path, capsys):
+    out = tmp_path / "out.json"
+    out.write_text("mine")
+    assert main(["simulate", "--json", str(out), "--force"]) == 0
+    assert json.loads(out.read_text())["cor"] > 1.1
+    plot = tmp_path / "run.png"
+    plot.write_bytes(b"mine")
+    assert main(["simulate", "--plot", str(plot)]) == 2
+    assert "--plot" in capsys.readouterr().err and plot.read_bytes() == b"mine"
+    folder = tmp_path / "report"
+    folder.mkdir()
+    (folder / "notes.txt").write_text("mine")
+    assert main(["margins", "--report", str(folder)]) == 2
+    assert "not empty" in capsys.readouterr().err
+
+
+def test_an_input_is_never_an_output_even_with_force(tmp_path, capsys):
+    run = tmp_path / "run1.json"
+    run.write_text((EXAMPLES / "run1.json").read_text())
+    (tmp_path / "run1.csv").write_text((EXAMPLES / "run1.csv").read_text())
+    before = run.read_text()
+    assert main(["compare", str(run), "--json", str(run), "--force"]) == 2
+    assert "input" in capsys.readouterr().err
+    assert run.read_text() == before

@@ -1,0 +1,132 @@
+"""Every command in the README and docs runs as written, from a copy of the
+repository with nothing beside it.
+
+A fenced block marked ``sh`` is a command to run; synopses and printed output
+are marked ``text``. The ``sh`` blocks of one file run in order, in one shell
+(a variable set in one block is seen by the next), in a fresh copy of the
+repository's files (``git ls-files``) whose parent holds nothing else, with the
+project's ``.venv/bin`` first on ``PATH``. ``make`` lines are skipped: the
+targets are what CI runs itself. ``pip install`` goes into a folder of the
+copy (``PIP_TARGET``, on ``PYTHONPATH``), so the test environment is left as
+it was.
+
+Run with ``make test-docs`` (marker ``docs``; a few minutes).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+FENCE = re.compile(r"^```(\w*)[^\n]*\n(.*?)^```", re.M | re.S)
+
+
+def doc_files() -> list[Path]:
+    return [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+
+
+def shell_blocks(path: Path) -> list[str]:
+    """The ``sh`` blocks of ``path``, in order."""
+    return [m.group(2) for m in FENCE.finditer(path.read_text()) if m.group(1) == "sh"]
+
+
+def _script(blocks: list[str]) -> str:
+    lines = []
+    for block in blocks:
+        for line in block.splitlines():
+            if line.lstrip().startswith("make "):
+                continue
+            lines.append(line)
+    return "set -euo pipefail\nset -x\n" + "\n".join(lines) + "\n"
+
+
+def _copy_repository(dest: Path) -> Path:
+    files = subprocess.run(
+        ["git", "ls-files", "-co", "--exclude-standard"],
+        cwd=ROOT,
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout.split()
+    repo = dest / "repo"
+    for name in files:
+        src = ROOT / name
+        if src.is_file():
+            target = repo / name
+            target.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(src, target)
+    (repo / ".venv").symlink_to(Path(sys.prefix))
+    return repo
+
+
+def test_the_block_convention_is_kept():
+    """A ``sh`` block holds commands only: no synopsis brackets, no output."""
+    for path in doc_files():
+        for block in shell_blocks(path):
+            for line in block.splitlines():
+                text = line.split("#", 1)[0]
+                assert not re.search(r"\[--[a-z]", text), f"{path.name}: synopsis in sh: {line}"
+                assert not text.startswith(("hybridtable: error", "wrote ")), (
+                    f"{path.name}: output in an sh block: {line}"
+                )
+
+
+def test_no_document_or_file_needs_anything_beside_the_repository():
+    files = subprocess.run(
+        ["git", "ls-files", "-co", "--exclude-standard"],
+        cwd=ROOT,
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout.split()
+    offenders = []
+    for name in files:
+        path = ROOT / name
+        if path.suffix not in {".py", ".md", ".toml", ".json", ".sh", ""} or not path.is_file():
+            continue
+        if name == "tests/test_docs.py":  # this test names what it looks for
+            continue
+        text = path.read_text(errors="replace")
+        if "../shared" in text or "/work/shared" in text:
+            offenders.append(name)
+    assert offenders == [], f"files that point outside the repository: {offenders}"
+
+
+@pytest.mark.docs
+@pytest.mark.parametrize("doc", [p.name for p in doc_files()])
+def test_every_shell_block_runs(doc, tmp_path):
+    path = ROOT / doc if doc == "README.md" else ROOT / "docs" / doc
+    blocks = shell_blocks(path)
+    if not blocks:
+        pytest.skip(f"{doc} has no sh block")
+    repo = _copy_repository(tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["repo"]  # nothing beside it
+    site = repo / "out" / "pip-target"
+    env = {
+        **os.environ,
+        "PATH": f"{repo / '.venv' / 'bin'}:{os.environ['PATH']}",
+        "MPLBACKEND": "Agg",
+        "PIP_TARGET": str(site),
+        "PYTHONPATH": str(site),
+        "PIP_DISABLE_PIP_VERSION_CHECK": "1",
+    }
+    result = subprocess.run(
+        ["bash", "-c", _script(blocks)],
+        cwd=repo,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=1800,
+    )
+    assert result.returncode == 0, (
+        f"{doc}: a command failed (exit {result.returncode})\n"
+        f"--- stderr (tail) ---\n{result.stderr[-4000:]}\n--- stdout (tail) ---\n"
+        f"{result.stdout[-2000:]}"
+    )
