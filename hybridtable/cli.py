@@ -80,6 +80,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="hybridtable",
         description="Hybrid-simulation motion tables: delay compensation, margins, measurements.",
+        epilog="Every command: --help (units, ranges, defaults), --json FILE (- for stdout), "
+        "--force to replace an existing output. New here: docs/tutorial.md; first command: "
+        "hybridtable simulate --compensator SDMDC.",
     )
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     _add_parser = sub.add_parser

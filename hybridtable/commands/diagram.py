@@ -51,13 +51,14 @@ def register(sub) -> None:
         + ",".join(f"{r:g}" for r in DEFAULT_SAMPLE_RATES_HZ)
         + ")",
     )
+    p.add_argument("--json", metavar="FILE", help="write the results as JSON (- for stdout)")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from hybridtable.commands._common import check_outputs
+    from hybridtable.commands._common import check_outputs, write_json
     from hybridtable.errors import CommandError
     from hybridtable.reports.diagrams import DIAGRAMS, diagram_files, draw
 
@@ -77,10 +78,20 @@ def run(args: argparse.Namespace) -> int:
         raise CommandError(f"--out-dir {args.out_dir} is a file, not a folder")
     for path in diagram_files(args.name, args.out_dir):
         check_outputs(args.force, files={"--out-dir": path})
+    check_outputs(args.force, files={"--json": args.json})
     out = draw(args.name, args.out_dir, sample_rates_hz=args.sample_rates_hz or ())
-    print(out.verdict)
-    for line in out.lines:
-        print(line)
-    for path in out.files:
-        print(f"wrote {path}")
+    if args.json != "-":
+        print(out.verdict)
+        for line in out.lines:
+            print(line)
+        for path in out.files:
+            print(f"wrote {path}")
+    if args.json:
+        data = {
+            "diagram": args.name,
+            "verdict": out.verdict,
+            "files": [str(p) for p in out.files],
+            **out.data,
+        }
+        write_json(args.json, data)
     return 0

@@ -459,7 +459,7 @@ def model_verdict(result) -> str:
         line += f" at {best['initial_velocity_m_per_s']:g} m/s, its worst approach"
     none = next((e for e in ranking if e["key"] == "none"), None)
     if none is not None and none is not best:
-        line += f"; none gives {_cor(none['cor'])}"
+        line += f"; no compensation gives {_cor(none['cor'])}"
     return line
 
 

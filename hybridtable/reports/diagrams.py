@@ -59,11 +59,13 @@ DELAY_SCENARIOS: dict[str, dict[str, float]] = {
 @dataclass
 class DiagramOutput:
     """What a diagram gives: ``verdict`` (one plain sentence), the ``lines``
-    of its table or notes, and the ``files`` written."""
+    of its table or notes, the ``files`` written and its figures as ``data``
+    (for ``--json``; CoRs [1], rates [Hz])."""
 
     verdict: str
     lines: list[str] = field(default_factory=list)
     files: list[Path] = field(default_factory=list)
+    data: dict = field(default_factory=dict)
 
 
 def _up(x: float) -> str:
@@ -120,7 +122,7 @@ def _hybrid_loop(out: Path, **_: object) -> DiagramOutput:
         f"The hybrid loop (Table 1 point, SDMDC) is a Drake diagram of {len(systems)} "
         f"systems, drawn in {shown}"
     )
-    return DiagramOutput(verdict, lines, files)
+    return DiagramOutput(verdict, lines, files, data={"systems": systems})
 
 
 def _sampled_rig(out: Path, sample_rates_hz: Sequence[float] = (), **_: object) -> DiagramOutput:
@@ -143,7 +145,11 @@ def _sampled_rig(out: Path, sample_rates_hz: Sequence[float] = (), **_: object) 
         f"and {sdmdc[1][0]:.5f} with SDMDC, against {none[0]:.5f} and {sdmdc[0]:.5f} for the "
         "continuous loop"
     )
-    return DiagramOutput(verdict, lines)
+    data = {
+        "sample_rates_hz": list(rates),
+        "cor": {n: {"continuous": c, "sampled": s} for n, (c, s) in cors.items()},
+    }
+    return DiagramOutput(verdict, lines, data=data)
 
 
 def _delay_scenarios(out: Path, **_: object) -> DiagramOutput:
@@ -152,10 +158,12 @@ def _delay_scenarios(out: Path, **_: object) -> DiagramOutput:
 
     lines = [f"{'scenario':<24}{'CoR [1]':>10}{'estimate [1]':>14}{'difference':>12}"]
     worst = 0.0
+    rows = []
     for label, kwargs in DELAY_SCENARIOS.items():
         p = paper_params(**kwargs)
         cor, estimate = simulate(p).metrics.cor, cor_estimate(p)
         worst = max(worst, abs(cor - estimate))
+        rows.append({"scenario": label, **kwargs, "cor": cor, "cor_estimate": estimate})
         lines.append(f"{label:<24}{cor:>10.5f}{estimate:>14.5f}{cor - estimate:>+12.5f}")
     lines.append("estimate: exp(pi^2 f_con tau_eff), tau_eff = T_fms + 2 zeta / omega_resp")
     verdict = (
@@ -163,7 +171,7 @@ def _delay_scenarios(out: Path, **_: object) -> DiagramOutput:
         f"{_up(worst)} over the paper's {len(DELAY_SCENARIOS)} delay "
         "scenarios (Figs. 3-5)"
     )
-    return DiagramOutput(verdict, lines)
+    return DiagramOutput(verdict, lines, data={"scenarios": rows})
 
 
 def _table1_compensators(out: Path, **_: object) -> DiagramOutput:
@@ -190,7 +198,8 @@ def _table1_compensators(out: Path, **_: object) -> DiagramOutput:
         f"gives {cor['none']:.3f} (energy {gain:+.0%}); every CoR within "
         f"{_up(worst)} of the paper's"
     )
-    return DiagramOutput(verdict, lines)
+    data = {"cor": cor, "cor_paper": {n: paper[n] for n in cor}}
+    return DiagramOutput(verdict, lines, data=data)
 
 
 _DRAW: dict[str, Callable[..., DiagramOutput]] = {

@@ -29,7 +29,7 @@ def test_the_ranking_against_the_damped_contact(model, tmp_path, capsys):
     assert main(args) == 0
     lines = capsys.readouterr().out.splitlines()
     assert lines[0].startswith("On the modelled rig ") and "comes closest: CoR" in lines[0]
-    assert "; none gives 1.0" in lines[0]
+    assert "; no compensation gives 1.0" in lines[0]
     doc = json.loads(out.read_text())
     assert doc["verdict"] == lines[0]
     assert doc["model"]["path"] == str(model)

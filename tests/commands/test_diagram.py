@@ -68,6 +68,17 @@ def test_table1_compensators_gives_the_paper_cors(tmp_path, capsys):
     assert (tmp_path / "table1_compensators.txt").read_text().splitlines()[0] == first
 
 
+def test_json_on_stdout_holds_the_cors_only(tmp_path, capsys):
+    import json
+
+    argv = ["diagram", "table1-compensators", "--out-dir", str(tmp_path), "--json", "-"]
+    assert main(argv) == 0
+    doc = json.loads(capsys.readouterr().out)  # nothing else on stdout
+    assert set(doc["cor"]) == {"none", "SDC", "MDC", "SDMDC"}
+    for name, cor in doc["cor"].items():
+        assert abs(cor - doc["cor_paper"][name]) < 0.001
+
+
 def test_delay_scenarios_follow_the_estimate(tmp_path, capsys):
     assert main(["diagram", "delay-scenarios", "--out-dir", str(tmp_path)]) == 0
     lines = capsys.readouterr().out.splitlines()
