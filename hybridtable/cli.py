@@ -12,6 +12,7 @@ the exit code.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 from hybridtable.commands import (
@@ -52,7 +53,10 @@ class _HelpFormatter(argparse.HelpFormatter):
         default = action.default
         if (
             "default" in text
-            or default in (None, False, [], argparse.SUPPRESS)
+            or default is None
+            or default is False
+            or default == []
+            or default == argparse.SUPPRESS
             or action.nargs == 0
             or not action.option_strings
         ):
@@ -122,6 +126,10 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("hybridtable: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # the reader (``| head``) closed stdout: stop quietly
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())  # no second error when Python flushes at exit
+        return 141
 
 
 if __name__ == "__main__":  # pragma: no cover

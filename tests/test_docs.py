@@ -5,10 +5,12 @@ A fenced block marked ``sh`` is a command to run; synopses and printed output
 are marked ``text``. The ``sh`` blocks of one file run in order, in one shell
 (a variable set in one block is seen by the next), in a fresh copy of the
 repository's files (``git ls-files``) whose parent holds nothing else, with the
-project's ``.venv/bin`` first on ``PATH``. ``make`` lines are skipped: the
+project's ``.venv/bin`` first on ``PATH`` (in CI the copy is of a fresh clone
+and ``.venv`` holds its editable install). ``make`` lines are skipped: the
 targets are what CI runs itself. ``pip install`` goes into a folder of the
-copy (``PIP_TARGET``, on ``PYTHONPATH``), so the test environment is left as
-it was.
+copy (``PIP_TARGET``, on ``PYTHONPATH``) without dependencies (``PIP_NO_DEPS``:
+they are the project's, installed already), so the test environment is left
+as it was.
 
 Run with ``make test-docs`` (marker ``docs``; a few minutes).
 """
@@ -115,6 +117,7 @@ def test_every_shell_block_runs(doc, tmp_path):
         "MPLBACKEND": "Agg",
         "PIP_TARGET": str(site),
         "PYTHONPATH": str(site),
+        "PIP_NO_DEPS": "1",
         "PIP_DISABLE_PIP_VERSION_CHECK": "1",
     }
     result = subprocess.run(

@@ -3,10 +3,10 @@
 A restructuring must not change a single number. Save a snapshot before it,
 another after, and diff them::
 
-    python tools/behaviour_snapshot.py save /tmp/before --runs examples/nominal
+    python tools/behaviour_snapshot.py save out/before --runs examples/nominal
     ...  # move code
-    python tools/behaviour_snapshot.py save /tmp/after --runs examples/nominal
-    python tools/behaviour_snapshot.py diff /tmp/before /tmp/after
+    python tools/behaviour_snapshot.py save out/after --runs examples/nominal
+    python tools/behaviour_snapshot.py diff out/before out/after
 
 The commands run as a user runs them (``python -m hybridtable.cli``):
 ``reproduce``, ``simulate`` with every registered compensator (continuous, a
@@ -73,7 +73,15 @@ def save(out: Path, runs: str | None) -> int:
     failed = 0
     for name, argv in _cases(runs):
         argv = [a.replace("{out}", str(out)) for a in argv]
-        cmd = [sys.executable, "-m", "hybridtable.cli", *argv, "--json", str(out / f"{name}.json")]
+        cmd = [
+            sys.executable,
+            "-m",
+            "hybridtable.cli",
+            *argv,
+            "--json",
+            str(out / f"{name}.json"),
+            "--force",
+        ]
         proc = subprocess.run(cmd, capture_output=True, text=True)
         (out / f"{name}.stdout").write_text(proc.stdout)
         status = "ok" if proc.returncode == 0 else f"exit {proc.returncode}"
@@ -84,8 +92,9 @@ def save(out: Path, runs: str | None) -> int:
     return 1 if failed else 0
 
 
-#: Keys of figures measured by the clock, not computed: left out of the diff.
-_CLOCKS = ("wall", "real_time")
+#: Keys whose values are clock readings (run times, creation stamps), not
+#: behaviour: left out of the diff.
+_CLOCKS = ("wall", "real_time", "created")
 
 
 def _strip(obj):

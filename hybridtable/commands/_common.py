@@ -53,6 +53,7 @@ _RANGES = {
     ">=0": (lambda x: x >= 0.0 and math.isfinite(x), ">= 0"),
     ">0|inf": (lambda x: x > 0.0, "> 0 (or inf)"),
     "any": (math.isfinite, "finite"),
+    "(-1,1)": (lambda x: -1.0 < x < 1.0, "in (-1, 1)"),
 }
 
 

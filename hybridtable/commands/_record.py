@@ -22,7 +22,7 @@ TRUTH_FORMAT = "hybridtable-truth/1"
 
 def add_record_arguments(parser: argparse.ArgumentParser) -> None:
     """The options of ``simulate --record``."""
-    from hybridtable.commands._common import parse_float
+    from hybridtable.commands._common import number_type, parse_float
 
     g = parser.add_argument_group(
         "recording runs (--record DIR): hybridtable-run/1 files of the rig with the "
@@ -58,10 +58,10 @@ def add_record_arguments(parser: argparse.ArgumentParser) -> None:
     )
     g.add_argument(
         "--noise-ar1",
-        type=parse_float,
+        type=number_type("(-1,1)"),
         default=0.0,
         metavar="PHI",
-        help="lag-one correlation of both noises, in (-1, 1) (default 0: white)",
+        help="lag-one correlation of both noises [1], in (-1, 1) (default 0: white)",
     )
     g.add_argument(
         "--seed",

@@ -9,7 +9,7 @@ __all__ = ["register", "run"]
 
 
 def register(sub) -> None:
-    from hybridtable.commands._common import add_run_arguments, parse_float
+    from hybridtable.commands._common import add_run_arguments, number_type
     from hybridtable.commands._model_options import (
         add_effect_argument,
         add_model_argument,
@@ -29,9 +29,10 @@ def register(sub) -> None:
     add_run_arguments(p, report="write report.md with PNG figures into this folder")
     p.add_argument(
         "--max-lag-s",
-        type=parse_float,
+        type=number_type(">0", "s"),
+        metavar="SECONDS",
         default=None,
-        help="longest lag of the whiteness tests (default: 50 ticks)",
+        help="longest lag of the whiteness tests [s], > 0 (default: 50 ticks)",
     )
     add_effect_argument(
         p,

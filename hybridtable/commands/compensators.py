@@ -33,7 +33,7 @@ SWEEP_DEFAULTS = {
 
 
 def register(sub) -> None:
-    from hybridtable.commands._common import parse_float
+    from hybridtable.commands._common import number_type, parse_float
     from hybridtable.commands._model_options import add_model_argument, add_plugin_argument
     from hybridtable.compensators.registry import compensator_names
     from hybridtable.studies.compensator_sweep import SCENARIOS
@@ -71,15 +71,17 @@ def register(sub) -> None:
     )
     p.add_argument(
         "--force-noise-ratio",
-        type=parse_float,
+        type=number_type(">=0"),
+        metavar="RATIO",
         default=None,
-        help="force noise std / undamped peak force (default 1e-3)",
+        help="force noise std / undamped peak force [1], >= 0 (default 1e-3)",
     )
     p.add_argument(
         "--position-noise-ratio",
-        type=parse_float,
+        type=number_type(">=0"),
+        metavar="RATIO",
         default=None,
-        help="position noise std / peak deflection (default 1e-4)",
+        help="position noise std / peak deflection [1], >= 0 (default 1e-4)",
     )
     p.add_argument(
         "--contact-damping-ratio",
@@ -92,9 +94,10 @@ def register(sub) -> None:
     )
     p.add_argument(
         "--sample-rate-hz",
-        type=parse_float,
+        type=number_type(">0", "Hz"),
+        metavar="HZ",
         default=None,
-        help="sampled rig computer (default: continuous loop, as the paper)",
+        help="sampled rig computer [Hz], > 0 (default: continuous loop, as the paper)",
     )
     p.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
     p.add_argument(

@@ -20,6 +20,8 @@ def _rates(text: str) -> tuple[float, ...]:
         ) from None
     if not values:
         raise argparse.ArgumentTypeError("empty list")
+    if not all(v > 0 and v != float("inf") for v in values):
+        raise argparse.ArgumentTypeError(f"rates must be > 0 [Hz] and finite (got {text})")
     return values
 
 

@@ -72,7 +72,7 @@ def default_delays(sample_rate_hz: float | None) -> np.ndarray:
 
 
 def register(sub) -> None:
-    from hybridtable.commands._common import parse_float
+    from hybridtable.commands._common import number_type
     from hybridtable.commands._model_options import add_model_argument, add_plugin_argument
 
     p = sub.add_parser(
@@ -98,65 +98,80 @@ def register(sub) -> None:
         "--sensor-delay-s",
         metavar="LIST",
         default=None,
-        help="delays, 'a,b,c' or 'start:stop:count' (default 0:0.02:41; sampled: whole "
-        "samples up to 20 ms)",
+        help="sensor delays of the grid [s], 'a,b,c' or 'start:stop:count', >= 0 (default "
+        "0:0.02:41; sampled: whole samples up to 0.02 s)",
     )
     p.add_argument(
         "--table-response-hz",
         metavar="LIST",
         default=DEFAULT_TABLES,
-        help=f"table response frequencies, same syntax, inf = ideal (default {DEFAULT_TABLES})",
+        help="table response frequencies of the grid [Hz], same syntax, > 0, inf = ideal "
+        f"table (default {DEFAULT_TABLES})",
     )
     p.add_argument(
         "--table-damping-ratio",
-        type=parse_float,
+        type=number_type(">=0"),
         default=None,
-        metavar="Z",
-        help="default 0.8 (with --model: the model's rig's)",
+        metavar="RATIO",
+        help="table damping ratio [1], >= 0 (default 0.8; with --model: the model's rig's)",
     )
     p.add_argument(
         "--contact-frequency-hz",
-        type=parse_float,
+        type=number_type(">0", "Hz"),
         default=None,
-        metavar="F",
-        help="sets the spacecraft mass, default 1 (with --model: the model's mass)",
+        metavar="HZ",
+        help="contact natural frequency [Hz], > 0, sets the spacecraft mass (default 1; with "
+        "--model: the model's mass)",
     )
     p.add_argument(
         "--contact-stiffness-n-per-m",
-        type=parse_float,
+        type=number_type(">0", "N/m"),
         default=None,
-        help="default 1e5 (with --model: the model's rig's)",
+        metavar="N_PER_M",
+        help="contact stiffness [N/m], > 0 (default 1e5; with --model: the model's rig's)",
     )
     g = p.add_mutually_exclusive_group()
-    g.add_argument("--contact-damping-n-s-per-m", type=parse_float, default=None)
+    g.add_argument(
+        "--contact-damping-n-s-per-m",
+        type=number_type(">=0", "N s/m"),
+        default=None,
+        metavar="N_S_PER_M",
+        help="contact damping [N s/m], >= 0 (default 0: an undamped spring; with --model: "
+        "the model's)",
+    )
     g.add_argument(
         "--contact-damping-ratio",
-        type=parse_float,
+        type=number_type(">=0"),
         default=None,
-        help="contact damping as a ratio c / (2 sqrt(k m))",
+        metavar="RATIO",
+        help="contact damping as a ratio c / (2 sqrt(k m)) [1], >= 0 (default 0)",
     )
     p.add_argument(
         "--lead-time-s",
-        type=parse_float,
+        type=number_type(">=0", "s"),
         default=None,
-        help="SDC lead (default: the delay; with --model: the rig's lead time)",
+        metavar="SECONDS",
+        help="SDC lead [s], >= 0 (default: the delay; with --model: the rig's lead time)",
     )
     p.add_argument(
         "--initial-velocity-m-per-s",
-        type=parse_float,
+        type=number_type(">0", "m/s"),
         default=None,
-        help="approach velocity of the validation runs (default 0.1; with --model: the "
-        "model's nominal one)",
+        metavar="M_PER_S",
+        help="approach velocity of the validation runs [m/s], > 0 (default 0.1; with "
+        "--model: the model's nominal one)",
     )
     p.add_argument(
         "--sample-rate-hz",
-        type=parse_float,
+        type=number_type(">0", "Hz"),
         default=None,
-        metavar="R",
-        help="sampled-data model of a rig computer at R Hz (delays must be whole samples; "
-        "with --model: default the model's rig's rate)",
+        metavar="HZ",
+        help="sampled-data model of a rig computer at this rate [Hz], > 0 (default: "
+        "continuous; delays must be whole samples; with --model: the model's rig's rate)",
     )
-    p.add_argument("--pade-order", type=int, default=3, metavar="N", help="default 3")
+    p.add_argument(
+        "--pade-order", type=int, default=3, metavar="N", help="order of the delay's Pade model"
+    )
     p.add_argument(
         "--validate",
         type=int,
@@ -170,28 +185,28 @@ def register(sub) -> None:
     )
     p.add_argument(
         "--cor-limit",
-        type=parse_float,
+        type=number_type(">0"),
         default=1.01,
         metavar="COR",
-        help="the CoR limit: report the largest sensor delay up to which the predicted CoR "
-        "stays within it",
+        help="the CoR limit [1], > 0: report the largest sensor delay up to which the "
+        "predicted CoR stays within it",
     )
     p.add_argument(
         "--operating-delay-s",
-        type=parse_float,
+        type=number_type(">=0", "s"),
         default=None,
-        metavar="T",
+        metavar="SECONDS",
         help="sensor delay of the operating point of the gain/phase/delay margins and "
-        "--export-linear (default 0.005, the paper's Table 1, in whole samples when sampled; "
-        "with --model: the rig's)",
+        "--export-linear [s], >= 0 (default 0.005, the paper's Table 1, in whole samples "
+        "when sampled; with --model: the rig's)",
     )
     p.add_argument(
         "--operating-table-hz",
-        type=parse_float,
+        type=number_type(">0|inf", "Hz"),
         default=None,
-        metavar="F",
-        help="table response frequency of the operating point (default 25, the paper's "
-        "Table 1; with --model: the rig's)",
+        metavar="HZ",
+        help="table response frequency of the operating point [Hz], > 0 (default 25, the "
+        "paper's Table 1; with --model: the rig's)",
     )
     p.add_argument(
         "--export-linear",

@@ -9,7 +9,7 @@ __all__ = ["register", "run"]
 
 
 def register(sub) -> None:
-    from hybridtable.commands._common import parse_float
+    from hybridtable.commands._common import number_type
     from hybridtable.compensators.paper import CONTACT_GATES
 
     p = sub.add_parser(
@@ -25,11 +25,18 @@ def register(sub) -> None:
     )
     p.add_argument(
         "--time-step-s",
-        type=parse_float,
+        type=number_type(">0", "s"),
+        metavar="SECONDS",
         default=None,
-        help="continuous-loop step (default: min(2e-4, 1/(5000 f_con)))",
+        help="continuous-loop step [s], > 0 (default: min(2e-4, 1/(5000 f_con)))",
     )
-    p.add_argument("--contact-gate", choices=CONTACT_GATES, default="measured_force")
+    p.add_argument(
+        "--contact-gate",
+        choices=CONTACT_GATES,
+        default="measured_force",
+        help="when the compensation acts: while the measured force is above the deadband "
+        "(the rig's gate), or while the table position is in contact",
+    )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 

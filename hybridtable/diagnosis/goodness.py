@@ -81,6 +81,10 @@ class WindowTest:
     misfit_start_s: float
     misfit_end_s: float
     band_hz: tuple[float, float]
+    #: Whether the error is large enough to count (over
+    #: :data:`WINDOW_ERROR_FLOOR` with the noise's own spread to spare): a
+    #: window below it can be statistically detectable and still negligible.
+    relevant: bool = True
 
     def to_json(self) -> dict:
         return {
@@ -95,6 +99,7 @@ class WindowTest:
             "error": self.error,
             "misfit_window_s": [self.misfit_start_s, self.misfit_end_s],
             "band_hz": list(self.band_hz),
+            "relevant": self.relevant,
         }
 
 
@@ -220,7 +225,7 @@ def goodness_of_fit(
     p_family = min(1.0, relevant_rows[0][2] * m) if relevant_rows else 1.0
     worst: list[WindowTest] = []
     seen = set()
-    for i, c, p, scale, stat, a, b, j, error, _ in rows:
+    for i, c, p, scale, stat, a, b, j, error, relevant in rows:
         d = data[i]
         labels = d.f_labels if c == "f_mea_n" else d.labels
         key = (i, c, int(labels[a]))
@@ -244,6 +249,7 @@ def goodness_of_fit(
                 misfit_start_s=float(t[j]),
                 misfit_end_s=float(t[min(j + scale - 1, b)]),
                 band_hz=_band(evaluations[i].whitened[c][a : b + 1], h),
+                relevant=bool(relevant),
             )
         )
         if len(worst) >= keep:

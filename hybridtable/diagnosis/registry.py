@@ -41,6 +41,24 @@ ENTRY_POINT_GROUP = "hybridtable.effects"
 
 _entry_points_loaded = False
 
+#: The source file of each effect registered by an entry point (to recognise
+#: the same plug-in given again with ``--plugin``).
+_ENTRY_POINT_FILES: dict[str, Path] = {}
+
+
+def _module_file(module_name: str) -> Path | None:
+    module = sys.modules.get(module_name)
+    path = getattr(module, "__file__", None)
+    return Path(path) if path else None
+
+
+def _same_source(a: Path | None, b: Path | None) -> bool:
+    """Whether two module files hold the same code (an installed copy of a file)."""
+    try:
+        return a is not None and b is not None and a.read_bytes() == b.read_bytes()
+    except OSError:
+        return False
+
 
 def _load_entry_points() -> None:
     """Register the effects of installed packages (entry-point group
@@ -70,6 +88,9 @@ def _load_entry_points() -> None:
                 "is already registered"
             )
         EFFECTS[effect.name] = effect
+        module_file = _module_file(ep.module)
+        if module_file is not None:
+            _ENTRY_POINT_FILES[effect.name] = module_file
 
 
 def register_effect(effect: Effect, replace_existing: bool = False) -> Effect:
@@ -203,7 +224,9 @@ def load_plugin(text: str) -> list[Effect]:
     ``MODULE`` is an importable module (``my_lab.effects``) or the path of a
     Python file (``./backlash.py``); ``ATTR`` names an
     :class:`~hybridtable.diagnosis.effects.Effect` or a list or tuple of them.
-    Loading the same plug-in twice registers it once.
+    Loading the same plug-in twice registers it once; so does a file whose
+    code an installed package's entry point already registered (the package
+    installed from it).
 
     Raises
     ------
@@ -229,8 +252,11 @@ def load_plugin(text: str) -> list[Effect]:
             f"(got {type(found).__name__})"
         )
     _load_entry_points()
+    here = Path(module.__file__) if getattr(module, "__file__", None) else None
     for effect in items:
         if EFFECTS.get(effect.name) is not effect:
+            if effect.name in EFFECTS and _same_source(_ENTRY_POINT_FILES.get(effect.name), here):
+                continue  # the installed copy of this very file: already registered
             if effect.name in EFFECTS:
                 raise ParameterError(
                     f"--plugin {text}: an effect named {effect.name!r} is already "

@@ -70,21 +70,21 @@ def parse_column_map(items: Iterable[str] | None) -> dict[str, str]:
                 continue
             if "=" not in part:
                 raise MeasurementError(
-                    f"column map item {part!r} must be FORMAT_COLUMN=LOG_COLUMN "
+                    f"--column-map item {part!r} must be FORMAT_COLUMN=LOG_COLUMN "
                     f"(format columns: {', '.join(RUN_COLUMNS)})"
                 )
             fmt, log = (s.strip() for s in part.split("=", 1))
             if fmt not in RUN_COLUMNS:
                 raise MeasurementError(
-                    f"column map: {fmt!r} is not a column of the format "
+                    f"--column-map: {fmt!r} is not a column of the format "
                     f"(one of {', '.join(RUN_COLUMNS)})"
                 )
             if not log:
-                raise MeasurementError(f"column map: empty log column name for {fmt}")
+                raise MeasurementError(f"--column-map: empty log column name for {fmt}")
             if fmt in mapping:
-                raise MeasurementError(f"column map: {fmt} is mapped twice")
+                raise MeasurementError(f"--column-map: {fmt} is mapped twice")
             if log in mapping.values():
-                raise MeasurementError(f"column map: log column {log!r} is mapped twice")
+                raise MeasurementError(f"--column-map: log column {log!r} is mapped twice")
             mapping[fmt] = log
     return mapping
 
@@ -258,7 +258,7 @@ def _read_series(
     unmatched = [f"{f}={log}" for f, log in (column_map or {}).items() if log not in header]
     if unmatched:
         raise MeasurementError(
-            f"{path} line {header_line}: column map entries not in the header: "
+            f"{path} line {header_line}: --column-map entries not in the header: "
             f"{', '.join(unmatched)} (has: {_column_list(header)})"
         )
     missing = [c for c in RUN_COLUMNS if c not in seen]

@@ -48,6 +48,36 @@ def _where(result: SweepResult) -> str:
     return "at the Table 1 point" if n == 1 else f"over the {n} grid points"
 
 
+def _scenario_words(result: SweepResult) -> str:
+    """What the scenarios vary, in words (the believed stiffness, noise, damping)."""
+    st = result.settings
+    words = []
+    for s in st.scenarios:
+        if s == "mismatch":
+            lo, hi = min(st.prior_ratios), max(st.prior_ratios)
+            words.append(f"a believed stiffness {lo:g}-{hi:g}x the true one")
+        elif s == "noise":
+            words.append("sensor noise")
+        elif s == "damped":
+            words.append(f"a damped contact (damping ratio {st.contact_damping_ratio:g})")
+    return ", ".join(words[:-1]) + (" and " if len(words) > 1 else "") + words[-1]
+
+
+def _point_words(result: SweepResult, index: int | None) -> str:
+    """A grid point in words (its delay, table, contact, stiffness, approach)."""
+    if index is None or not 0 <= int(index) < len(result.points):
+        return "a grid point"
+    d = result.points[int(index)]
+    try:
+        return (
+            f"{d['sensor_delay_ms']:g} ms delay, {d['table_response_hz']:g} Hz table, "
+            f"{d['contact_frequency_hz']:g} Hz contact, k "
+            f"{d['contact_stiffness_n_per_mm']:g} N/mm, v0 {d['initial_velocity_mm_per_s']:g} mm/s"
+        )
+    except KeyError:  # a point given without its parameters
+        return f"point {int(index) + 1} of the grid"
+
+
 def sweep_verdict(result: SweepResult) -> str:
     """One sentence: the compensator (or guarded variant) whose worst |CoR
     error| over every scenario is smallest, beside SDMDC and no compensation."""
@@ -58,9 +88,8 @@ def sweep_verdict(result: SweepResult) -> str:
         return f"Every compensator failed {_where(result)} (no run ended with a separation)"
     best = ranked[0]
     line = (
-        f"Closest to the ideal loop {_where(result)}: {best} (worst |CoR error| "
-        f"{worst[best]:.3f}"
-        + (f" over {len(summ[best])} scenarios)" if len(summ[best]) > 1 else ")")
+        f"Closest to the ideal loop {_where(result)} under {_scenario_words(result)}: "
+        f"{best} (worst |CoR error| {worst[best]:.3f})"
     )
     others = []
     for key, name in (("SDMDC", "SDMDC"), ("none", "no compensation")):
@@ -108,15 +137,15 @@ def format_checks(result: SweepResult) -> list[str]:
             largest = "a failed run" if p["max_cor"] is None else f"CoR {p['max_cor']:.4f}"
             lines.append(
                 f"the passivity guard does not hold CoR <= {p['limit']:g} in every guarded run: "
-                f"{largest} ({w.get('compensator')}, grid point {w.get('point')}, "
-                f"{w.get('scenario')})"
+                f"{largest} ({w.get('compensator')}, {w.get('scenario')} scenario, "
+                f"{_point_words(result, w.get('point'))})"
             )
     half = found["fixed_k_sdmdc_at_half_k"]
     if half:
         worst = max(half, key=lambda r: abs(r["cor_error"]))
         lines.append(
             f"fixed-k SDMDC with the stiffness believed 50 % low misses the ideal CoR by up to "
-            f"{worst['cor_error']:+.4f} (grid point {worst['point']})"
+            f"{worst['cor_error']:+.4f} (at {_point_words(result, worst['point'])})"
         )
     return lines
 
@@ -351,7 +380,9 @@ def write_report(result: SweepResult, out_dir: str | Path, traces: bool = True) 
             )
         )
 
-    lines = ["# Compensators over the Table 2 grid", "", "```", format_summary(result), "```", ""]
+    verdict, _, table = format_summary(result).partition("\n")
+    title = "at the Table 1 point" if len(result.points) == 1 else "over the Table 2 grid"
+    lines = [f"# Compensators {title}", "", f"**{verdict}.**", "", "```", table, "```", ""]
     lines += ["Grid points (index: delay / table / contact f / k / v0):", ""]
     lines += [f"- {i}: {_label(q)}" for i, q in enumerate(result.points)]
     for path, title, caption in figures:
@@ -545,7 +576,8 @@ def write_model_report(result, out_dir: str | Path, rig: str = "") -> list[str]:
         "compensator, hatched and lighter with the passivity guard; dashed: the CoR of the "
         "model's contact on an ideal rig (the target), dotted: 1."
     )
-    text = ["# Compensators on the modelled rig", "", "```", format_model_summary(result, rig)]
+    verdict, _, table = format_model_summary(result, rig).partition("\n")
+    text = ["# Compensators on the modelled rig", "", f"**{verdict}.**", "", "```", table]
     text += ["```", "", f"![CoR of every compensator on the modelled rig]({figure.name})"]
     text += [f"*{caption}*", ""]
     report.write_text("\n".join(text))

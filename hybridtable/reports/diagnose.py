@@ -19,6 +19,7 @@ import numpy as np  # noqa: E402
 
 from hybridtable.diagnosis.candidates import Candidate, Diagnosis
 from hybridtable.diagnosis.evaluate import RunData  # noqa: E402
+from hybridtable.diagnosis.goodness import WINDOW_ERROR_FLOOR  # noqa: E402
 from hybridtable.diagnosis.registry import get_effect  # noqa: E402
 from hybridtable.measurement.phases import PHASES, contact_mask, loop_energy  # noqa: E402
 from hybridtable.reports.compare import figure_stem  # noqa: E402
@@ -166,6 +167,12 @@ def format_remaining(d: Diagnosis) -> str:
             f"  {w.run_id} {w.channel} {w.phase:<12} {w.start_s:.3f}-{w.end_s:.3f} s: error "
             f"{w.error:.3g}x noise, p = {w.p_value:.3g} (scale {w.scale_ticks} ticks, band "
             f"{w.band_hz[0]:.3g}-{w.band_hz[1]:.3g} Hz)"
+            + ("" if w.relevant else "; detectable but too small to count")
+        )
+    if any(not w.relevant for w in g.worst):
+        lines.append(
+            f"  (too small to count: the window's error is under {WINDOW_ERROR_FLOOR:g}x the "
+            "noise once the noise's own spread is allowed for; a real but negligible misfit)"
         )
     return "\n".join(lines)
 

@@ -143,7 +143,9 @@ class SweepSettings:
             raise ParameterError("contact_damping_ratio must be < 1")
         for s in self.scenarios:
             if s not in SCENARIOS:
-                raise ParameterError(f"scenario must be one of {', '.join(SCENARIOS)} (got {s!r})")
+                raise ParameterError(
+                    f"scenarios must each be one of {', '.join(SCENARIOS)} (got {s!r})"
+                )
         object.__setattr__(self, "scenarios", tuple(self.scenarios))
         object.__setattr__(self, "passivity", tuple(bool(p) for p in self.passivity))
         if self.sample_rate_hz is not None:

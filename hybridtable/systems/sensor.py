@@ -66,8 +66,8 @@ def delay_samples(delay_s: float, sample_period_s: float) -> int:
     mi = int(round(m))
     if abs(m - mi) > 1e-6:
         raise ParameterError(
-            f"sensor_delay_s ({delay_s}) must be a whole number of sample periods "
-            f"({sample_period_s} s) for a sampled loop"
+            f"sensor_delay_s ({delay_s:.6g} s) must be a whole number of sample periods "
+            f"({sample_period_s:.6g} s, {1.0 / sample_period_s:.6g} Hz) for a sampled loop"
         )
     return mi
 

@@ -42,14 +42,6 @@ def test_zero_mass_via_stiffness_is_rejected_without_traceback():
     assert "--contact-stiffness-n-per-m" in proc.stderr
 
 
-def test_a_parameter_error_names_the_flag_of_its_field(capsys):
-    # Checked by the parameter dataclass, not by argparse: still named as a flag.
-    assert main(["simulate", "--compensator", "SDMDC", "--table-response-hz", "inf"]) == 0
-    capsys.readouterr()
-    assert main(["margins", "--table-damping-ratio", "-1"]) == 2
-    assert "--table-damping-ratio must be >= 0" in capsys.readouterr().err
-
-
 def test_simulate_json_and_plot(tmp_path):
     out = tmp_path / "run.json"
     png = tmp_path / "run.png"
@@ -102,3 +94,56 @@ def test_reproduce_json_shape_and_tables(tmp_path):
             "fig7_compensated_force.png",
         ]
     )
+
+
+#: Endings of option names that carry a unit, and the unit the help must show.
+_UNIT_SUFFIXES = {
+    "_s": "[s]",
+    "_hz": "[Hz]",
+    "_n": "[N]",
+    "_m": "[m]",
+    "_n_per_m": "[N/m]",
+    "_n_s_per_m": "[N s/m]",
+    "_m_per_s": "[m/s]",
+    "_ratio": "[1]",
+}
+
+
+def _options():
+    import argparse
+
+    from hybridtable.cli import build_parser
+
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    for name, p in sub.choices.items():
+        for a in p._actions:
+            if a.option_strings and a.nargs != 0 and a.dest != "help":
+                yield name, a
+
+
+def test_help_shows_the_unit_of_every_physical_option():
+    missing = []
+    for name, a in _options():
+        suffix = max((s for s in _UNIT_SUFFIXES if a.dest.endswith(s)), key=len, default=None)
+        if suffix is None or a.dest.endswith(("_json", "_ms")):
+            continue
+        unit = _UNIT_SUFFIXES[suffix]
+        if unit == "[1]" and "[1]" not in (a.help or "") and "ratio" in (a.help or ""):
+            continue  # a ratio named in words, e.g. "believed / true stiffness ratio"
+        if unit not in (a.help or ""):
+            missing.append(f"{name} {a.option_strings[-1]}: {a.help!r}")
+    assert missing == []
+
+
+def test_help_shows_every_default():
+    from hybridtable.cli import _HelpFormatter
+
+    missing = []
+    for name, a in _options():
+        if a.default is None or a.default == []:
+            continue  # "not given" (an output, an optional input, a derived value)
+        text = _HelpFormatter("x")._get_help_string(a)
+        if "default" not in text:
+            missing.append(f"{name} {a.option_strings[-1]}")
+    assert missing == []

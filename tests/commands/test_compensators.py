@@ -37,7 +37,8 @@ def test_compensators_command_quick(tmp_path, capsys):
     text = capsys.readouterr().out
     lines = text.splitlines()
     # The first line is the verdict: sdmdc-online comes closest, SDMDC leaves ~0.05.
-    assert lines[0].startswith("Closest to the ideal loop at the Table 1 point: sdmdc-online")
+    assert lines[0].startswith("Closest to the ideal loop at the Table 1 point under a believed")
+    assert ": sdmdc-online (worst" in lines[0]
     m = re.search(r"SDMDC leaves (\d\.\d{3})", lines[0])
     assert m and 0.04 < float(m.group(1)) < 0.06
     assert "sdmdc-online keeps |CoR error| <= 0.000" in text

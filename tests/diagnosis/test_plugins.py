@@ -29,6 +29,7 @@ from hybridtable.diagnosis.diagnose import diagnose
 from hybridtable.diagnosis.effects import ModelSpec, RigScale
 from hybridtable.diagnosis.fit import fit_effect
 from hybridtable.diagnosis.library import BUILTIN_EFFECTS
+from hybridtable.errors import ParameterError
 from hybridtable.measurement.recorder import record_run, write_run
 from hybridtable.measurement.replay import replay
 from hybridtable.measurement.rig import add_physical_part, rig_params
@@ -81,6 +82,7 @@ def builtins_only(monkeypatch):
     """The registry with the built-ins only, entry points not loaded again."""
     monkeypatch.setattr(registry, "EFFECTS", {e.name: e for e in BUILTIN_EFFECTS})
     monkeypatch.setattr(registry, "_entry_points_loaded", True)
+    monkeypatch.setattr(registry, "_ENTRY_POINT_FILES", {})
 
 
 @pytest.fixture(scope="module")
@@ -204,6 +206,14 @@ def test_a_real_entry_point_is_found_by_diagnose(runs, tmp_path, monkeypatch):
     try:
         assert "backlash" in registry.effect_names()
         assert registry.get_effect("backlash") is sys.modules[module].EFFECT
+        # The file it was installed from, given again with --plugin: the same code,
+        # registered once (a user following docs/plugins.md after pip install).
+        registry.load_plugin(f"{BACKLASH}:EFFECT")
+        assert registry.get_effect("backlash") is sys.modules[module].EFFECT
+        other = tmp_path / "other_backlash.py"
+        other.write_text(BACKLASH.read_text(encoding="utf-8") + "\n# changed\n", encoding="utf-8")
+        with pytest.raises(ParameterError, match="already registered"):
+            registry.load_plugin(f"{other}:EFFECT")  # another code under the same name
         _check_found(runs)
     finally:
         sys.modules.pop(module, None)

@@ -312,7 +312,7 @@ def test_column_map_reads_renamed_log(tmp_path, capsys):
         np.testing.assert_array_equal(getattr(run, name), getattr(reference, name))
     # A map entry whose log column is absent is named in the error.
     with pytest.raises(
-        MeasurementError, match=r"column map entries not in the header: p_act_m=pos"
+        MeasurementError, match=r"--column-map entries not in the header: p_act_m=pos"
     ):
         read_run(c, column_map=parse_column_map(["f_mea_n=Force", "time_s=t", "p_act_m=pos"]))
     for bad, expect in (

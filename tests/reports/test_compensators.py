@@ -49,19 +49,22 @@ def test_the_verdict_names_the_closest_beside_sdmdc_and_no_compensation():
     line = sweep_verdict(_sweep(runs))
     # none +passivity is exact here (an undamped contact guarded to CoR 1).
     assert line == (
-        "Closest to the ideal loop at the Table 1 point: none +passivity (worst |CoR error| "
-        "0.000); SDMDC leaves 0.052, no compensation 0.161 (kinetic energy +35%)"
+        "Closest to the ideal loop at the Table 1 point under a believed stiffness 0.5-1x the "
+        "true one: none +passivity (worst |CoR error| 0.000); SDMDC leaves 0.052, no "
+        "compensation 0.161 (kinetic energy +35%)"
     )
     assert format_summary(_sweep(runs)).splitlines()[0] == line
     assert sweep_verdict(_sweep(runs[2:], points=11)).startswith(
-        "Closest to the ideal loop over the 11 grid points: polynomial (worst |CoR error| 0.005)"
+        "Closest to the ideal loop over the 11 grid points under a believed stiffness 0.5-1x "
+        "the true one: polynomial (worst |CoR error| 0.005)"
     )
 
 
 def test_a_failed_run_never_wins():
     failed = dict(_run("sdmdc-online", math.nan), error="diverged")
     line = sweep_verdict(_sweep([failed, _run("SDMDC", 1.01)]))
-    assert line.startswith("Closest to the ideal loop at the Table 1 point: SDMDC (worst")
+    assert line.startswith("Closest to the ideal loop at the Table 1 point under")
+    assert ": SDMDC (worst" in line
 
 
 def test_the_checks_are_sentences_that_say_when_they_do_not_hold():
@@ -76,7 +79,7 @@ def test_the_checks_are_sentences_that_say_when_they_do_not_hold():
         "should stay within 0.01)",
         "the passivity guard holds CoR <= 0.996 in the guarded run",
         "fixed-k SDMDC with the stiffness believed 50 % low misses the ideal CoR by up to "
-        "+0.0515 (grid point 0)",
+        "+0.0515 (at point 1 of the grid)",
     ]
     bad = [_run("sdmdc-online", 1.03, ratio=0.5), _run("SDC", 1.02, guard=True)]
     lines = format_checks(_sweep(bad))
@@ -86,7 +89,7 @@ def test_the_checks_are_sentences_that_say_when_they_do_not_hold():
     )
     assert lines[1] == (
         "the passivity guard does not hold CoR <= 1.005 in every guarded run: CoR 1.0200 "
-        "(SDC, grid point 0, mismatch)"
+        "(SDC, mismatch scenario, point 1 of the grid)"
     )
     for line in lines:
         assert "PASS" not in line and "FAIL" not in line and "acceptance" not in line
