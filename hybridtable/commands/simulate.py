@@ -254,7 +254,7 @@ def _run_stewart(args: argparse.Namespace, params):
     import math
     import sys
 
-    from hybridtable.errors import CommandError, ParameterError, WorkspaceError
+    from hybridtable.errors import CommandError, ParameterError, SimulationError, WorkspaceError
     from hybridtable.stewart.run import DEFAULT_SAMPLE_RATE_HZ, simulate_stewart
     from hybridtable.stewart.view import auto_force_scale_n_per_m, auto_magnify
 
@@ -263,7 +263,7 @@ def _run_stewart(args: argparse.Namespace, params):
         run_ = simulate_stewart(params, progress=True)
     except WorkspaceError as err:
         v, f = params.initial_velocity_m_per_s, params.contact_frequency_hz
-        raise CommandError(
+        raise SimulationError(  # the run failed (exit 1), its parameters were valid
             f"the Stewart table left its workspace during the run: {err}. The devices "
             f"penetrate about --initial-velocity-m-per-s / (2 pi --contact-frequency-hz) = "
             f"{v / (2.0 * math.pi * f):.3f} m; lower --initial-velocity-m-per-s or raise "

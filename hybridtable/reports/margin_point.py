@@ -288,7 +288,9 @@ def format_point(point: PointMargins) -> list[str]:
     notes = [
         "gain margin: the factor by which the force fed to the spacecraft model (or 1 / its "
         "mass) may grow before the loop is unstable. delay margin = phase margin / crossover: "
-        "the extra delay of the whole force path the loop tolerates (negative: lead missing).",
+        "the extra delay of the whole force path the loop tolerates with the compensators' lead "
+        "fixed (negative: lead missing); 'stable below' grows the sensor delay with the SDC "
+        "lead following it, as a rig set up for that delay would.",
     ]
     if point.undamped:
         notes.append(

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hybridtable.errors import ParameterError, SimulationError, WorkspaceError
+from hybridtable.errors import ParameterError
 from hybridtable.loop.params import HybridLoopParams
 from hybridtable.loop.simulation import SimulationResult, run_loop, simulate
 from hybridtable.stewart.backend import add_stewart_loop, stewart_params_for_loop
@@ -287,9 +287,8 @@ def simulate_stewart(
     ------
     ParameterError
         See :func:`check_stewart_loop`; or the table cannot be tuned.
-    SimulationError
-        The loop commanded the table out of its docking-axis workspace during
-        the run (the CLI exits with 1, as for any run that fails).
+    WorkspaceError
+        The loop commands the table out of its docking-axis workspace.
     """
     params = stewart_loop_params(params)
     check_stewart_loop(params, stewart)
@@ -318,10 +317,7 @@ def simulate_stewart(
         )
         loop, recorder = _build_logged_loop(params, tuned)
         t0 = time.perf_counter()
-        try:
-            result = run_loop(loop, **run_kwargs)
-        except WorkspaceError as err:  # the run failed, the parameters were valid
-            raise SimulationError(f"the run stopped: {err}") from None
+        result = run_loop(loop, **run_kwargs)
         wall = time.perf_counter() - t0
     motion = _motion(recorder, result, tuned)
     equivalent = params.with_(

@@ -70,7 +70,7 @@ ARROW_PATH = "contact_force"
 FRAMES_PER_SECOND = 64.0
 #: The automatic magnification draws the peak plate displacement at about
 #: this fraction of the platform's radius (the top joint circle).
-DRAWN_FRACTION_OF_RADIUS = 0.1
+DRAWN_FRACTION_OF_RADIUS = 0.3
 #: The automatic force scale draws the peak force at most this long, m.
 MAX_ARROW_LENGTH_M = 0.5
 
