@@ -40,11 +40,6 @@ __all__ = [
 COMMANDS = (simulate, reproduce, compare, diagnose, effects, compensators, margins, diagram)
 
 
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # one line, exit 2
-        self.exit(2, f"{self.prog}: error: {message}\n")
-
-
 class _HelpFormatter(argparse.HelpFormatter):
     """Every option's help ends with its default, unless it says it already."""
 
@@ -63,6 +58,17 @@ class _HelpFormatter(argparse.HelpFormatter):
             return text
         shown = f"{default:g}" if isinstance(default, float) else str(default)
         return f"{text} (default {shown})"
+
+
+class _Parser(argparse.ArgumentParser):
+    """One-line errors (exit 2); every command's ``--help`` shows its defaults."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        kwargs.setdefault("formatter_class", _HelpFormatter)
+        super().__init__(*args, **kwargs)
+
+    def error(self, message: str) -> None:  # one line, exit 2
+        self.exit(2, f"{self.prog}: error: {message}\n")
 
 
 def _flag_message(err: Exception, parser: argparse.ArgumentParser | None) -> str:
@@ -89,13 +95,6 @@ def build_parser() -> argparse.ArgumentParser:
         "hybridtable simulate --compensator SDMDC.",
     )
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    _add_parser = sub.add_parser
-
-    def add_parser(*args, **kwargs):
-        kwargs.setdefault("formatter_class", _HelpFormatter)
-        return _add_parser(*args, **kwargs)
-
-    sub.add_parser = add_parser  # every command's --help shows its defaults
     for command in COMMANDS:
         command.register(sub)
     for command_parser in sub.choices.values():

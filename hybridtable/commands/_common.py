@@ -59,7 +59,7 @@ _RANGES = {
 
 def number_type(accepted: str, unit: str = "1"):
     """argparse type: a float in the range ``accepted`` (``">0"``, ``">=0"``,
-    ``">0|inf"``, ``"any"``); argparse names the flag in the error, e.g.
+    ``">0|inf"``, ``"any"``, ``"(-1,1)"``); argparse names the flag in the error, e.g.
     ``argument --sensor-delay-s: must be >= 0 [s] (got -1)``."""
     check, words = _RANGES[accepted]
     unit_text = "" if unit == "1" else f" [{unit}]"

@@ -147,3 +147,17 @@ def test_help_shows_every_default():
         if "default" not in text:
             missing.append(f"{name} {a.option_strings[-1]}")
     assert missing == []
+
+
+def test_a_closed_pipe_stops_quietly():
+    # `hybridtable simulate | head -0`: the reader has gone before the first line.
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "hybridtable.cli", "simulate"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    proc.stdout.close()
+    err = proc.stderr.read()
+    assert proc.wait() == 141
+    assert "Traceback" not in err and "BrokenPipe" not in err, err
