@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import re
 import sys
 from collections.abc import Iterable, Mapping
 from pathlib import Path
@@ -19,6 +20,7 @@ __all__ = [
     "parse_float",
     "number_type",
     "range_words",
+    "flag_words",
     "UNIT_METAVARS",
     "write_json",
     "input_paths",
@@ -75,6 +77,17 @@ def number_type(accepted: str, unit: str = "1"):
 
     number.__name__ = "number"
     return number
+
+
+def flag_words(text: str, fields: Iterable[str]) -> str:
+    """``text`` with every whole word among ``fields`` (``sensor_delay_s``) written
+    as its flag (``--sensor-delay-s``): a library's message in the command line's
+    words. Use it on the messages of one call whose fields the flags set."""
+    names = sorted(set(fields), key=len, reverse=True)
+    if not names:
+        return text
+    pattern = re.compile(r"(?<![\w.-])(" + "|".join(map(re.escape, names)) + r")(?![\w-])")
+    return pattern.sub(lambda m: "--" + m.group(1).replace("_", "-"), text)
 
 
 def range_words(accepted: str) -> str:

@@ -183,12 +183,14 @@ def _stewart_flags_given(args: argparse.Namespace) -> list[str]:
 
 def _check_stewart_args(args: argparse.Namespace, params) -> None:
     """Refuse, before any simulation, what the Stewart table cannot run, with
-    the flags to change (the checks of ``check_stewart_loop`` and those of the
-    back-end's contact, in the command line's words)."""
+    the flags to change (:func:`~hybridtable.stewart.run.check_stewart_loop`
+    in the command line's words), and drawing options without a drawing."""
     import math
 
-    from hybridtable.errors import CommandError
-    from hybridtable.stewart.run import DEFAULT_SAMPLE_RATE_HZ, stewart_limits
+    from hybridtable.commands._common import flag_words
+    from hybridtable.commands._loop_options import LOOP_OPTIONS
+    from hybridtable.errors import CommandError, ParameterError
+    from hybridtable.stewart.run import check_stewart_loop
 
     for flag, value in (("--magnify", args.magnify), ("--realtime-rate", args.realtime_rate)):
         if value is not None and not (math.isfinite(value) and value > 0.0):
@@ -197,54 +199,10 @@ def _check_stewart_args(args: argparse.Namespace, params) -> None:
         args.html or args.meshcat
     ):
         raise CommandError("--magnify and --realtime-rate set the drawing of --html or --meshcat")
-    rate_given = params.sample_rate_hz is not None
-    rate = params.sample_rate_hz or DEFAULT_SAMPLE_RATE_HZ
-    at_rate = f"--sample-rate-hz {rate:g}" + ("" if rate_given else " (its default)")
-    f = params.table_response_hz
-    if math.isinf(f):
-        raise CommandError(
-            "--table-response-hz inf: the Stewart table has a finite response; give a "
-            "finite --table-response-hz (default 25)"
-        )
-    if not rate_given:
-        from hybridtable.errors import ParameterError
-
-        try:
-            params.with_(sample_rate_hz=rate)
-        except ParameterError:
-            d = params.sensor_delay_s
-            raise CommandError(
-                f"the Stewart table runs the loop sampled at {at_rate} and --sensor-delay-s {d:g} "
-                f"is not a whole number of its periods ({1.0 / rate:g} s); give e.g. "
-                f"--sensor-delay-s {math.floor(d * rate) / rate:g} or "
-                f"{math.ceil(d * rate) / rate:g}, or a --sample-rate-hz that divides it"
-            ) from None
-        params = params.with_(sample_rate_hz=rate)
-    limits = stewart_limits(params)
-    if f > limits.max_response_hz * (1.0 + 1e-12):
-        needed = limits.min_sample_rate_hz(f, params.sensor_delay_s)
-        raise CommandError(
-            f"--table-response-hz {f:g} is too fast for the Stewart table at {at_rate}: "
-            f"it needs --table-response-hz <= {limits.max_response_hz:g}, or "
-            f"--sample-rate-hz >= {needed:g}"
-        )
-    gap = limits.max_initial_gap_m(params)
-    if params.initial_gap_m > gap:
-        raise CommandError(
-            f"--initial-gap-m {params.initial_gap_m:g} starts the Stewart table outside its "
-            f"workspace: it reaches {-limits.workspace_m[0]:.4f} m below the contact point "
-            f"(needs --initial-gap-m <= {gap:.4f})"
-        )
-    k, c = params.contact_stiffness_n_per_m, params.contact_damping_n_s_per_m
-    critical = 2.0 * math.sqrt(k * params.spacecraft_mass_kg)
-    if c >= critical:
-        raise CommandError(
-            f"--contact-damping-n-s-per-m {c:g} is at or above the contact's critical "
-            f"damping ({critical:.6g} N s/m with --contact-stiffness-n-per-m {k:g} and "
-            f"--contact-frequency-hz {params.contact_frequency_hz:g}): such a contact does not "
-            "rebound and the Stewart table's Hunt-Crossley contact has no equivalent; give a "
-            "smaller --contact-damping-n-s-per-m"
-        )
+    try:
+        check_stewart_loop(params)
+    except ParameterError as err:
+        raise CommandError(flag_words(str(err), LOOP_OPTIONS)) from None
 
 
 def _run_stewart(args: argparse.Namespace, params):

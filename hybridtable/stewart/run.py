@@ -103,30 +103,72 @@ def stewart_limits(params: HybridLoopParams, stewart: StewartParams | None = Non
 def check_stewart_loop(params: HybridLoopParams, stewart: StewartParams | None = None) -> None:
     """Refuse, before any simulation, a loop the Stewart table cannot run.
 
+    The messages name the fields of ``params`` (a command translates them into
+    its flags) and say what to change.
+
+    Parameters
+    ----------
+    params
+        The loop as asked for: a continuous loop (``sample_rate_hz`` None)
+        runs sampled at :data:`DEFAULT_SAMPLE_RATE_HZ`.
+    stewart
+        The platform (default ``StewartParams()``).
+
     Raises
     ------
     ParameterError
-        Infinite or too fast ``table_response_hz`` for the sample rate, or an
-        ``initial_gap_m`` that starts the table outside its workspace.
+        An infinite or too fast ``table_response_hz`` for the sample rate; a
+        ``sensor_delay_s`` that is not a whole number of the default rate's
+        periods; an ``initial_gap_m`` that starts the table outside its
+        workspace; a ``contact_damping_n_s_per_m`` at or above critical (the
+        Hunt-Crossley contact has no equivalent of a contact that does not
+        rebound).
     """
-    limits = stewart_limits(params, stewart)
+    rate = params.sample_rate_hz or DEFAULT_SAMPLE_RATE_HZ
+    at_rate = f"sample_rate_hz {rate:g}" + (
+        "" if params.sample_rate_hz is not None else " (its default)"
+    )
     f = params.table_response_hz
     if math.isinf(f):
         raise ParameterError(
-            "the Stewart table has a finite response: give a finite table_response_hz"
+            "table_response_hz inf: the Stewart table has a finite response; give a finite "
+            "table_response_hz"
         )
+    if params.sample_rate_hz is None:
+        try:
+            params = params.with_(sample_rate_hz=rate)
+        except ParameterError:
+            d = params.sensor_delay_s
+            raise ParameterError(
+                f"the Stewart table runs the loop sampled at {at_rate} and sensor_delay_s "
+                f"{d:g} is not a whole number of its periods ({1.0 / rate:g} s); give e.g. "
+                f"sensor_delay_s {math.floor(d * rate) / rate:g} or "
+                f"{math.ceil(d * rate) / rate:g}, or a sample_rate_hz that divides it"
+            ) from None
+    limits = stewart_limits(params, stewart)
     if f > limits.max_response_hz * (1.0 + 1e-12):
-        rate = limits.min_sample_rate_hz(f, params.sensor_delay_s)
+        needed = limits.min_sample_rate_hz(f, params.sensor_delay_s)
         raise ParameterError(
-            f"table_response_hz {f:g} is too fast for the Stewart table at sample_rate_hz "
-            f"{limits.sample_rate_hz:g} (needs table_response_hz <= "
-            f"{limits.max_response_hz:g}, or sample_rate_hz >= {rate:g})"
+            f"table_response_hz {f:g} is too fast for the Stewart table at {at_rate}: it "
+            f"needs table_response_hz <= {limits.max_response_hz:g}, or sample_rate_hz >= "
+            f"{needed:g}"
         )
     gap = limits.max_initial_gap_m(params)
     if params.initial_gap_m > gap:
         raise ParameterError(
             f"initial_gap_m {params.initial_gap_m:g} starts the Stewart table outside its "
-            f"workspace (needs initial_gap_m <= {gap:.4f})"
+            f"workspace: it reaches {-limits.workspace_m[0]:.4f} m below the contact point "
+            f"(needs initial_gap_m <= {gap:.4f})"
+        )
+    k, c = params.contact_stiffness_n_per_m, params.contact_damping_n_s_per_m
+    critical = 2.0 * math.sqrt(k * params.spacecraft_mass_kg)
+    if c >= critical:
+        raise ParameterError(
+            f"contact_damping_n_s_per_m {c:g} is at or above the contact's critical damping "
+            f"({critical:.6g} N s/m with contact_stiffness_n_per_m {k:g} and "
+            f"contact_frequency_hz {params.contact_frequency_hz:g}): such a contact does not "
+            "rebound and the Stewart table's Hunt-Crossley contact has no equivalent; give a "
+            "smaller contact_damping_n_s_per_m"
         )
 
 
@@ -290,8 +332,8 @@ def simulate_stewart(
     WorkspaceError
         The loop commands the table out of its docking-axis workspace.
     """
-    params = stewart_loop_params(params)
     check_stewart_loop(params, stewart)
+    params = stewart_loop_params(params)
     html_path = None if html is None else Path(html)
     if html_path is not None and html_path.exists():
         raise ParameterError(f"refusing to overwrite {html_path}")
