@@ -20,6 +20,7 @@ __all__ = [
     "parse_float",
     "number_type",
     "range_words",
+    "number_list",
     "flag_words",
     "UNIT_METAVARS",
     "write_json",
@@ -88,6 +89,21 @@ def flag_words(text: str, fields: Iterable[str]) -> str:
         return text
     pattern = re.compile(r"(?<![\w.-])(" + "|".join(map(re.escape, names)) + r")(?![\w-])")
     return pattern.sub(lambda m: "--" + m.group(1).replace("_", "-"), text)
+
+
+def number_list(accepted: str = ">0", unit: str = "1"):
+    """argparse type: a comma-separated list of numbers, each in the range
+    ``accepted`` of :func:`number_type` (``1000,5000``)."""
+    one = number_type(accepted, unit)
+
+    def numbers(text: str) -> tuple[float, ...]:
+        items = [x.strip() for x in text.split(",") if x.strip()]
+        if not items:
+            raise argparse.ArgumentTypeError("empty list")
+        return tuple(one(x) for x in items)
+
+    numbers.__name__ = "numbers"
+    return numbers
 
 
 def range_words(accepted: str) -> str:

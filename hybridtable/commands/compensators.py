@@ -10,18 +10,6 @@ import argparse
 __all__ = ["register", "run"]
 
 
-def _ratios(text: str) -> tuple[float, ...]:
-    try:
-        values = tuple(float(x) for x in text.split(",") if x.strip())
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"not a comma-separated list of numbers: {text!r}"
-        ) from None
-    if not values:
-        raise argparse.ArgumentTypeError("empty list")
-    return values
-
-
 #: Defaults of the grid sweep's options (None in the parser, so that
 #: ``--model`` can tell an option given from one left alone).
 SWEEP_DEFAULTS = {
@@ -33,7 +21,7 @@ SWEEP_DEFAULTS = {
 
 
 def register(sub) -> None:
-    from hybridtable.commands._common import number_type, parse_float
+    from hybridtable.commands._common import number_list, number_type, parse_float
     from hybridtable.commands._model_options import add_model_argument, add_plugin_argument
     from hybridtable.compensators.registry import compensator_names
     from hybridtable.studies.compensator_sweep import SCENARIOS
@@ -64,10 +52,11 @@ def register(sub) -> None:
     )
     p.add_argument(
         "--prior-ratios",
-        type=_ratios,
+        type=number_list(">0"),
         default=None,
         metavar="R1,R2",
-        help="believed/true stiffness of the mismatch scenario (default: 0.5,0.75,1,1.5,2)",
+        help="believed/true stiffness of the mismatch scenario [1], each > 0 (default: "
+        "0.5,0.75,1,1.5,2)",
     )
     p.add_argument(
         "--force-noise-ratio",

@@ -11,21 +11,8 @@ __all__ = ["register", "run", "DEFAULT_OUT_DIR"]
 DEFAULT_OUT_DIR = "out/diagrams"
 
 
-def _rates(text: str) -> tuple[float, ...]:
-    try:
-        values = tuple(float(x) for x in text.split(",") if x.strip())
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"not a comma-separated list of numbers: {text!r}"
-        ) from None
-    if not values:
-        raise argparse.ArgumentTypeError("empty list")
-    if not all(v > 0 and v != float("inf") for v in values):
-        raise argparse.ArgumentTypeError(f"rates must be > 0 [Hz] and finite (got {text})")
-    return values
-
-
 def register(sub) -> None:
+    from hybridtable.commands._common import number_list
     from hybridtable.reports.diagrams import DEFAULT_SAMPLE_RATES_HZ, DIAGRAMS
 
     names = ", ".join(DIAGRAMS)
@@ -46,10 +33,10 @@ def register(sub) -> None:
     )
     p.add_argument(
         "--sample-rates-hz",
-        type=_rates,
+        type=number_list(">0", "Hz"),
         default=None,
         metavar="R1,R2",
-        help="rig computer rates of sampled-rig [Hz] (default "
+        help="rig computer rates of sampled-rig [Hz], each > 0 (default "
         + ",".join(f"{r:g}" for r in DEFAULT_SAMPLE_RATES_HZ)
         + ")",
     )
