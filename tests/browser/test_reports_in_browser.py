@@ -20,6 +20,8 @@ from pathlib import Path
 
 import pytest
 
+from tests.examples import EXAMPLES
+
 pytestmark = pytest.mark.browser
 
 CHROMIUM = os.environ.get("HYBRIDTABLE_CHROMIUM", "/usr/bin/chromium")
@@ -34,7 +36,6 @@ CHROMIUM_ARGS = [
     "--disable-sync",
 ]
 VIEWPORT_WIDTHS_PX = (1280, 800)
-EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "nominal"
 
 #: The four commands on small inputs (each gets ``--report DIR``).
 COMMANDS = {

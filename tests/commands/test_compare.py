@@ -14,9 +14,9 @@ from hybridtable.cli import main
 from hybridtable.measurement.comparison import compare_run
 from hybridtable.measurement.phases import PHASES
 from hybridtable.measurement.run_reader import read_run
+from tests.examples import EXAMPLES
 from tests.generators.rigsim import NOMINAL, damped_spring, simulate_record, write_run
 
-EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "nominal"
 LONG_ID = "rig-B-2024-06-12-damped-contact-trial-07"  # 40 characters
 
 

@@ -8,8 +8,7 @@ import shutil
 from pathlib import Path
 
 from hybridtable.cli import main
-
-EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "nominal"
+from tests.examples import EXAMPLES
 
 
 def _log(tmp_path: Path, header: str) -> Path:

@@ -5,13 +5,11 @@ from __future__ import annotations
 
 import json
 import time
-from pathlib import Path
 
 import pytest
 
 from hybridtable.cli import COMMANDS, build_parser, main
-
-EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "nominal"
+from tests.examples import EXAMPLES
 
 #: A cheap invocation of every command (the check runs before the work).
 INVOCATIONS = {

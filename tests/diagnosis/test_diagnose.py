@@ -228,11 +228,10 @@ def test_a_registered_user_effect_is_diagnosed(tmp_path):
 
 
 def test_examples_of_the_nominal_rig_say_none():
-    from pathlib import Path
 
     from hybridtable.measurement.run_reader import read_runs
+    from tests.examples import EXAMPLES as folder
 
-    folder = Path(__file__).resolve().parents[2] / "examples" / "nominal"
     d = diagnose(
         read_runs([folder]), effects=["contact_damping", "extra_delay", "force_bias", "mass_error"]
     )

@@ -33,9 +33,9 @@ from hybridtable.errors import ParameterError
 from hybridtable.measurement.recorder import record_run, write_run
 from hybridtable.measurement.replay import replay
 from hybridtable.measurement.rig import add_physical_part, rig_params
-from hybridtable.measurement.run_format import RunInfo
 from hybridtable.measurement.run_reader import read_runs
 from hybridtable.systems.noise import MeasurementNoiseParams
+from tests.examples import example_info
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "plugins"
 BACKLASH = EXAMPLE / "backlash.py"
@@ -43,20 +43,7 @@ BACKLASH = EXAMPLE / "backlash.py"
 PLUGIN = f"{BACKLASH}:EFFECT"
 
 #: The rig of ``examples/nominal`` (its run1.json).
-INFO = RunInfo(
-    run_id="backlash-run1",
-    sample_rate_hz=1000.0,
-    spacecraft_mass_kg=675.475,
-    contact_stiffness_n_per_m=60000.0,
-    sensor_delay_s=0.004,
-    table_natural_frequency_hz=30.0,
-    table_damping_ratio=0.7,
-    compensator="none",
-    lead_time_s=0.004,
-    initial_gap_m=0.002,
-    initial_velocity_m_per_s=0.08,
-    force_deadband_n=6.0,
-)
+INFO = example_info(run_id="backlash-run1")
 #: (approach velocity m/s, compensator) of the three recorded runs.
 PLAN = ((0.06, "none"), (0.08, "SDMDC"), (0.10, "none"))
 SCALE = RigScale(60000.0, 675.475, 1e-3, 0.004, 0.10, 30.0)

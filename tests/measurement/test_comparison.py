@@ -5,7 +5,6 @@ tested in ``tests/commands/test_compare.py``."""
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -26,9 +25,9 @@ from hybridtable.measurement.stats import (
     lags_outside_by_chance,
     position_noise_rms,
 )
+from tests.examples import EXAMPLES
 from tests.generators.rigsim import NOMINAL, damped_spring, simulate_record, write_run
 
-EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "nominal"
 needs_examples = pytest.mark.skipif(not EXAMPLES.is_dir(), reason="example runs not available")
 
 

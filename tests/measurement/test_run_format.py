@@ -14,9 +14,7 @@ from hybridtable.cli import main
 from hybridtable.errors import MeasurementError
 from hybridtable.measurement.run_format import RUN_COLUMNS
 from hybridtable.measurement.run_reader import parse_column_map, read_run, read_runs
-
-#: The example runs the repository ships.
-EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "nominal"
+from tests.examples import EXAMPLES
 
 
 def _pair(tmp_path: Path, stem: str = "run1") -> tuple[Path, Path]:

@@ -10,7 +10,6 @@ import itertools
 import json
 import re
 import shutil
-from pathlib import Path
 
 import pytest
 
@@ -18,9 +17,9 @@ import hybridtable.reports.compare as report
 import hybridtable.reports.compare_figures as figures
 from hybridtable.measurement.comparison import compare_run
 from hybridtable.measurement.run_reader import read_run
+from tests.examples import EXAMPLES
 from tests.generators.rigsim import NOMINAL, damped_spring, simulate_record, write_run
 
-EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "nominal"
 LONG_ID = "nominal-run2-recorded-on-rig-B-2024-6-12"  # 40 characters
 
 

@@ -17,8 +17,9 @@ from pathlib import Path
 import pytest
 
 from hybridtable.cli import main
+from tests.examples import EXAMPLES
 
-EXAMPLE_RUN = Path(__file__).resolve().parents[2] / "examples" / "nominal" / "run1.csv"
+EXAMPLE_RUN = EXAMPLES / "run1.csv"
 
 #: A unit in brackets anywhere in the label.
 UNIT = re.compile(r"\[[^\[\]]+\]")

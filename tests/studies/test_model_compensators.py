@@ -15,21 +15,14 @@ from hybridtable.diagnosis.model_file import FittedEffect, RigModel
 from hybridtable.measurement.recorder import record_run, write_run
 from hybridtable.measurement.run_format import RunInfo
 from hybridtable.measurement.run_reader import read_runs
+from tests.examples import example_info
 
 #: The rig of ``examples/nominal``: k = 6e4 N/m, m = 675.475 kg (1.5 Hz),
-#: 4 ms delay, 1 kHz computer, table 30 Hz / 0.7.
-RIG = dict(
-    sample_rate_hz=1000.0,
-    spacecraft_mass_kg=675.475,
-    contact_stiffness_n_per_m=6e4,
-    sensor_delay_s=0.004,
-    table_natural_frequency_hz=30.0,
-    table_damping_ratio=0.7,
-    compensator="SDMDC",
-    lead_time_s=0.004,
-    initial_gap_m=0.002,
-    force_deadband_n=6.0,
-)
+#: 4 ms delay, 1 kHz computer, table 30 Hz / 0.7; SDMDC.
+_EXAMPLE = example_info(compensator="SDMDC").to_dict()
+RIG = {
+    k: v for k, v in _EXAMPLE.items() if k not in ("format", "run_id", "initial_velocity_m_per_s")
+}
 DAMPING = 300.0
 
 
