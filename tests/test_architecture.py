@@ -6,7 +6,7 @@ layers of ``docs/architecture.md``::
 
     cli -> commands -> reports -> (analysis, diagnosis, studies)
         -> (measurement, stewart) -> loop -> compensators -> systems
-        -> (errors, _validation, data)
+        -> (errors, _validation, limits, data)
 
 A module may import its own layer or any layer below, never one above, and no
 two modules nor two first-level packages may import each other, directly or
@@ -32,6 +32,7 @@ LAYERS: dict[str, int] = {
     "_lazy": 0,
     "_validation": 0,
     "_files": 0,
+    "limits": 0,
     "data": 0,
     "systems": 1,
     "compensators": 2,

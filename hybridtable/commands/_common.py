@@ -17,10 +17,11 @@ from hybridtable._files import write_text_atomic
 from hybridtable.errors import CommandError
 
 __all__ = [
-    "parse_float",
     "number_type",
     "range_words",
     "number_list",
+    "integer_type",
+    "SEED_RANGE",
     "flag_words",
     "UNIT_METAVARS",
     "write_json",
@@ -29,14 +30,6 @@ __all__ = [
     "check_outputs",
     "add_force_argument",
 ]
-
-
-def parse_float(text: str) -> float:
-    """argparse type: a float ("inf" allowed, NaN refused by the parameter checks)."""
-    try:
-        return float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
 
 
 #: ``argparse`` metavar of an option by its unit.
@@ -60,11 +53,28 @@ _RANGES = {
 }
 
 
-def number_type(accepted: str, unit: str = "1"):
-    """argparse type: a float in the range ``accepted`` (``">0"``, ``">=0"``,
-    ``">0|inf"``, ``"any"``, ``"(-1,1)"``); argparse names the flag in the error, e.g.
-    ``argument --sensor-delay-s: must be >= 0 [s] (got -1)``."""
+def _range(accepted: str, unit: str) -> tuple[Any, str, str]:
+    """(check, words, unit) of a range code of :data:`_RANGES` or a quantity
+    of :data:`hybridtable.limits.LIMITS` (whose unit wins)."""
+    from hybridtable.limits import LIMITS
+
+    if accepted in LIMITS:
+        limit = LIMITS[accepted]
+        return limit.contains, limit.words(unit=False), limit.unit
+    if ".." in accepted:  # "low..high", both included
+        low, high = (float(x) for x in accepted.split(".."))
+        return (lambda x: low <= x <= high), f"{low:g} to {high:g}", unit
     check, words = _RANGES[accepted]
+    return check, words, unit
+
+
+def number_type(accepted: str, unit: str = "1"):
+    """argparse type: a float in the range ``accepted``: a range code (``">0"``,
+    ``">=0"``, ``">0|inf"``, ``"any"``, ``"(-1,1)"``, ``"LOW..HIGH"`` both included) or the name of a quantity with a
+    plausible range (``"sensor_delay_s"``, :data:`hybridtable.limits.LIMITS`, whose
+    unit is used). argparse names the flag in the error, e.g.
+    ``argument --sensor-delay-s: must be 0 to 1 [s] (got 1e300)``."""
+    check, words, unit = _range(accepted, unit)
     unit_text = "" if unit == "1" else f" [{unit}]"
 
     def number(text: str) -> float:
@@ -78,6 +88,30 @@ def number_type(accepted: str, unit: str = "1"):
 
     number.__name__ = "number"
     return number
+
+
+#: The seeds numpy's generators accept from a command line (0 to 2**32 - 1).
+SEED_RANGE: tuple[int, int] = (0, 2**32 - 1)
+
+
+def integer_type(low: int, high: int):
+    """argparse type: a whole number from ``low`` to ``high`` (both included);
+    argparse names the flag in the error, e.g.
+    ``argument --workers: must be a whole number from 1 to 256 (got 0)``."""
+
+    def integer(text: str) -> int:
+        try:
+            value = int(text.strip())
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(
+                f"must be a whole number from {low} to {high} (got {text.strip()})"
+            )
+        return value
+
+    integer.__name__ = "integer"
+    return integer
 
 
 def flag_words(text: str, fields: Iterable[str]) -> str:
@@ -107,8 +141,8 @@ def number_list(accepted: str = ">0", unit: str = "1"):
 
 
 def range_words(accepted: str) -> str:
-    """The words of a range of :func:`number_type` (``"> 0"``)."""
-    return _RANGES[accepted][1]
+    """The words of a range of :func:`number_type` (``"> 0"``, ``"0 to 1"``)."""
+    return _range(accepted, "1")[1]
 
 
 def _jsonable(obj: Any) -> Any:

@@ -45,22 +45,9 @@ LOOP_OPTIONS: dict[str, tuple[object, str, str]] = {
     "time_step_s": (None, "s", "continuous-mode step (default: min(2e-4, 1/(5000 f_con)))"),
 }
 
-#: The accepted range of each loop option (:func:`~hybridtable.commands._common.number_type`).
-LOOP_RANGES: dict[str, str] = {
-    "sensor_delay_s": ">=0",
-    "table_response_hz": ">0|inf",
-    "table_damping_ratio": ">=0",
-    "contact_frequency_hz": ">0",
-    "contact_stiffness_n_per_m": ">0",
-    "contact_damping_n_s_per_m": ">=0",
-    "initial_velocity_m_per_s": ">0",
-    "initial_gap_m": ">=0",
-    "lead_time_s": ">=0",
-    "compensator_stiffness_n_per_m": ">0",
-    "force_deadband_n": ">=0",
-    "sample_rate_hz": ">0",
-    "time_step_s": ">0",
-}
+#: The accepted range of each loop option: its plausible range
+#: (:data:`hybridtable.limits.LIMITS`, the same the parameters are checked against).
+LOOP_RANGES: dict[str, str] = {name: name for name in LOOP_OPTIONS}
 
 
 def add_loop_arguments(parser: argparse.ArgumentParser) -> None:

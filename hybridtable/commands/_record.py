@@ -22,7 +22,7 @@ TRUTH_FORMAT = "hybridtable-truth/1"
 
 def add_record_arguments(parser: argparse.ArgumentParser) -> None:
     """The options of ``simulate --record``."""
-    from hybridtable.commands._common import number_type, parse_float
+    from hybridtable.commands._common import SEED_RANGE, integer_type, number_list, number_type
 
     g = parser.add_argument_group(
         "recording runs (--record DIR): hybridtable-run/1 files of the rig with the "
@@ -35,25 +35,32 @@ def add_record_arguments(parser: argparse.ArgumentParser) -> None:
         "JSON holds the nominal parameters only (--compensator may list one per run)",
     )
     g.add_argument(
-        "--runs", type=int, default=None, help="number of runs (default: one per velocity, else 1)"
+        "--runs",
+        type=integer_type(1, 1000),
+        default=None,
+        help="number of runs, 1 to 1000 (default: one per velocity, else 1)",
     )
     g.add_argument(
         "--velocities",
+        type=number_list("initial_velocity_m_per_s"),
         metavar="V1,V2,...",
-        help="approach velocity of each run [m/s] (default: --initial-velocity-m-per-s)",
+        help="approach velocity of each run [m/s], each 0.0001 to 10 (default: "
+        "--initial-velocity-m-per-s)",
     )
     g.add_argument(
         "--noise-force-n",
-        type=parse_float,
+        type=number_type("0..1e6", "N"),
+        metavar="NEWTONS",
         default=None,
-        help="force-reading noise, standard deviation [N] (default: 0.002 x the "
+        help="force-reading noise, standard deviation [N], 0 to 1e+06 (default: 0.002 x the "
         "undamped peak force v sqrt(k m) of the fastest run)",
     )
     g.add_argument(
         "--noise-position-m",
-        type=parse_float,
+        type=number_type("0..1", "m"),
+        metavar="METRES",
         default=None,
-        help="table-position noise, standard deviation [m] (default: 1e-4 x the "
+        help="table-position noise, standard deviation [m], 0 to 1 (default: 1e-4 x the "
         "undamped peak deflection v sqrt(m/k))",
     )
     g.add_argument(
@@ -65,15 +72,17 @@ def add_record_arguments(parser: argparse.ArgumentParser) -> None:
     )
     g.add_argument(
         "--seed",
-        type=int,
+        type=integer_type(*SEED_RANGE),
         default=0,
-        help="noise seed of run 1; run i uses seed + i - 1 (default 0)",
+        help=f"noise seed of run 1; run i uses seed + i - 1, {SEED_RANGE[0]} to "
+        f"{SEED_RANGE[1]} (default 0)",
     )
     g.add_argument(
         "--duration-s",
-        type=parse_float,
+        type=number_type("0.001..10000", "s"),
+        metavar="SECONDS",
         default=None,
-        help="length of each record [s] (default: approach + 3 undamped contact durations)",
+        help="length of each record [s], 0.001 to 10000 (default: approach + 3 undamped contact durations)",
     )
 
 
@@ -107,15 +116,11 @@ def run_record(args: argparse.Namespace, model) -> dict:
     from hybridtable.systems.noise import MeasurementNoiseParams
 
     refuse_unsupported(args, "simulate --record")
-    velocities = _list(args.velocities, "--velocities", float)
+    velocities = list(args.velocities or [])
     compensators = _list(args.compensator, "--compensator", str)
-    if args.runs is not None and args.runs < 1:
-        raise CommandError(f"--runs must be >= 1 (got {args.runs})")
     n = args.runs or max(len(velocities), len(compensators), 1)
     velocities = _per_run(velocities, n, "--velocities")
     compensators = _per_run(compensators, n, "--compensator")
-    if args.seed < 0:
-        raise CommandError(f"--seed must be >= 0 (got {args.seed})")
     folder = Path(args.record)
     check_outputs(args.force, folders={"--record": folder})
     base = model.nominal if model is not None else None

@@ -21,7 +21,12 @@ SWEEP_DEFAULTS = {
 
 
 def register(sub) -> None:
-    from hybridtable.commands._common import number_list, number_type, parse_float
+    from hybridtable.commands._common import (
+        SEED_RANGE,
+        integer_type,
+        number_list,
+        number_type,
+    )
     from hybridtable.commands._model_options import add_model_argument, add_plugin_argument
     from hybridtable.compensators.registry import compensator_names
     from hybridtable.studies.compensator_sweep import SCENARIOS
@@ -52,45 +57,54 @@ def register(sub) -> None:
     )
     p.add_argument(
         "--prior-ratios",
-        type=number_list(">0"),
+        type=number_list("0.001..1000"),
         default=None,
         metavar="R1,R2",
-        help="believed/true stiffness of the mismatch scenario [1], each > 0 (default: "
+        help="believed/true stiffness of the mismatch scenario [1], each 0.001 to 1000 (default: "
         "0.5,0.75,1,1.5,2)",
     )
     p.add_argument(
         "--force-noise-ratio",
-        type=number_type(">=0"),
+        type=number_type("0..1"),
         metavar="RATIO",
         default=None,
-        help="force noise std / undamped peak force [1], >= 0 (default 1e-3)",
+        help="force noise std / undamped peak force [1], 0 to 1 (default 1e-3)",
     )
     p.add_argument(
         "--position-noise-ratio",
-        type=number_type(">=0"),
+        type=number_type("0..1"),
         metavar="RATIO",
         default=None,
-        help="position noise std / peak deflection [1], >= 0 (default 1e-4)",
+        help="position noise std / peak deflection [1], 0 to 1 (default 1e-4)",
     )
     p.add_argument(
         "--contact-damping-ratio",
-        type=parse_float,
+        type=number_type("contact_damping_ratio"),
         default=None,
-        help="damping ratio of the damped scenario's contact (default 0.1)",
+        metavar="RATIO",
+        help="damping ratio of the damped scenario's contact [1], 0 to 10 (default 0.1)",
     )
     p.add_argument(
         "--no-passivity", action="store_true", help="skip the runs with the passivity guard"
     )
     p.add_argument(
         "--sample-rate-hz",
-        type=number_type(">0", "Hz"),
+        type=number_type("sample_rate_hz"),
         metavar="HZ",
         default=None,
-        help="sampled rig computer [Hz], > 0 (default: continuous loop, as the paper)",
+        help="sampled rig computer [Hz], 1 to 1e+06 (default: continuous loop, as the paper)",
     )
-    p.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
     p.add_argument(
-        "--jobs", type=int, default=None, help="worker processes (default: CPUs, at most 4)"
+        "--seed",
+        type=integer_type(*SEED_RANGE),
+        default=0,
+        help=f"noise seed, {SEED_RANGE[0]} to {SEED_RANGE[1]} (default 0)",
+    )
+    p.add_argument(
+        "--jobs",
+        type=integer_type(1, 256),
+        default=None,
+        help="worker processes, 1 to 256 (default: CPUs, at most 4)",
     )
     p.add_argument("--tables", metavar="FILE", help="the paper's tables.json")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -146,8 +160,6 @@ def run(args: argparse.Namespace) -> int:
         files={"--json": args.json},
         folders={"--report": args.report},
     )
-    if args.jobs is not None and args.jobs < 1:
-        raise CommandError(f"--jobs must be >= 1 (got {args.jobs})")
     settings = SweepSettings(
         compensators=_names(args.compensators),
         prior_ratios=args.prior_ratios,
@@ -225,8 +237,6 @@ def _run_model(args: argparse.Namespace, model) -> int:
         files={"--json": args.json},
         folders={"--report": args.report},
     )
-    if args.jobs is not None and args.jobs < 1:
-        raise CommandError(f"--jobs must be >= 1 (got {args.jobs})")
     result = run_model_compensators(
         model,
         compensators=_names(args.compensators),

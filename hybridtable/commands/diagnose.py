@@ -25,7 +25,7 @@ BUILTIN_EFFECT_NAMES: tuple[str, ...] = (
 
 
 def register(sub) -> None:
-    from hybridtable.commands._common import add_run_arguments
+    from hybridtable.commands._common import add_run_arguments, integer_type
     from hybridtable.commands._model_options import (
         add_plugin_argument,
         add_save_model_arguments,
@@ -55,12 +55,16 @@ def register(sub) -> None:
     )
     p.add_argument(
         "--max-effects",
-        type=int,
+        type=integer_type(1, 20),
         default=3,
-        help="most physical effects the model may gain (default 3)",
+        metavar="N",
+        help="most physical effects the model may gain, 1 to 20 (default 3)",
     )
     p.add_argument(
-        "--workers", type=int, default=None, help="processes fitting in parallel (default: 2)"
+        "--workers",
+        type=integer_type(1, 256),
+        default=None,
+        help="processes fitting in parallel, 1 to 256 (default: 2)",
     )
     add_plugin_argument(p)
     add_save_model_arguments(p)
@@ -96,10 +100,6 @@ def run(args: argparse.Namespace) -> int:
             get_effect(e)
         if not effects:
             raise CommandError("--effects names no effect")
-    if args.max_effects < 1:
-        raise CommandError(f"--max-effects must be >= 1 (got {args.max_effects})")
-    if args.workers is not None and args.workers < 1:
-        raise CommandError(f"--workers must be >= 1 (got {args.workers})")
     runs = read_runs(args.runs, parse_column_map(args.column_map))
     inputs = input_paths(runs)
     check_outputs(

@@ -12,10 +12,9 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["register", "run", "parse_list", "default_delays"]
+from hybridtable.commands._grid import DEFAULT_TABLES, default_delays, parse_list
 
-DEFAULT_DELAYS = "0:0.02:41"
-DEFAULT_TABLES = "5:200:40"
+__all__ = ["register", "run"]
 
 #: Defaults of the rig options without ``--model`` (None in the parser, so
 #: that ``--model`` can tell an option given from one left alone).
@@ -27,52 +26,8 @@ RIG_DEFAULTS = {
 }
 
 
-def parse_list(text: str, name: str) -> np.ndarray:
-    """``"a,b,c"`` or ``"start:stop:count"`` (``count`` evenly spaced values,
-    both ends included) as a float array.
-
-    Raises
-    ------
-    CommandError
-        On malformed input (one line, names the option).
-    """
-    from hybridtable.errors import CommandError
-
-    text = text.strip()
-    try:
-        if ":" in text:
-            parts = text.split(":")
-            if len(parts) != 3:
-                raise ValueError
-            start, stop = float(parts[0]), float(parts[1])
-            count = int(parts[2])
-            if count < 1 or not (math.isfinite(start) and math.isfinite(stop)):
-                raise ValueError
-            values = np.linspace(start, stop, count)
-        else:
-            values = np.array([float(v) for v in text.split(",") if v.strip() != ""])
-    except ValueError:
-        raise CommandError(
-            f"{name}: expected comma-separated numbers or start:stop:count, got {text!r}"
-        ) from None
-    if values.size == 0 or np.isnan(values).any():
-        raise CommandError(f"{name}: expected at least one number, got {text!r}")
-    return values
-
-
-def default_delays(sample_rate_hz: float | None) -> np.ndarray:
-    """0-20 ms: 41 values, or whole sample periods up to 20 ms when sampled
-    (at most 81 values)."""
-    if sample_rate_hz is None:
-        return np.linspace(0.0, 0.02, 41)
-    h = 1.0 / sample_rate_hz
-    n = int(math.floor(0.02 / h + 1e-9))
-    samples = np.unique(np.round(np.linspace(0, n, min(n + 1, 81))).astype(int))
-    return samples * h
-
-
 def register(sub) -> None:
-    from hybridtable.commands._common import number_type
+    from hybridtable.commands._common import integer_type, number_type
     from hybridtable.commands._model_options import add_model_argument, add_plugin_argument
 
     p = sub.add_parser(
@@ -98,86 +53,91 @@ def register(sub) -> None:
         "--sensor-delay-s",
         metavar="LIST",
         default=None,
-        help="sensor delays of the grid [s], 'a,b,c' or 'start:stop:count', >= 0 (default "
+        help="sensor delays of the grid [s], 'a,b,c' or 'start:stop:count', each 0 to 1, at "
+        "most 1000 values (default "
         "0:0.02:41; sampled: whole samples up to 0.02 s)",
     )
     p.add_argument(
         "--table-response-hz",
         metavar="LIST",
         default=DEFAULT_TABLES,
-        help="table response frequencies of the grid [Hz], same syntax, > 0, inf = ideal "
-        f"table (default {DEFAULT_TABLES})",
+        help="table response frequencies of the grid [Hz], same syntax, each 0.1 to 10000, "
+        f"inf = ideal table (default {DEFAULT_TABLES})",
     )
     p.add_argument(
         "--table-damping-ratio",
-        type=number_type(">=0"),
+        type=number_type("table_damping_ratio"),
         default=None,
         metavar="RATIO",
-        help="table damping ratio [1], >= 0 (default 0.8; with --model: the model's rig's)",
+        help="table damping ratio [1], 0 to 10 (default 0.8; with --model: the model's rig's)",
     )
     p.add_argument(
         "--contact-frequency-hz",
-        type=number_type(">0", "Hz"),
+        type=number_type("contact_frequency_hz"),
         default=None,
         metavar="HZ",
-        help="contact natural frequency [Hz], > 0, sets the spacecraft mass (default 1; with "
+        help="contact natural frequency [Hz], 0.001 to 10000, sets the spacecraft mass (default 1; with "
         "--model: the model's mass)",
     )
     p.add_argument(
         "--contact-stiffness-n-per-m",
-        type=number_type(">0", "N/m"),
+        type=number_type("contact_stiffness_n_per_m"),
         default=None,
         metavar="N_PER_M",
-        help="contact stiffness [N/m], > 0 (default 1e5; with --model: the model's rig's)",
+        help="contact stiffness [N/m], 1 to 1e+10 (default 1e5; with --model: the model's rig's)",
     )
     g = p.add_mutually_exclusive_group()
     g.add_argument(
         "--contact-damping-n-s-per-m",
-        type=number_type(">=0", "N s/m"),
+        type=number_type("contact_damping_n_s_per_m"),
         default=None,
         metavar="N_S_PER_M",
-        help="contact damping [N s/m], >= 0 (default 0: an undamped spring; with --model: "
+        help="contact damping [N s/m], 0 to 1e+08 (default 0: an undamped spring; with --model: "
         "the model's)",
     )
     g.add_argument(
         "--contact-damping-ratio",
-        type=number_type(">=0"),
+        type=number_type("contact_damping_ratio"),
         default=None,
         metavar="RATIO",
-        help="contact damping as a ratio c / (2 sqrt(k m)) [1], >= 0 (default 0)",
+        help="contact damping as a ratio c / (2 sqrt(k m)) [1], 0 to 10 (default 0)",
     )
     p.add_argument(
         "--lead-time-s",
-        type=number_type(">=0", "s"),
+        type=number_type("lead_time_s"),
         default=None,
         metavar="SECONDS",
-        help="SDC lead [s], >= 0 (default: the delay; with --model: the rig's lead time)",
+        help="SDC lead [s], 0 to 1 (default: the delay; with --model: the rig's lead time)",
     )
     p.add_argument(
         "--initial-velocity-m-per-s",
-        type=number_type(">0", "m/s"),
+        type=number_type("initial_velocity_m_per_s"),
         default=None,
         metavar="M_PER_S",
-        help="approach velocity of the validation runs [m/s], > 0 (default 0.1; with "
+        help="approach velocity of the validation runs [m/s], 0.0001 to 10 (default 0.1; with "
         "--model: the model's nominal one)",
     )
     p.add_argument(
         "--sample-rate-hz",
-        type=number_type(">0", "Hz"),
+        type=number_type("sample_rate_hz"),
         default=None,
         metavar="HZ",
-        help="sampled-data model of a rig computer at this rate [Hz], > 0 (default: "
+        help="sampled-data model of a rig computer at this rate [Hz], 1 to 1e+06 (default: "
         "continuous; delays must be whole samples; with --model: the model's rig's rate)",
     )
     p.add_argument(
-        "--pade-order", type=int, default=3, metavar="N", help="order of the delay's Pade model"
+        "--pade-order",
+        type=integer_type(1, 10),
+        default=3,
+        metavar="N",
+        help="order of the delay's Pade model, 1 to 10 (default 3)",
     )
     p.add_argument(
         "--validate",
-        type=int,
+        type=integer_type(0, 1000),
         default=0,
         metavar="N",
-        help="run the nonlinear simulation at N grid points per compensator",
+        help="run the nonlinear simulation at N grid points per compensator, 0 to 1000 (default 0)",
     )
     p.add_argument("--json", metavar="FILE", help="write the results as JSON (- for stdout)")
     p.add_argument(
@@ -185,27 +145,27 @@ def register(sub) -> None:
     )
     p.add_argument(
         "--cor-limit",
-        type=number_type(">0"),
+        type=number_type("0.001..1000"),
         default=1.01,
         metavar="COR",
-        help="the CoR limit [1], > 0: report the largest sensor delay up to which the "
+        help="the CoR limit [1], 0.001 to 1000: report the largest sensor delay up to which the "
         "predicted CoR stays within it",
     )
     p.add_argument(
         "--operating-delay-s",
-        type=number_type(">=0", "s"),
+        type=number_type("sensor_delay_s"),
         default=None,
         metavar="SECONDS",
         help="sensor delay of the operating point of the gain/phase/delay margins and "
-        "--export-linear [s], >= 0 (default 0.005, the paper's Table 1, in whole samples "
+        "--export-linear [s], 0 to 1 (default 0.005, the paper's Table 1, in whole samples "
         "when sampled; with --model: the rig's)",
     )
     p.add_argument(
         "--operating-table-hz",
-        type=number_type(">0|inf", "Hz"),
+        type=number_type("table_response_hz"),
         default=None,
         metavar="HZ",
-        help="table response frequency of the operating point [Hz], > 0 (default 25, the "
+        help="table response frequency of the operating point [Hz], 0.1 to 10000, or inf (default 25, the "
         "paper's Table 1; with --model: the rig's)",
     )
     p.add_argument(
@@ -316,17 +276,13 @@ def run(args: argparse.Namespace) -> int:
             raise CommandError(f"--compensator: {c!r} is not one of {', '.join(COMPENSATORS)}")
     if not comps or len(set(comps)) != len(comps):
         raise CommandError("--compensator: give each compensator once")
-    if args.pade_order < 1:
-        raise CommandError("--pade-order must be >= 1")
-    if args.validate < 0:
-        raise CommandError("--validate must be >= 0")
     base = _base_params(args, model)
     delays = (
         default_delays(base.sample_rate_hz)
         if args.sensor_delay_s is None
-        else parse_list(args.sensor_delay_s, "--sensor-delay-s")
+        else parse_list(args.sensor_delay_s, "--sensor-delay-s", "sensor_delay_s")
     )
-    tables = parse_list(args.table_response_hz, "--table-response-hz")
+    tables = parse_list(args.table_response_hz, "--table-response-hz", "table_response_hz")
     if (delays < 0).any() or not np.isfinite(delays).all():
         raise CommandError("--sensor-delay-s: delays must be finite and >= 0")
     if (tables <= 0).any():

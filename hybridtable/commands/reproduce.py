@@ -25,10 +25,10 @@ def register(sub) -> None:
     )
     p.add_argument(
         "--time-step-s",
-        type=number_type(">0", "s"),
+        type=number_type("time_step_s"),
         metavar="SECONDS",
         default=None,
-        help="continuous-loop step [s], > 0 (default: min(2e-4, 1/(5000 f_con)))",
+        help="continuous-loop step [s], 1e-09 to 1 (default: min(2e-4, 1/(5000 f_con)))",
     )
     p.add_argument(
         "--contact-gate",

@@ -142,7 +142,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _add_stewart_arguments(p: argparse.ArgumentParser) -> None:
     """The options that show a Stewart run (``--table stewart``)."""
-    from hybridtable.commands._common import parse_float
+    from hybridtable.commands._common import number_type
 
     g = p.add_argument_group("seeing a Stewart run (--table stewart)")
     g.add_argument(
@@ -159,17 +159,17 @@ def _add_stewart_arguments(p: argparse.ArgumentParser) -> None:
     )
     g.add_argument(
         "--magnify",
-        type=parse_float,
+        type=number_type("0.001..1e6"),
         metavar="X",
-        help="draw the platform's displacement from home X times larger (the physics is "
+        help="draw the platform's displacement from home X times larger, 0.001 to 1e+06 (the physics is "
         "unchanged) (default: a round factor that draws the peak displacement at about "
         "10%% of the platform's radius)",
     )
     g.add_argument(
         "--realtime-rate",
-        type=parse_float,
+        type=number_type("0.001..1000"),
         metavar="R",
-        help="play the motion at R times real time, e.g. 0.2 for slow motion (default 1)",
+        help="play the motion at R times real time, 0.001 to 1000, e.g. 0.2 for slow motion (default 1)",
     )
 
 
@@ -185,16 +185,12 @@ def _check_stewart_args(args: argparse.Namespace, params) -> None:
     """Refuse, before any simulation, what the Stewart table cannot run, with
     the flags to change (:func:`~hybridtable.stewart.run.check_stewart_loop`
     in the command line's words), and drawing options without a drawing."""
-    import math
 
     from hybridtable.commands._common import flag_words
     from hybridtable.commands._loop_options import LOOP_OPTIONS
     from hybridtable.errors import CommandError, ParameterError
     from hybridtable.stewart.run import check_stewart_loop
 
-    for flag, value in (("--magnify", args.magnify), ("--realtime-rate", args.realtime_rate)):
-        if value is not None and not (math.isfinite(value) and value > 0.0):
-            raise CommandError(f"{flag} must be a number > 0 (got {value:g})")
     if (args.magnify is not None or args.realtime_rate is not None) and not (
         args.html or args.meshcat
     ):

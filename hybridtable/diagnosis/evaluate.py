@@ -20,7 +20,7 @@ from hybridtable.diagnosis.settings import (
 )
 from hybridtable.errors import MeasurementError, SimulationError
 from hybridtable.measurement.noise_model import NoiseModel, estimate_noise, whiten
-from hybridtable.measurement.phases import delayed_labels, phase_labels
+from hybridtable.measurement.phases import delayed_labels, phase_labels, settle_ticks
 from hybridtable.measurement.replay import replay
 from hybridtable.measurement.rig import rig_params, simulate_rig
 from hybridtable.measurement.run_format import Run
@@ -82,8 +82,7 @@ def prepare_runs(runs: Sequence[Run]) -> list[RunData]:
         m = delay_samples(params.sensor_delay_s, run.sample_period_s)
         table = params.table()
         h = run.sample_period_s
-        zeta_w = 0.0 if table.is_ideal else table.damping_ratio * table.omega_rad_per_s
-        settle = max(2, math.ceil(5.0 / zeta_w / h)) if zeta_w > 0.0 else 2
+        settle = max(2, settle_ticks(table.settling_time_s, h, run.n))
         noise = estimate_noise(run, m, settle)
         notes = []
         if "f_mea_n" not in noise:

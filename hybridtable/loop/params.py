@@ -13,6 +13,8 @@ from hybridtable._validation import (
 )
 from hybridtable.compensators.paper import CompensatorParams
 from hybridtable.compensators.registry import compensator_names
+from hybridtable.errors import ParameterError
+from hybridtable.limits import check_plausible, limit_of, limit_words
 from hybridtable.systems.contact import ContactParams
 from hybridtable.systems.sensor import SensorParams
 from hybridtable.systems.spacecraft import SpacecraftParams
@@ -25,6 +27,24 @@ __all__ = [
 
 
 TABLE_INITIAL_STATES: tuple[str, ...] = ("tracking", "command", "rest")
+
+#: The fields checked against their plausible range (:data:`hybridtable.limits.LIMITS`).
+_PLAUSIBLE_FIELDS: tuple[str, ...] = (
+    "spacecraft_mass_kg",
+    "contact_stiffness_n_per_m",
+    "contact_damping_n_s_per_m",
+    "sensor_delay_s",
+    "table_response_hz",
+    "table_damping_ratio",
+    "lead_time_s",
+    "compensator_stiffness_n_per_m",
+    "compensator_damping_n_s_per_m",
+    "force_deadband_n",
+    "initial_velocity_m_per_s",
+    "initial_gap_m",
+    "sample_rate_hz",
+    "time_step_s",
+)
 
 
 @dataclass(frozen=True)
@@ -130,6 +150,12 @@ class HybridLoopParams:
                 s(self, name, check_nonnegative(name, getattr(self, name)))
         if self.sample_rate_hz is not None:
             s(self, "sample_rate_hz", check_positive("sample_rate_hz", self.sample_rate_hz))
+        # Every number inside its plausible range (hybridtable.limits), so that
+        # no absurd value reaches a simulation that would run forever.
+        for name in _PLAUSIBLE_FIELDS:
+            if getattr(self, name) is not None:
+                check_plausible(name, getattr(self, name))
+        if self.sample_rate_hz is not None:
             # Raises a clear error when the delay is not a whole number of ticks.
             from hybridtable.systems.sensor import delay_samples
 
@@ -144,9 +170,16 @@ class HybridLoopParams:
         ``f_con = sqrt(k / m) / (2 pi)`` (how the paper specifies its runs)."""
         f = check_positive("contact_frequency_hz", contact_frequency_hz)
         k = check_positive("contact_stiffness_n_per_m", contact_stiffness_n_per_m)
-        return cls(
-            spacecraft_mass_kg=k / (2.0 * math.pi * f) ** 2, contact_stiffness_n_per_m=k, **kwargs
-        )
+        check_plausible("contact_frequency_hz", f)
+        check_plausible("contact_stiffness_n_per_m", k)
+        m = k / (2.0 * math.pi * f) ** 2
+        if not limit_of("spacecraft_mass_kg").contains(m):
+            raise ParameterError(
+                f"contact_frequency_hz = {f:g} Hz with contact_stiffness_n_per_m = {k:g} N/m "
+                f"makes spacecraft_mass_kg = {m:.3g} kg, outside its plausible range "
+                f"{limit_words('spacecraft_mass_kg')}"
+            )
+        return cls(spacecraft_mass_kg=m, contact_stiffness_n_per_m=k, **kwargs)
 
     @property
     def contact_frequency_hz(self) -> float:
@@ -178,6 +211,7 @@ class HybridLoopParams:
         """A copy whose contact damping is ``damping_ratio`` of the critical one:
         ``c = 2 zeta sqrt(k m)`` (N s/m), ``zeta >= 0``."""
         zeta = check_nonnegative("contact_damping_ratio", damping_ratio)
+        check_plausible("contact_damping_ratio", zeta)
         c = 2.0 * zeta * math.sqrt(self.contact_stiffness_n_per_m * self.spacecraft_mass_kg)
         return self.with_(contact_damping_n_s_per_m=c)
 

@@ -9,13 +9,19 @@ import numpy as np
 from pydrake.systems.analysis import Simulator
 
 from hybridtable.errors import SimulationError
+from hybridtable.loop.budget import check_budget, check_steps_taken
 from hybridtable.loop.builder import LOG_ROWS, HybridLoop, build_hybrid_loop
 from hybridtable.loop.metrics import ContactMetrics, contact_metrics
 from hybridtable.loop.params import HybridLoopParams
 
-__all__ = ["SimulationError", "SimulationResult", "simulate", "run_loop"]
+__all__ = ["DIVERGED_FORCE_RATIO", "SimulationError", "SimulationResult", "simulate", "run_loop"]
 
 _F_ACT = LOG_ROWS.index("f_act_n")
+
+#: A compensated force above this many times the undamped peak force
+#: ``v sqrt(k m)`` means the loop diverged (a CoR of this order: the energy of
+#: the contact grown ten-thousandfold).
+DIVERGED_FORCE_RATIO = 100.0
 
 
 @dataclass
@@ -73,12 +79,15 @@ def run_loop(
     Raises
     ------
     SimulationError
-        If a signal becomes non-finite or exceeds 1e6 times the undamped
-        peak force (divergence), or no separation happens before ``t_max_s``.
+        If a signal becomes non-finite or exceeds :data:`DIVERGED_FORCE_RATIO`
+        times the undamped peak force (divergence), no separation happens
+        before ``t_max_s``, or the run is over the simulation budget
+        (:mod:`hybridtable.loop.budget`: too long or too stiff to simulate).
     """
     params = loop.params
     diagram = loop.diagram
     t_max = _default_t_max(params) if t_max_s is None else t_max_s
+    check_budget(params, t_max, loop.computer_period_s)
     simulator = Simulator(diagram)
     context = simulator.get_mutable_context()
     loop.set_initial_conditions(context)
@@ -127,12 +136,17 @@ def run_loop(
             simulator.AdvanceTo(t)
         except (RuntimeError, SystemExit) as err:  # Drake asserts reach Python as SystemExit
             raise SimulationError(f"simulation failed: {err}") from None
+        check_steps_taken(simulator.get_num_steps_taken(), t)
         f_act = f_act_port.Eval(contact_ctx)[0]
         f_mea = f_mea_port.Eval(sensor_ctx)[0]
         f_comp = f_comp_port.Eval(comp_ctx)[0]
-        if not all(math.isfinite(x) for x in (f_act, f_mea, f_comp)) or abs(f_comp) > 1e6 * f_scale:
+        if not all(math.isfinite(x) for x in (f_act, f_mea, f_comp)) or (
+            abs(f_comp) > DIVERGED_FORCE_RATIO * f_scale
+        ):
             raise SimulationError(
-                f"simulation diverged by t = {t:.4f} s (the loop is unstable for these parameters)"
+                f"simulation diverged by t = {t:.4f} s: the force passed "
+                f"{DIVERGED_FORCE_RATIO:g} times the undamped peak force v sqrt(k m) = "
+                f"{f_scale:.3g} N (the loop is unstable for these parameters)"
             )
         log = loop.logger.FindLog(context).data()[_F_ACT]
         if f_act > 0.0 or f_mea > params.force_deadband_n or f_comp != 0.0:

@@ -71,6 +71,7 @@ from hybridtable.measurement.phases import (
     loop_energy,
     phase_breakdown,
     phase_labels,
+    settle_ticks,
 )
 from hybridtable.measurement.replay import ReplayResult, replay
 from hybridtable.measurement.rig import RigPhysics, rig_params, simulate_rig
@@ -292,9 +293,7 @@ def compare_run(
     quiet_f = delayed_labels(quiet_phys.astype(int), m).astype(bool)
     noise_f, offset_f, n_f = force_noise_rms(run.f_mea_n, quiet_f)
     table = rep.params.table()
-    settle = (
-        0 if table.is_ideal else math.ceil(5.0 / (table.damping_ratio * table.omega_rad_per_s) / h)
-    )
+    settle = settle_ticks(table.settling_time_s, h, len(run.p_act_m))
     settle = max(settle, guard)
     quiet_p = ~dilate(on, guard, settle)
     quiet_p[: min(settle, len(quiet_p))] = False  # start-up transient of the table

@@ -18,6 +18,7 @@ __all__ = [
     "contact_duration",
     "loop_energy",
     "true_runs",
+    "settle_ticks",
     "dilate",
 ]
 
@@ -35,6 +36,14 @@ MERGE_GAP_TICKS = 3
 
 
 # -- phases --------------------------------------------------------------------
+def settle_ticks(settling_time_s: float, h: float, n: int) -> int:
+    """Ticks of period ``h`` [s] in ``settling_time_s`` [s], at most ``n`` (an
+    undamped table's infinite settling time is the whole record)."""
+    if not settling_time_s < n * h:
+        return n
+    return math.ceil(settling_time_s / h)
+
+
 def true_runs(mask: np.ndarray) -> list[tuple[int, int]]:
     """Inclusive index ranges of the True runs of ``mask``."""
     m = np.asarray(mask, dtype=bool)

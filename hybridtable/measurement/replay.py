@@ -36,6 +36,7 @@ from pydrake.systems.primitives import LogVectorOutput, TrajectorySource, ZeroOr
 from pydrake.trajectories import PiecewisePolynomial
 
 from hybridtable.errors import SimulationError
+from hybridtable.loop.budget import check_budget
 from hybridtable.loop.params import HybridLoopParams
 from hybridtable.measurement.rig import (
     RigPhysics,
@@ -105,7 +106,8 @@ def replay_command(
     Raises
     ------
     SimulationError
-        If the response becomes non-finite.
+        If the response becomes non-finite, or the replay is over the
+        simulation budget (:func:`hybridtable.loop.budget.check_budget`).
     """
     physics = physics or RigPhysics()
     params = physics.apply(params)
@@ -127,6 +129,8 @@ def replay_command(
         TrajectorySource(PiecewisePolynomial.ZeroOrderHold(breaks, samples)),
     )
     part = add_physical_part(builder, params, physics, sampled_table_period_s=h)
+    # A sampled table is exact per tick; a continuous one must be integrated.
+    check_budget(params, n * h, h, what="the replay", integrated=not part.table_is_sampled)
     if part.table_is_sampled:
         # The sampled table holds the command of each tick itself.
         builder.Connect(source.get_output_port(), part.table.GetInputPort("commanded_state"))

@@ -38,22 +38,23 @@ RUN_COLUMNS: dict[str, str] = {
     "v_des_m_per_s": "m/s",
 }
 
-#: JSON keys of the format: name -> (type, range). Type ``"number"`` or
-#: ``"string"``; range ``">0"``, ``">=0"``, ``"any"`` or ``None`` (strings).
-RUN_KEYS: dict[str, tuple[str, str | None]] = {
-    "format": ("string", None),
-    "run_id": ("string", None),
-    "sample_rate_hz": ("number", ">0"),
-    "spacecraft_mass_kg": ("number", ">0"),
-    "contact_stiffness_n_per_m": ("number", ">0"),
-    "sensor_delay_s": ("number", ">=0"),
-    "table_natural_frequency_hz": ("number", ">0"),
-    "table_damping_ratio": ("number", ">=0"),
-    "compensator": ("string", None),
-    "lead_time_s": ("number", ">=0"),
-    "initial_gap_m": ("number", ">=0"),
-    "initial_velocity_m_per_s": ("number", ">0"),
-    "force_deadband_n": ("number", ">=0"),
+#: JSON keys of the format: name -> type, ``"number"`` or ``"string"``. A
+#: number must lie in its plausible range (:data:`hybridtable.limits.LIMITS`,
+#: under the same name).
+RUN_KEYS: dict[str, str] = {
+    "format": "string",
+    "run_id": "string",
+    "sample_rate_hz": "number",
+    "spacecraft_mass_kg": "number",
+    "contact_stiffness_n_per_m": "number",
+    "sensor_delay_s": "number",
+    "table_natural_frequency_hz": "number",
+    "table_damping_ratio": "number",
+    "compensator": "string",
+    "lead_time_s": "number",
+    "initial_gap_m": "number",
+    "initial_velocity_m_per_s": "number",
+    "force_deadband_n": "number",
 }
 
 #: Largest relative deviation of one time step from the sample period (and of

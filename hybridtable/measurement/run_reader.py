@@ -31,6 +31,8 @@ import numpy as np
 
 from hybridtable.compensators.paper import COMPENSATORS
 from hybridtable.errors import MeasurementError
+from hybridtable.limits import LIMITS
+from hybridtable.measurement.channels import check_channels
 from hybridtable.measurement.run_format import (
     FORMAT,
     MIN_ROWS,
@@ -132,7 +134,7 @@ def run_info_from_dict(raw: object, path: str) -> RunInfo:
     if missing:
         raise MeasurementError(f"{path}: missing key(s) {', '.join(missing)}")
     values: dict = {}
-    for key, (kind, rng) in RUN_KEYS.items():
+    for key, kind in RUN_KEYS.items():
         v = raw[key]
         if kind == "string":
             if not isinstance(v, str) or not v.strip():
@@ -146,8 +148,12 @@ def run_info_from_dict(raw: object, path: str) -> RunInfo:
         x = float(v)
         if not math.isfinite(x):
             raise MeasurementError(f"{path}: key {key} must be finite (got {v})")
-        if (rng == ">0" and x <= 0.0) or (rng == ">=0" and x < 0.0):
-            raise MeasurementError(f"{path}: key {key} must be {rng[:-1]} 0 (got {v})")
+        limit = LIMITS[key]
+        if not limit.contains(x):
+            raise MeasurementError(
+                f"{path}: key {key} = {x:g}{'' if limit.unit == '1' else ' ' + limit.unit} "
+                f"is outside its plausible range {limit.words()}"
+            )
         values[key] = x
     if values["format"] != FORMAT:
         raise MeasurementError(
@@ -442,7 +448,9 @@ def read_runs(
     """Read and validate every run named by ``paths`` (files or folders).
 
     All runs are read before any is returned, so a defect anywhere stops
-    everything. Run ids must be unique.
+    everything. Run ids must be unique, and each run's channels must agree
+    with each other (:func:`hybridtable.measurement.channels.check_channels`:
+    no dead or sign-flipped channel, a contact, a start apart).
 
     Raises
     ------
@@ -450,6 +458,8 @@ def read_runs(
         For any defect (see :func:`read_run` and :func:`find_run_files`).
     """
     runs = [read_run(c, j, column_map) for c, j in find_run_files(paths)]
+    for r in runs:
+        check_channels(r)
     ids: dict[str, Path | None] = {}
     for r in runs:
         if r.run_id in ids:

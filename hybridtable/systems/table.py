@@ -65,6 +65,15 @@ class TableParams:
         return 2.0 * math.pi * self.response_frequency_hz
 
     @property
+    def settling_time_s(self) -> float:
+        """Five time constants of the decay envelope, ``5 / (zeta omega)`` [s]: 0 for
+        an ideal table, ``inf`` for an undamped one (it never settles)."""
+        if self.is_ideal:
+            return 0.0
+        decay = self.damping_ratio * self.omega_rad_per_s
+        return 5.0 / decay if decay > 0.0 else math.inf
+
+    @property
     def ramp_lag_s(self) -> float:
         """Steady-state lag of the table behind a ramp command, 2 zeta / omega."""
         return 0.0 if self.is_ideal else 2.0 * self.damping_ratio / self.omega_rad_per_s

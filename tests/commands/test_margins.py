@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from hybridtable.cli import main
-from hybridtable.commands.margins import default_delays, parse_list
+from hybridtable.commands._grid import default_delays, parse_list
 from hybridtable.errors import CommandError
 
 
@@ -102,10 +102,17 @@ def test_report_and_validation(tmp_path, capsys):
         ["--compensator", "PID"],
         ["--sample-rate-hz", "1000", "--sensor-delay-s", "0.0015"],
         ["--pade-order", "0"],
+        ["--pade-order", "100"],
+        ["--contact-frequency-hz", "1e300"],
+        ["--sensor-delay-s", "0,1e300"],
+        ["--table-response-hz", "25,1e300"],
     ],
 )
 def test_bad_input_is_one_line_exit_2(args, capsys):
-    rc = main(["margins", *args, "--no-progress"])
+    try:
+        rc = main(["margins", *args, "--no-progress"])
+    except SystemExit as exc:  # argparse refuses a flag's value itself
+        rc = exc.code
     err = capsys.readouterr().err.strip()
     assert rc == 2
     assert err.count("\n") == 0 and "error" in err

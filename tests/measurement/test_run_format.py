@@ -162,7 +162,7 @@ CASES = [
         "negative_mass",
         None,
         lambda d: d.update(spacecraft_mass_kg=-1.0),
-        "key spacecraft_mass_kg must be > 0",
+        "key spacecraft_mass_kg = -1 kg is outside its plausible range 0.001 to 1e+07 kg",
         "json",
     ),
     (
