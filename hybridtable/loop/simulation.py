@@ -53,11 +53,26 @@ class SimulationResult:
         return {n: getattr(self, n) for n in names}
 
 
+def _approach_s(params: HybridLoopParams) -> float:
+    lag = params.table().ramp_lag_s
+    return (params.initial_gap_m + lag * params.initial_velocity_m_per_s) / (
+        params.initial_velocity_m_per_s
+    )
+
+
 def _default_t_max(params: HybridLoopParams) -> float:
-    approach = (
-        params.initial_gap_m + params.table().ramp_lag_s * params.initial_velocity_m_per_s
-    ) / (params.initial_velocity_m_per_s)
-    return approach + 10.0 / params.contact_frequency_hz + 20.0 * params.effective_delay_s + 1.0
+    """The longest a run through one contact may last: the approach, ten contact
+    periods, twenty effective delays and a second."""
+    tail = 20.0 * params.effective_delay_s + 1.0
+    return _approach_s(params) + 10.0 / params.contact_frequency_hz + tail
+
+
+def _expected_duration_s(params: HybridLoopParams) -> float:
+    """How long a run through one contact lasts when it separates: the approach,
+    two contact periods (the contact itself lasts about half of one), twenty
+    effective delays and a second."""
+    tail = 20.0 * params.effective_delay_s + 1.0
+    return _approach_s(params) + 2.0 / params.contact_frequency_hz + tail
 
 
 def run_loop(
@@ -87,7 +102,10 @@ def run_loop(
     params = loop.params
     diagram = loop.diagram
     t_max = _default_t_max(params) if t_max_s is None else t_max_s
-    check_budget(params, t_max, loop.computer_period_s)
+    # The estimate of a run that stops at separation is its expected length;
+    # one that does not separate is stopped by the steps it really takes.
+    duration = min(t_max, _expected_duration_s(params)) if stop_at_separation else t_max
+    check_budget(params, duration, loop.computer_period_s)
     simulator = Simulator(diagram)
     context = simulator.get_mutable_context()
     loop.set_initial_conditions(context)
