@@ -33,6 +33,7 @@ from hybridtable.compensators.paper import COMPENSATORS
 from hybridtable.errors import MeasurementError
 from hybridtable.limits import LIMITS
 from hybridtable.measurement.channels import check_channels
+from hybridtable.measurement.csv_fast import read_float_columns, read_header
 from hybridtable.measurement.run_format import (
     FORMAT,
     MIN_ROWS,
@@ -42,6 +43,7 @@ from hybridtable.measurement.run_format import (
     Run,
     RunInfo,
 )
+from hybridtable.measurement.run_header import format_names
 
 __all__ = [
     "MeasurementError",
@@ -169,53 +171,10 @@ def run_info_from_dict(raw: object, path: str) -> RunInfo:
 
 
 # -- CSV -----------------------------------------------------------------------
-#: Other names a log may give each format column (lower case), for the
-#: suggestion of a missing column's error.
-_ALIASES = {
-    "time_s": ("time", "t", "timestamp"),
-    "p_des_m": ("p_des", "p_cmd", "position_command", "commanded_position", "command"),
-    "p_act_m": ("p_act", "position", "table_position", "actual_position", "p_table"),
-    "f_mea_n": ("f_mea", "force", "measured_force", "f_measured", "fz"),
-    "f_comp_n": ("f_comp", "compensated_force", "f_compensated", "force_command"),
-    "v_des_m_per_s": ("v_des", "velocity", "v_cmd", "commanded_velocity"),
-}
-
-#: Least :class:`difflib.SequenceMatcher` ratio of a proposed log column.
-_SIMILAR = 0.6
-
-
-def _similarity(column: str, log_name: str) -> float:
-    import difflib
-
-    log = log_name.strip().lower()
-    return max(
-        difflib.SequenceMatcher(None, name, log).ratio() for name in (column, *_ALIASES[column])
-    )
-
-
-def _column_list(header: Sequence[str], most: int = 10) -> str:
-    shown = ", ".join(header[:most])
-    return shown + (", ..." if len(header) > most else "")
-
-
-def _missing_message(missing: list[str], header: list[str], leftover: list[str]) -> str:
-    """One line: the missing format columns, the log's columns and the
-    ``--column-map`` that would read them, with the most similar unmapped log
-    column proposed for each (by name, :data:`_ALIASES`), where one is."""
-    pairs = sorted(
-        ((_similarity(m, c), i, m, c) for i, m in enumerate(missing) for c in leftover),
-        key=lambda x: (-x[0], x[1]),
-    )
-    proposed: dict[str, str] = {}
-    for score, _, m, c in pairs:
-        if score >= _SIMILAR and m not in proposed and c not in proposed.values():
-            proposed[m] = c
-    text = f"missing column(s) {', '.join(missing)} (has: {_column_list(header)})"
-    if not leftover:
-        return text + "; the log has no other column to read it from"
-    them = "it" if len(missing) == 1 else "them"
-    items = ",".join(f"{m}={proposed.get(m, 'LOG_COLUMN')}" for m in missing)
-    return f"{text}; map {them} with --column-map {items}"
+#: Read a CSV with pyarrow first (:mod:`~hybridtable.measurement.csv_fast`),
+#: falling back to the line-precise Python path on any defect; ``False`` forces
+#: the Python path (for the benchmark and the tests that compare the two).
+_FAST_CSV = True
 
 
 def _parse_cell(text: str) -> float:
@@ -225,10 +184,9 @@ def _parse_cell(text: str) -> float:
     return float(s)
 
 
-def _read_series(
-    path: Path, column_map: Mapping[str, str] | None
-) -> tuple[dict[str, np.ndarray], list[int]]:
-    """Columns by format name and the file line of every data row."""
+def _csv_rows(path: Path) -> tuple[list[str], int, list[list[str]], list[int]]:
+    """The Python path: the header's cells and file line, every data row's
+    cells and file line (blank lines skipped)."""
     text = _read_text(path)
     if not text.strip():
         raise MeasurementError(f"{path}: empty file")
@@ -251,34 +209,63 @@ def _read_series(
         raise MeasurementError(f"{path}: not a CSV file ({err})") from None
     if header is None:
         raise MeasurementError(f"{path}: no header row")
-    # Log names -> format names.
-    rename = {log: fmt for fmt, log in (column_map or {}).items()}
-    names = [rename.get(c, c) for c in header]
-    seen: set[str] = set()
-    for c, name in zip(header, names, strict=True):
-        if not c:
-            raise MeasurementError(f"{path} line {header_line}: empty column name in the header")
-        if name in seen:
-            raise MeasurementError(f"{path} line {header_line}: column {c!r} appears twice")
-        seen.add(name)
-    unmatched = [f"{f}={log}" for f, log in (column_map or {}).items() if log not in header]
-    if unmatched:
-        raise MeasurementError(
-            f"{path} line {header_line}: --column-map entries not in the header: "
-            f"{', '.join(unmatched)} (has: {_column_list(header)})"
-        )
-    missing = [c for c in RUN_COLUMNS if c not in seen]
-    if missing:
-        leftover = [c for c, name in zip(header, names, strict=True) if name not in RUN_COLUMNS]
-        raise MeasurementError(
-            f"{path} line {header_line}: {_missing_message(missing, header, leftover)}"
-        )
-    extra = [c for c, name in zip(header, names, strict=True) if name not in RUN_COLUMNS]
-    if extra:
-        raise MeasurementError(
-            f"{path} line {header_line}: unexpected column(s) {', '.join(extra)} "
-            f"(the format has {', '.join(RUN_COLUMNS)}; rename with --column-map)"
-        )
+    return header, header_line, data, line_of_row
+
+
+class _RowLines(Sequence[int]):
+    """The file line of every data row of a CSV read by the fast path, found
+    on first use by reading the file again line by line: only a message about
+    a row needs it, so a valid file never builds the list."""
+
+    def __init__(self, path: Path):
+        self._path = path
+        self._lines: list[int] | None = None
+
+    def _get(self) -> list[int]:
+        if self._lines is None:
+            self._lines = _csv_rows(self._path)[3]
+        return self._lines
+
+    def __getitem__(self, i):
+        return self._get()[i]
+
+    def __len__(self) -> int:
+        return len(self._get())
+
+
+def _read_series_fast(
+    path: Path, column_map: Mapping[str, str] | None
+) -> dict[str, np.ndarray] | None:
+    """Columns by format name read by pyarrow, or ``None`` if the file is not
+    a plain valid table (the Python path then names its defect)."""
+    header = read_header(path)
+    if header is None:
+        return None
+    try:
+        names = format_names(path, header.cells, header.line, column_map)
+    except MeasurementError:
+        return None  # the Python path says it, or a defect before it
+    columns = read_float_columns(path, header.data_offset_bytes, len(names))
+    if columns is None or len(columns[0]) < MIN_ROWS:
+        return None
+    return {name: columns[names.index(name)] for name in RUN_COLUMNS}
+
+
+def _read_series(
+    path: Path, column_map: Mapping[str, str] | None
+) -> tuple[dict[str, np.ndarray], Sequence[int]]:
+    """Columns by format name and the file line of every data row.
+
+    A plain valid file is read by pyarrow (no Python string per cell; its row
+    lines are found only if a message needs them); any other file, and every
+    defect, by the Python path, line by line, whose message names the line.
+    """
+    if _FAST_CSV:
+        cols = _read_series_fast(path, column_map)
+        if cols is not None:
+            return cols, _RowLines(path)
+    header, header_line, data, line_of_row = _csv_rows(path)
+    names = format_names(path, header, header_line, column_map)
     if not data:
         raise MeasurementError(f"{path}: no data rows after the header")
     if len(data) < MIN_ROWS:
@@ -306,7 +293,7 @@ def _read_series(
     return cols, line_of_row
 
 
-def _check_time(path: Path, json_path: Path, t: np.ndarray, lines: list[int], info: RunInfo):
+def _check_time(path: Path, json_path: Path, t: np.ndarray, lines: Sequence[int], info: RunInfo):
     h = info.sample_period_s
     dt = np.diff(t)
     bad = np.flatnonzero(dt <= 0.0)
