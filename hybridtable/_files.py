@@ -1,17 +1,36 @@
-"""Writing files so that a reader never sees half of one (the ground floor).
+"""Writing files so that nothing is lost or left half-written (the ground floor).
 
-:func:`write_text_atomic` writes through a temporary file in the target's
-folder and a rename: an error or an interruption leaves the old file, if any,
-in place.
+Every output of every command goes through here:
+
+- :func:`write_text_atomic` / :func:`write_bytes_atomic` / :func:`atomic_path`
+  write a file through a temporary file in the target's folder and a rename:
+  an error or an interruption (Ctrl-C) leaves the old file, if any, in place
+  and no temporary file behind;
+- :func:`staged_folder` writes a folder of outputs (a report, a set of
+  recorded runs) into a hidden staging folder beside it and moves the files
+  in only when all are written: an interrupted report leaves the target
+  folder as it was;
+- :func:`writable_problem` says, before any work, why a path cannot be
+  written (a parent that is a file, a read-only folder).
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
+import shutil
 import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 
-__all__ = ["write_text_atomic"]
+__all__ = [
+    "write_text_atomic",
+    "write_bytes_atomic",
+    "atomic_path",
+    "staged_folder",
+    "Staging",
+    "writable_problem",
+]
 
 
 def _umask() -> int:
@@ -20,17 +39,95 @@ def _umask() -> int:
     return mask
 
 
-def write_text_atomic(path: str | Path, text: str) -> None:
-    """Write ``text`` (UTF-8, newlines as given) to ``path`` atomically,
-    creating its folder."""
+@contextlib.contextmanager
+def atomic_path(path: str | Path) -> Iterator[Path]:
+    """A temporary path (same folder, same suffix) to write ``path``'s content
+    to; renamed onto ``path`` when the block ends without error, removed
+    otherwise. Creates the folder."""
     target = Path(path)
     target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent)
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=target.suffix, dir=target.parent)
+    os.close(fd)
     try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as f:
-            f.write(text)
+        yield Path(tmp)
         os.chmod(tmp, 0o666 & ~_umask())  # as open() would, not mkstemp's 0600
         os.replace(tmp, target)
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+
+
+def write_text_atomic(path: str | Path, text: str) -> None:
+    """Write ``text`` (UTF-8, newlines as given) to ``path`` atomically,
+    creating its folder."""
+    with atomic_path(path) as tmp:
+        with open(tmp, "w", encoding="utf-8", newline="") as f:
+            f.write(text)
+
+
+def write_bytes_atomic(path: str | Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` atomically, creating its folder."""
+    with atomic_path(path) as tmp:
+        tmp.write_bytes(data)
+
+
+class Staging:
+    """A staging folder (:attr:`path`) of the outputs bound for :attr:`target`."""
+
+    def __init__(self, path: Path, target: Path) -> None:
+        self.path = path
+        self.target = target
+
+    def final(self, staged: str | Path) -> Path:
+        """Where a file written under :attr:`path` ends up under :attr:`target`."""
+        return self.target / Path(staged).relative_to(self.path)
+
+
+@contextlib.contextmanager
+def staged_folder(path: str | Path) -> Iterator[Staging]:
+    """A :class:`Staging` folder to write the outputs of folder ``path`` into.
+
+    When the block ends without error, a new ``path`` is the staging folder
+    renamed; an existing one receives the staged files (same names replaced,
+    others kept). On an error or an interruption the staging folder is
+    removed and ``path`` is left as it was.
+    """
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    stage = Path(tempfile.mkdtemp(prefix=f".{target.name}.partial-", dir=target.parent))
+    try:
+        yield Staging(stage, target)
+        os.chmod(stage, 0o777 & ~_umask())
+        if not target.exists():
+            os.replace(stage, target)
+            return
+        for src in sorted(stage.rglob("*")):
+            dst = target / src.relative_to(stage)
+            if src.is_dir():
+                dst.mkdir(exist_ok=True)
+            else:
+                dst.parent.mkdir(parents=True, exist_ok=True)
+                os.replace(src, dst)
+    finally:
+        if stage.exists():
+            shutil.rmtree(stage, ignore_errors=True)
+
+
+def writable_problem(path: str | Path, folder: bool = False) -> str | None:
+    """Why ``path`` (a file, or a folder if ``folder``) cannot be written, in
+    words, or ``None`` if it can: an ancestor that is a file, or the nearest
+    existing folder not writable."""
+    target = Path(path).absolute()
+    probe = target if folder else target.parent
+    while not probe.exists():
+        if probe.is_symlink():
+            return f"{probe} is a broken link"
+        probe = probe.parent
+    if not probe.is_dir():
+        return f"{probe} is a file, not a folder"
+    if not os.access(probe, os.W_OK | os.X_OK):
+        return f"the folder {probe} is not writable"
+    if target.exists() and not folder and not os.access(target, os.W_OK):
+        # Replaced by a rename, but a read-only file is the user's "keep this".
+        return f"{target} is read-only"
+    return None

@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hybridtable._files import write_text_atomic
+from hybridtable._files import write_bytes_atomic, write_text_atomic
 from hybridtable.analysis.blockwise import ContactLoopLinearizer
 from hybridtable.analysis.interconnect import StateSpaceBlock
 from hybridtable.analysis.linearize import LinearLoop
@@ -195,10 +195,7 @@ def save_linear_model(path: str | Path, doc: dict) -> Path:
     arrays["metadata"] = np.asarray(json.dumps(rest))
     buf = io.BytesIO()
     np.savez(buf, **arrays)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_bytes(buf.getvalue())
-    tmp.replace(path)
+    write_bytes_atomic(path, buf.getvalue())
     return path
 
 

@@ -13,7 +13,7 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
-from hybridtable._files import write_text_atomic
+from hybridtable._files import writable_problem, write_text_atomic
 from hybridtable.errors import CommandError
 
 __all__ = [
@@ -28,7 +28,10 @@ __all__ = [
     "input_paths",
     "add_run_arguments",
     "check_outputs",
+    "declared_inputs",
     "add_force_argument",
+    "check_suffix",
+    "figure_suffixes",
 ]
 
 
@@ -180,24 +183,38 @@ def input_paths(runs) -> list[Path]:
     return [p.resolve() for r in runs for p in (r.csv_path, r.json_path) if p is not None]
 
 
+def declared_inputs(args: argparse.Namespace) -> list[Path]:
+    """The files a command's flags name as inputs: ``--model``, ``--tables`` and
+    the ``.py`` files of ``--plugin`` (resolved; those that exist)."""
+    paths = [getattr(args, "model", None), getattr(args, "tables", None)]
+    for text in getattr(args, "plugin", None) or ():
+        head = str(text).rsplit(":", 1)[0]  # ./backlash.py:EFFECT
+        if head.endswith(".py"):
+            paths.append(head)
+    return [Path(p).resolve() for p in paths if p and Path(p).is_file()]
+
+
 def check_outputs(
-    force: bool,
+    args: argparse.Namespace,
     inputs: Iterable[Path] = (),
     *,
     files: Mapping[str, str | Path | None] | None = None,
     folders: Mapping[str, str | Path | None] | None = None,
 ) -> None:
-    """The one overwrite policy of every command, checked before any work.
+    """The one output policy of every command, checked before any work.
 
     An existing output is replaced only with ``--force``; an input (a run's CSV
-    or JSON, a model file) is never written over, with or without it.
+    or JSON, a model file, the tables, a plug-in's file) is never written
+    over, with or without it; an output that cannot be written (a parent that
+    is a file, a read-only folder) is refused before anything is computed.
 
     Parameters
     ----------
-    force
-        The command's ``--force``.
+    args
+        The command's arguments: ``args.force``, and the inputs its flags name
+        (:func:`declared_inputs`).
     inputs
-        The files the command reads (resolved), see :func:`input_paths`.
+        Other files the command reads (e.g. :func:`input_paths` of its runs).
     files
         ``{flag: path}`` of the output files (``None`` or ``-`` for stdout:
         not checked), e.g. ``{"--json": args.json}``.
@@ -210,9 +227,11 @@ def check_outputs(
     ------
     CommandError
         One line naming the flag: the output is an input, a file where a folder
-        is wanted (or the other way round), or exists and ``force`` is false.
+        is wanted (or the other way round), cannot be written, or exists and
+        ``--force`` is not given.
     """
-    inputs = {Path(p).resolve() for p in inputs}
+    force = bool(getattr(args, "force", False))
+    inputs = {Path(p).resolve() for p in inputs} | set(declared_inputs(args))
     for flag, path in (files or {}).items():
         if path is None or str(path) == "-":
             continue
@@ -221,6 +240,9 @@ def check_outputs(
             raise CommandError(f"{flag} {path} is one of the input files; not writing over it")
         if target.is_dir():
             raise CommandError(f"{flag} {path} is a folder; give a file name")
+        problem = writable_problem(target)
+        if problem:
+            raise CommandError(f"{flag} {path}: cannot write it ({problem})")
         if target.exists() and not force:
             raise CommandError(f"{flag} {path} exists; give --force to replace it")
     for flag, path in (folders or {}).items():
@@ -231,11 +253,41 @@ def check_outputs(
             raise CommandError(f"{flag} {path} is a file, not a folder")
         if any(d == p.parent or d in p.parents for p in inputs):
             raise CommandError(f"{flag} {path} holds input files; choose another folder")
+        # The files are staged beside the folder, then moved in.
+        problem = writable_problem(d, folder=True) or writable_problem(d)
+        if problem:
+            raise CommandError(f"{flag} {path}: cannot write into it ({problem})")
         if d.is_dir() and any(d.iterdir()) and not force:
             raise CommandError(
                 f"{flag} {path} is not empty; choose a new folder, or give --force to "
                 "write into it (its files of the same names are replaced)"
             )
+
+
+def check_suffix(flag: str, path: str | Path | None, suffixes: Iterable[str]) -> None:
+    """Refuse an output file whose suffix is not one of ``suffixes`` (lower
+    case, with the dot), before any work: ``--plot out.txt``.
+
+    Raises
+    ------
+    CommandError
+        One line naming the flag and the suffixes it writes.
+    """
+    if path is None or str(path) == "-":
+        return
+    allowed = sorted(set(suffixes))
+    if Path(path).suffix.lower() not in allowed:
+        raise CommandError(
+            f"{flag} {path}: writes {', '.join(s.lstrip('.') for s in allowed)} files; "
+            "give a file name with one of these suffixes"
+        )
+
+
+def figure_suffixes() -> list[str]:
+    """The file suffixes matplotlib writes figures in (``.png``, ``.pdf``, ...)."""
+    from matplotlib.figure import Figure
+
+    return ["." + s for s in Figure().canvas.get_supported_filetypes()]
 
 
 def add_force_argument(parser: argparse.ArgumentParser) -> None:

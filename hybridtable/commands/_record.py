@@ -110,6 +110,7 @@ def _per_run(items: list, n: int, flag: str) -> list:
 
 def run_record(args: argparse.Namespace, model) -> dict:
     """``simulate --record DIR``: write the runs and ``truth.json``."""
+    from hybridtable._files import staged_folder
     from hybridtable.commands._common import check_outputs, write_json
     from hybridtable.diagnosis.model_file import tool_version
     from hybridtable.measurement.recorder import record_run, write_run
@@ -122,7 +123,7 @@ def run_record(args: argparse.Namespace, model) -> dict:
     velocities = _per_run(velocities, n, "--velocities")
     compensators = _per_run(compensators, n, "--compensator")
     folder = Path(args.record)
-    check_outputs(args.force, folders={"--record": folder})
+    check_outputs(args, folders={"--record": folder})
     base = model.nominal if model is not None else None
     infos = [
         rig_info_from_args(args, base, f"{folder.name}-run{i + 1}", compensators[i], velocities[i])
@@ -183,9 +184,6 @@ def run_record(args: argparse.Namespace, model) -> dict:
             progress.update()
     if progress is not None:
         progress.close()
-    folder.mkdir(parents=True, exist_ok=True)
-    for i, run in enumerate(records):
-        write_run(run, folder, f"run{i + 1}", force=args.force)
     from hybridtable.diagnosis.registry import get_effect
 
     units = {name: {p.name: p.unit for p in get_effect(name).parameters} for name, _ in effects}
@@ -213,8 +211,12 @@ def run_record(args: argparse.Namespace, model) -> dict:
         "nominal": infos[0].to_dict(),
         "runs": truth_runs,
     }
-    truth_path = folder / "truth.json"
-    write_json(str(truth_path), truth_doc)
+    # All runs and truth.json appear together, or none (an interruption
+    # leaves the folder as it was).
+    with staged_folder(folder) as stage:
+        for i, run in enumerate(records):
+            write_run(run, stage.path, f"run{i + 1}", force=True)
+        write_json(str(stage.path / "truth.json"), truth_doc)
     hidden = (
         "; ".join(
             f"{name} " + ", ".join(f"{k_}={v:g}" for k_, v in values.items())

@@ -51,6 +51,7 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from hybridtable._files import staged_folder
     from hybridtable.commands._common import check_outputs, input_paths, write_json
     from hybridtable.commands._model_options import (
         load_model_arg,
@@ -71,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
         check_comparable(r)
     inputs = input_paths(runs)
     check_outputs(
-        args.force,
+        args,
         inputs,
         files={"--json": args.json, "--save-model": args.save_model},
         folders={"--report": args.report},
@@ -108,7 +109,9 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         write_json(args.json, document)
     if args.report:
-        files = write_report(comparisons, args.report, verdict_text=sentence)
+        with staged_folder(args.report) as stage:
+            files = write_report(comparisons, stage.path, verdict_text=sentence)
+        files = [stage.final(f) for f in files]
         if not quiet:
             print(
                 f"wrote {files[0]}, {files[0].with_suffix('.html')} (figures embedded) and "

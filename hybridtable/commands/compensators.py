@@ -117,14 +117,24 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def _names(text: str | None) -> tuple[str, ...]:
-    return () if not text else tuple(x.strip() for x in text.split(",") if x.strip())
+def _names(text: str | None, flag: str) -> tuple[str, ...]:
+    """The names of a comma-separated flag; () when not given, an error when
+    given empty (``--scenarios=`` must not mean "all")."""
+    if text is None:
+        return ()
+    names = tuple(x.strip() for x in text.split(",") if x.strip())
+    if not names:
+        from hybridtable.errors import CommandError
+
+        raise CommandError(f"{flag}: empty list; give NAME[,NAME...] or leave the flag out")
+    return names
 
 
 def run(args: argparse.Namespace) -> int:
     import json
     from pathlib import Path
 
+    from hybridtable._files import staged_folder
     from hybridtable.commands._common import check_outputs, write_json
     from hybridtable.commands._model_options import load_model_arg, load_plugins
     from hybridtable.errors import CommandError
@@ -154,20 +164,15 @@ def run(args: argparse.Namespace) -> int:
             tables = json.loads(path.read_text())
         except (OSError, json.JSONDecodeError) as err:
             raise CommandError(f"cannot read {args.tables}: {err}") from None
-    check_outputs(
-        args.force,
-        [Path(args.tables)] if args.tables else [],
-        files={"--json": args.json},
-        folders={"--report": args.report},
-    )
+    check_outputs(args, files={"--json": args.json}, folders={"--report": args.report})
     settings = SweepSettings(
-        compensators=_names(args.compensators),
+        compensators=_names(args.compensators, "--compensators"),
         prior_ratios=args.prior_ratios,
         force_noise_ratio=args.force_noise_ratio,
         position_noise_ratio=args.position_noise_ratio,
         contact_damping_ratio=args.contact_damping_ratio,
         passivity=(False,) if args.no_passivity else (False, True),
-        scenarios=_names(args.scenarios) or SCENARIOS,
+        scenarios=_names(args.scenarios, "--scenarios") or SCENARIOS,
         sample_rate_hz=args.sample_rate_hz,
         seed=args.seed,
     )
@@ -178,7 +183,9 @@ def run(args: argparse.Namespace) -> int:
     jobs = args.jobs if args.jobs is not None else default_jobs()
     result = run_sweep(settings, points, progress=not args.no_progress, jobs=jobs)
     if args.report:
-        write_report(result, args.report)
+        with staged_folder(args.report) as stage:
+            write_report(result, stage.path)
+        result.figures = [str(stage.final(f)) for f in result.figures]
     if args.json != "-":
         print(format_summary(result))
         for f in result.figures:
@@ -217,8 +224,8 @@ def _rig_line(model) -> str:
 
 
 def _run_model(args: argparse.Namespace, model) -> int:
-    from pathlib import Path
 
+    from hybridtable._files import staged_folder
     from hybridtable.commands._common import check_outputs, write_json
     from hybridtable.errors import CommandError
     from hybridtable.reports.compensators import (
@@ -231,22 +238,19 @@ def _run_model(args: argparse.Namespace, model) -> int:
     given = [flag for name, flag in _GRID_ONLY if getattr(args, name) not in (None, False)]
     if given:
         raise CommandError(f"{', '.join(given)}: not with --model (the model's rig is the grid)")
-    check_outputs(
-        args.force,
-        [Path(args.model)],
-        files={"--json": args.json},
-        folders={"--report": args.report},
-    )
+    check_outputs(args, files={"--json": args.json}, folders={"--report": args.report})
     result = run_model_compensators(
         model,
-        compensators=_names(args.compensators),
+        compensators=_names(args.compensators, "--compensators"),
         passivity=(False,) if args.no_passivity else (False, True),
         jobs=args.jobs or 1,
         progress=not args.no_progress and args.json != "-",
     )
     rig = _rig_line(model)
     if args.report:
-        write_model_report(result, args.report, rig)
+        with staged_folder(args.report) as stage:
+            write_model_report(result, stage.path, rig)
+        result.figures = [str(stage.final(f)) for f in result.figures]
     if args.json != "-":
         print(format_model_summary(result, rig))
         for f in result.figures:

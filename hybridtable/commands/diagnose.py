@@ -80,6 +80,7 @@ def diagnosis_json(d) -> dict:
 
 
 def run(args: argparse.Namespace) -> int:
+    from hybridtable._files import staged_folder
     from hybridtable.commands._common import check_outputs, input_paths, write_json
     from hybridtable.commands._model_options import load_plugins, write_model
     from hybridtable.diagnosis.diagnose import diagnose
@@ -94,7 +95,7 @@ def run(args: argparse.Namespace) -> int:
 
     load_plugins(args)
     effects = None
-    if args.effects:
+    if args.effects is not None:  # given, even empty (--effects=)
         effects = [e.strip() for e in args.effects.split(",") if e.strip()]
         for e in effects:
             get_effect(e)
@@ -103,7 +104,7 @@ def run(args: argparse.Namespace) -> int:
     runs = read_runs(args.runs, parse_column_map(args.column_map))
     inputs = input_paths(runs)
     check_outputs(
-        args.force,
+        args,
         inputs,
         files={"--json": args.json, "--save-model": args.save_model},
         folders={"--report": args.report},
@@ -133,7 +134,9 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         write_json(args.json, diagnosis_json(d))
     if args.report:
-        files = write_report(d, args.report)
+        with staged_folder(args.report) as stage:
+            files = write_report(d, stage.path)
+        files = [stage.final(f) for f in files]
         if not quiet:
             print(
                 f"wrote {files[0]}, {files[0].with_suffix('.html')} (figures embedded) and "

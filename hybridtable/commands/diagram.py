@@ -66,8 +66,8 @@ def run(args: argparse.Namespace) -> int:
     if Path(args.out_dir).exists() and not Path(args.out_dir).is_dir():
         raise CommandError(f"--out-dir {args.out_dir} is a file, not a folder")
     for path in diagram_files(args.name, args.out_dir):
-        check_outputs(args.force, files={"--out-dir": path})
-    check_outputs(args.force, files={"--json": args.json})
+        check_outputs(args, files={"--out-dir": path})
+    check_outputs(args, files={"--json": args.json})
     out = draw(args.name, args.out_dir, sample_rates_hz=args.sample_rates_hz or ())
     if args.json != "-":
         print(out.verdict)

@@ -217,7 +217,7 @@ def run(args: argparse.Namespace) -> int:
     else:
         scale = paper_scale()
         where = "the paper's Table 1 point"
-    check_outputs(args.force, inputs, files={"--json": args.json})
+    check_outputs(args, inputs, files={"--json": args.json})
     sources = _sources(plugin_effects)
     names = effect_names()
     items = [effect_json(get_effect(n), sources.get(n, "script"), scale, where) for n in names]

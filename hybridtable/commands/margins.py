@@ -245,6 +245,7 @@ def _base_params(args: argparse.Namespace, model=None):
 
 
 def run(args: argparse.Namespace) -> int:
+    from hybridtable._files import staged_folder
     from hybridtable.analysis.robustness import grid_cor_limits
     from hybridtable.analysis.sweep import sweep_margins
     from hybridtable.analysis.validation import validate_sweep
@@ -290,11 +291,8 @@ def run(args: argparse.Namespace) -> int:
     if base.sample_period_s is not None:
         for T in delays:
             delay_samples(float(T), base.sample_period_s)  # ParameterError if not whole
-    model_inputs = [Path(args.model)] if getattr(args, "model", None) else []
-    check_outputs(
-        args.force, model_inputs, files={"--json": args.json}, folders={"--report": args.report}
-    )
-    check_outputs(args.force, model_inputs, files={"--export-linear": args.export_linear})
+    check_outputs(args, files={"--json": args.json}, folders={"--report": args.report})
+    check_outputs(args, files={"--export-linear": args.export_linear})
     op_delay, op_table, export_comp = _operating_point(args, base, model, comps)
     progress = not args.no_progress and args.json != "-"
 
@@ -339,9 +337,11 @@ def run(args: argparse.Namespace) -> int:
             args.pade_order,
             simulate=True,
         )
-        files = write_report(
-            result, args.report, table1, model_lines, point, args.cor_limit, verdict
-        )
+        with staged_folder(args.report) as stage:
+            files = write_report(
+                result, stage.path, table1, model_lines, point, args.cor_limit, verdict
+            )
+        files = [stage.final(f) for f in files]
     wall = time.perf_counter() - t0
 
     data = result.to_json_dict()

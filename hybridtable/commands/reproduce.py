@@ -44,26 +44,27 @@ def register(sub) -> None:
 def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
+    from hybridtable._files import staged_folder
     from hybridtable.commands._common import check_outputs, write_json
     from hybridtable.errors import CommandError
     from hybridtable.reports.reproduce import format_tables, reproduce, verdict
 
     if args.tables is not None and not Path(args.tables).is_file():
         raise CommandError(f"no such tables file: {args.tables}")
-    check_outputs(
-        args.force,
-        [Path(args.tables)] if args.tables else [],
-        files={"--json": args.json},
-        folders={"--out-dir": args.out_dir},
-    )
+    check_outputs(args, files={"--json": args.json}, folders={"--out-dir": args.out_dir})
     t0 = time.perf_counter()
-    rep = reproduce(
-        out_dir=args.out_dir,
+    options = dict(
         tables_path=args.tables,
         time_step_s=args.time_step_s,
         contact_gate=args.contact_gate,
         progress=not args.no_progress,
     )
+    if args.out_dir is None:
+        rep = reproduce(**options)
+    else:
+        with staged_folder(args.out_dir) as stage:
+            rep = reproduce(out_dir=stage.path, **options)
+        rep.figures = [str(stage.final(f)) for f in rep.figures]
     wall = time.perf_counter() - t0
     data = rep.to_json()
     data["wall_time_s"] = wall

@@ -49,9 +49,13 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from pathlib import Path
 
-    from hybridtable.commands._common import check_outputs, write_json
+    from hybridtable.commands._common import (
+        check_outputs,
+        check_suffix,
+        figure_suffixes,
+        write_json,
+    )
     from hybridtable.commands._loop_options import params_from_args
     from hybridtable.commands._model_options import load_model_arg, load_plugins
     from hybridtable.errors import CommandError
@@ -59,11 +63,10 @@ def run(args: argparse.Namespace) -> int:
 
     load_plugins(args)
     model = load_model_arg(args)
-    check_outputs(
-        args.force,
-        [Path(args.model)] if args.model else [],
-        files={"--json": args.json, "--plot": args.plot, "--html": args.html},
-    )
+    check_outputs(args, files={"--json": args.json, "--plot": args.plot, "--html": args.html})
+    if args.plot:
+        check_suffix("--plot", args.plot, figure_suffixes())
+    check_suffix("--html", args.html, (".html", ".htm"))
     if args.record or model is not None:
         from hybridtable.commands._record import run_record
         from hybridtable.commands._simulate_rig import run_model

@@ -173,6 +173,8 @@ def parse_effect_specs(
     """
     out: list[tuple[Effect, dict[str, float]]] = []
     for text in texts:
+        if not str(text).strip():
+            raise ParameterError(f"{flag}: empty; give EFFECT[:param=value,...]")
         effect, values = parse_effect_spec(text)
         for other, _ in out:
             if other.name == effect.name:

@@ -19,6 +19,7 @@ import numpy as np  # noqa: E402
 from hybridtable.measurement.comparison import RunComparison  # noqa: E402
 from hybridtable.measurement.phases import PHASES  # noqa: E402
 from hybridtable.measurement.stats import Correlation  # noqa: E402
+from hybridtable.reports.figure_text import literal  # noqa: E402
 
 __all__ = [
     "FIGURES",
@@ -110,7 +111,7 @@ def plot_overlay(c: RunComparison, path: Path) -> Path:
         a.grid(True, alpha=0.3)
         a.legend(loc="best", fontsize=7)
     ax[0].set_title(
-        f"{c.run_id}\nreplay (top two) and closed loop (bottom two); "
+        f"{literal(c.run_id)}\nreplay (top two) and closed loop (bottom two); "
         f"CoR {c.cor_measured:.4f} measured, {c.cor_model:.4f} model",
         fontsize=9,
     )
@@ -148,7 +149,9 @@ def plot_residuals(c: RunComparison, path: Path) -> Path:
         ax.grid(True, alpha=0.3)
         if row == 0:
             ax.legend(loc="best", fontsize=7, markerscale=4)
-            ax.set_title(f"{c.run_id}: replay residuals (dotted: +-2 noise RMS)", fontsize=9)
+            ax.set_title(
+                f"{literal(c.run_id)}: replay residuals (dotted: +-2 noise RMS)", fontsize=9
+            )
         # Horizontal bars: the phase names read along the y axis, never overlapping.
         bx = fig.add_subplot(grid[row, 2])
         shares = [np.nan_to_num(c.phases[name][ph]["share"]) for ph in PHASES]
@@ -190,7 +193,7 @@ def plot_correlation(c: RunComparison, path: Path) -> Path:
             ax[row, 1], corr, corr.cross, corr.lags, f"{name} residual vs input (command increment)"
         )
     ax[0, 0].legend(fontsize=7)
-    fig.suptitle(f"{c.run_id}: whiteness of the replay residuals", fontsize=9)
+    fig.suptitle(f"{literal(c.run_id)}: whiteness of the replay residuals", fontsize=9)
     return _save(fig, path)
 
 
@@ -217,7 +220,7 @@ def plot_force_deflection(c: RunComparison, path: Path) -> Path:
     )
     ax.set_xlabel("penetration p_act [mm]")
     ax.set_ylabel("contact force [N]")
-    ax.set_title(f"{c.run_id}: force-deflection loop", fontsize=9)
+    ax.set_title(f"{literal(c.run_id)}: force-deflection loop", fontsize=9)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=7)
     return _save(fig, path)

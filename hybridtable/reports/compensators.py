@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from hybridtable.reports.figure_text import literal
 from hybridtable.studies.compensator_sweep import (
     ONLINE_COR_TOLERANCE,
     SCENARIOS,
@@ -316,7 +317,13 @@ def write_report(result: SweepResult, out_dir: str | Path, traces: bool = True) 
     ax.axhline(tol, color="k", lw=0.8, ls=":")
     ax.set_yscale("log")
     ax.set_ylim(bottom=1e-5)
-    ax.set_xticks(x + width * (len(scen) - 1) / 2, keys, rotation=45, ha="right", fontsize=7)
+    ax.set_xticks(
+        x + width * (len(scen) - 1) / 2,
+        [literal(k) for k in keys],
+        rotation=45,
+        ha="right",
+        fontsize=7,
+    )
     ax.set_ylabel("worst |CoR error| [1]")
     ax.set_title("Worst CoR error over the grid, per scenario")
     ax.legend(fontsize=8)
@@ -563,7 +570,7 @@ def write_model_report(result, out_dir: str | Path, rig: str = "") -> list[str]:
     finite = [c for c in cors if np.isfinite(c)] + [q["cor_reference"] for q in result.points]
     if finite:
         ax.set_ylim(min(finite) - 0.05, max(finite) + 0.05)
-    ax.set_xticks(x, [e["key"] for e in ranking], rotation=45, ha="right", fontsize=7)
+    ax.set_xticks(x, [literal(e["key"]) for e in ranking], rotation=45, ha="right", fontsize=7)
     ax.set_ylabel("CoR on the modelled rig [1]")
     ax.set_title("Compensators on the modelled rig (dashed: the model's contact, ideal rig)")
     ax.grid(True, axis="y", alpha=0.3)

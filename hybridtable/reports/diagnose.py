@@ -23,6 +23,7 @@ from hybridtable.diagnosis.goodness import WINDOW_ERROR_FLOOR  # noqa: E402
 from hybridtable.diagnosis.registry import get_effect  # noqa: E402
 from hybridtable.measurement.phases import PHASES, contact_mask, loop_energy  # noqa: E402
 from hybridtable.reports.compare import figure_stem  # noqa: E402
+from hybridtable.reports.figure_text import literal  # noqa: E402
 
 __all__ = [
     "summary_sentence",
@@ -256,7 +257,7 @@ def plot_staircase(d: Diagnosis, path: Path) -> Path:
     for xi, e in zip(x, [s["error"] for s in steps], strict=True):
         ax.annotate(f"{e:.3g}", (xi - 0.18, e), ha="center", va="bottom", fontsize=8)
     ax.axhline(1.0, color="k", ls=":", lw=1, label="noise floor")
-    ax.set_xticks(x, labels, fontsize=8)
+    ax.set_xticks(x, [literal(s) for s in labels], fontsize=8)
     ax.set_ylabel("RMS error / noise RMS [1]")
     ax.set_ylim(0, max(1.2, 1.12 * max(s["error"] for s in steps)))
     ax.grid(True, alpha=0.3, axis="y")
@@ -332,7 +333,7 @@ def plot_phases(d: Diagnosis, i: int, path: Path) -> Path:
         ax[k].set_title(f"{ch} residual by phase", fontsize=9)
         ax[k].grid(True, alpha=0.3, axis="y")
         ax[k].legend(fontsize=7)
-    fig.suptitle(rd.run_id, fontsize=9)
+    fig.suptitle(literal(rd.run_id), fontsize=9)
     return _save(fig, path)
 
 

@@ -10,6 +10,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from hybridtable._files import atomic_path  # noqa: E402
 from hybridtable.loop.simulation import SimulationResult  # noqa: E402
 
 __all__ = ["plot_run", "plot_velocities", "plot_forces"]
@@ -34,9 +35,11 @@ def _contact_window(results: Sequence[SimulationResult], margin_s: float = 0.1):
 def _save(fig, path: str | Path) -> Path:
     fig.tight_layout()
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    try:
+        with atomic_path(path) as tmp:  # an interrupted save leaves no half figure
+            fig.savefig(tmp, dpi=120, format=path.suffix.lstrip(".").lower() or None)
+    finally:
+        plt.close(fig)
     return path
 
 
