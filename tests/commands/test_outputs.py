@@ -74,3 +74,66 @@ def test_an_input_is_never_an_output_even_with_force(tmp_path, capsys):
     assert main(["compare", str(run), "--json", str(run), "--force"]) == 2
     assert "input" in capsys.readouterr().err
     assert run.read_text() == before
+
+
+def test_an_output_that_cannot_be_written_is_refused_before_the_work(tmp_path, capsys):
+    blocker = tmp_path / "afile"
+    blocker.write_text("x")
+    t0 = time.perf_counter()
+    assert main(["simulate", "--json", str(blocker / "out.json")]) == 2
+    assert main(["compare", str(EXAMPLES), "--report", str(blocker / "rep")]) == 2
+    assert time.perf_counter() - t0 < 30.0
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 2 and all("is a file, not a folder" in line for line in err), err
+
+
+def test_the_tables_are_never_written_over(tmp_path, capsys):
+    from hybridtable.studies.paper import load_tables
+
+    tables = tmp_path / "tables.json"
+    text = json.dumps(load_tables())
+    tables.write_text(text)
+    rc = main(["reproduce", "--tables", str(tables), "--json", str(tables), "--force"])
+    assert rc == 2
+    assert "one of the input files" in capsys.readouterr().err
+    assert tables.read_text() == text
+
+
+def test_a_plot_suffix_matplotlib_cannot_write_is_refused_first(tmp_path, capsys):
+    assert main(["simulate", "--plot", str(tmp_path / "out.txt")]) == 2
+    err = capsys.readouterr().err
+    assert "--plot" in err and "png" in err and err.count("\n") == 1
+    assert not (tmp_path / "out.txt").exists()
+
+
+def test_an_interrupted_report_leaves_the_folder_as_it_was(tmp_path, monkeypatch, capsys):
+    import hybridtable.reports.compare as report_module
+
+    report = tmp_path / "rep"
+    report.mkdir()
+    (report / "mine.txt").write_text("mine")
+    real = report_module.write_report
+
+    def interrupted(comparisons, folder, **kw):
+        real(comparisons, folder, **kw)  # every file written, then Ctrl-C
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(report_module, "write_report", interrupted)
+    argv = ["compare", str(EXAMPLES / "run1.csv"), "--report", str(report), "--force"]
+    assert main(argv) == 130
+    assert capsys.readouterr().err.strip().endswith("hybridtable: interrupted")
+    assert sorted(p.name for p in report.iterdir()) == ["mine.txt"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["rep"]  # no staging folder
+
+
+def test_a_run_id_with_dollars_is_drawn_as_written(tmp_path, capsys):
+    import shutil
+
+    runs = tmp_path / "runs"
+    runs.mkdir()
+    shutil.copy(EXAMPLES / "run1.csv", runs / "run1.csv")
+    info = json.loads((EXAMPLES / "run1.json").read_text())
+    info["run_id"] = "cost $5 and $x^2$"
+    (runs / "run1.json").write_text(json.dumps(info))
+    assert main(["compare", str(runs), "--report", str(tmp_path / "rep"), "--no-progress"]) == 0
+    assert "cost $5 and $x^2$" in (tmp_path / "rep" / "report.md").read_text()
