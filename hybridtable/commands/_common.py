@@ -26,6 +26,7 @@ __all__ = [
     "UNIT_METAVARS",
     "write_json",
     "input_paths",
+    "read_run_arguments",
     "add_run_arguments",
     "check_outputs",
     "declared_inputs",
@@ -176,6 +177,16 @@ def write_json(path: str | Path, data: Any) -> None:
         sys.stdout.write(text)
         return
     write_text_atomic(path, text)
+
+
+def read_run_arguments(args: argparse.Namespace):
+    """The runs of ``RUN...`` (with ``--column-map``), every long log split into
+    its contact events (:func:`hybridtable.measurement.events.split_runs`):
+    ``(runs, splits)``."""
+    from hybridtable.measurement.events import split_runs
+    from hybridtable.measurement.run_reader import parse_column_map, read_runs
+
+    return split_runs(read_runs(args.runs, parse_column_map(args.column_map)))
 
 
 def input_paths(runs) -> list[Path]:

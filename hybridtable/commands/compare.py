@@ -52,7 +52,12 @@ def register(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from hybridtable._files import staged_folder
-    from hybridtable.commands._common import check_outputs, input_paths, write_json
+    from hybridtable.commands._common import (
+        check_outputs,
+        input_paths,
+        read_run_arguments,
+        write_json,
+    )
     from hybridtable.commands._model_options import (
         load_model_arg,
         load_plugins,
@@ -60,14 +65,12 @@ def run(args: argparse.Namespace) -> int:
         write_model,
     )
     from hybridtable.measurement.comparison import check_comparable, compare_run
-    from hybridtable.measurement.run_reader import parse_column_map, read_runs
     from hybridtable.reports.compare import format_table, format_whiteness, verdict, write_report
 
     load_plugins(args)
     added = parse_added(args)  # a malformed --add before any work
     base = load_model_arg(args)
-    column_map = parse_column_map(args.column_map)
-    runs = read_runs(args.runs, column_map)
+    runs, splits = read_run_arguments(args)
     for r in runs:  # every defect before any work
         check_comparable(r)
     inputs = input_paths(runs)
@@ -86,6 +89,8 @@ def run(args: argparse.Namespace) -> int:
     comparisons = [compare_run(r, max_lag_s=args.max_lag_s) for r in iterator]
     sentence = verdict(comparisons)
     document = {"verdict": sentence, "runs": [c.to_json() for c in comparisons]}
+    if splits:
+        document["contact_events"] = [s.to_dict() for s in splits]
     model = None
     if added or base is not None:
         model, comparisons, document = _compare_with_model(
@@ -98,6 +103,12 @@ def run(args: argparse.Namespace) -> int:
         print(format_table(comparisons))
         print()
         print(format_whiteness(comparisons))
+    if splits and not quiet:
+        print()
+        for s in splits:
+            print(s.sentence())
+    if splits and model is not None:
+        document["contact_events"] = [s.to_dict() for s in splits]
     if args.save_model:
         if model is None:
             from hybridtable.diagnosis.model_file import RigModel

@@ -81,12 +81,16 @@ def diagnosis_json(d) -> dict:
 
 def run(args: argparse.Namespace) -> int:
     from hybridtable._files import staged_folder
-    from hybridtable.commands._common import check_outputs, input_paths, write_json
+    from hybridtable.commands._common import (
+        check_outputs,
+        input_paths,
+        read_run_arguments,
+        write_json,
+    )
     from hybridtable.commands._model_options import load_plugins, write_model
     from hybridtable.diagnosis.diagnose import diagnose
     from hybridtable.diagnosis.registry import get_effect
     from hybridtable.errors import CommandError
-    from hybridtable.measurement.run_reader import parse_column_map, read_runs
     from hybridtable.reports.diagnose import (
         format_ranking,
         summary_sentence,
@@ -101,7 +105,7 @@ def run(args: argparse.Namespace) -> int:
             get_effect(e)
         if not effects:
             raise CommandError("--effects names no effect")
-    runs = read_runs(args.runs, parse_column_map(args.column_map))
+    runs, splits = read_run_arguments(args)
     inputs = input_paths(runs)
     check_outputs(
         args,
@@ -124,6 +128,8 @@ def run(args: argparse.Namespace) -> int:
         print()
         print(format_ranking(d))
         print(f"({d.simulations} model runs, {d.wall_time_s:.1f} s)")
+        for s in splits:
+            print(s.sentence())
     if args.save_model:
         from hybridtable.diagnosis.model_file import model_from_diagnosis
 
@@ -132,7 +138,10 @@ def run(args: argparse.Namespace) -> int:
         if not quiet:
             print(f"wrote the model to {args.save_model}: {model.describe()}")
     if args.json:
-        write_json(args.json, diagnosis_json(d))
+        document = diagnosis_json(d)
+        if splits:
+            document["contact_events"] = [s.to_dict() for s in splits]
+        write_json(args.json, document)
     if args.report:
         with staged_folder(args.report) as stage:
             files = write_report(d, stage.path)

@@ -112,6 +112,9 @@ class Run:
     v_des_m_per_s: np.ndarray
     csv_path: Path | None = None
     json_path: Path | None = None
+    #: Which part of the files this run is, if not all of them (a contact
+    #: event of a long log, :mod:`hybridtable.measurement.events`).
+    part: str | None = None
 
     @property
     def run_id(self) -> str:
@@ -138,4 +141,5 @@ class Run:
     def where(self, what: str) -> str:
         """A file name for messages about this run (``what`` = "csv" or "json")."""
         path = self.csv_path if what == "csv" else self.json_path
-        return str(path) if path is not None else f"run {self.run_id}"
+        where = str(path) if path is not None else f"run {self.run_id}"
+        return where if self.part is None else f"{where} ({self.part})"
