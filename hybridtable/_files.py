@@ -19,6 +19,7 @@ from __future__ import annotations
 import contextlib
 import os
 import shutil
+import stat
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
@@ -30,6 +31,7 @@ __all__ = [
     "staged_folder",
     "Staging",
     "writable_problem",
+    "regular_file_problem",
 ]
 
 
@@ -113,6 +115,30 @@ def staged_folder(path: str | Path) -> Iterator[Staging]:
             shutil.rmtree(stage, ignore_errors=True)
 
 
+def regular_file_problem(path: str | Path) -> str | None:
+    """Why ``path`` is not a regular file to read, in words ("no such file", "a
+    FIFO", "a device", "a folder"), or ``None``. Reading a FIFO or a device would
+    block or never end, so a reader asks this first."""
+    p = Path(path)
+    try:
+        mode = p.stat().st_mode
+    except FileNotFoundError:
+        return "no such file" if not p.is_symlink() else "a broken link"
+    except OSError as err:
+        return f"cannot read it ({err.strerror})"
+    if stat.S_ISREG(mode):
+        return None
+    if stat.S_ISDIR(mode):
+        return "a folder, not a file"
+    if stat.S_ISFIFO(mode):
+        return "a FIFO (named pipe), not a file"
+    if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
+        return "a device, not a file"
+    if stat.S_ISSOCK(mode):
+        return "a socket, not a file"
+    return "not a regular file"
+
+
 def writable_problem(path: str | Path, folder: bool = False) -> str | None:
     """Why ``path`` (a file, or a folder if ``folder``) cannot be written, in
     words, or ``None`` if it can: an ancestor that is a file, or the nearest
@@ -127,6 +153,11 @@ def writable_problem(path: str | Path, folder: bool = False) -> str | None:
         return f"{probe} is a file, not a folder"
     if not os.access(probe, os.W_OK | os.X_OK):
         return f"the folder {probe} is not writable"
+    try:  # what the permissions say is not always what the system allows
+        with tempfile.TemporaryFile(dir=probe):
+            pass
+    except OSError as err:
+        return f"the folder {probe} is not writable ({err.strerror})"
     if target.exists() and not folder and not os.access(target, os.W_OK):
         # Replaced by a rename, but a read-only file is the user's "keep this".
         return f"{target} is read-only"

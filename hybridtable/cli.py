@@ -109,6 +109,19 @@ def _sub_parser(parser: argparse.ArgumentParser, name: str) -> argparse.Argument
     return None
 
 
+#: Longest error line the command line prints (a message quoting a user's
+#: megabyte-long cell or column name is cut).
+_MAX_ERROR_CHARS = 500
+
+
+def _one_line(text: str) -> str:
+    """``text`` on one line of at most :data:`_MAX_ERROR_CHARS` characters."""
+    text = " ".join(str(text).split())
+    if len(text) <= _MAX_ERROR_CHARS:
+        return text
+    return text[: _MAX_ERROR_CHARS - 30] + f"... ({len(text)} characters)"
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``hybridtable`` console script."""
     parser = build_parser()
@@ -117,10 +130,18 @@ def main(argv: list[str] | None = None) -> int:
         return int(args.func(args) or 0)
     except (ParameterError, CommandError) as err:
         sub = _sub_parser(parser, args.command)
-        print(f"hybridtable {args.command}: error: {_flag_message(err, sub)}", file=sys.stderr)
+        text = _one_line(_flag_message(err, sub))
+        print(f"hybridtable {args.command}: error: {text}", file=sys.stderr)
         return 2
     except SimulationError as err:
-        print(f"hybridtable {args.command}: error: {err}", file=sys.stderr)
+        print(f"hybridtable {args.command}: error: {_one_line(str(err))}", file=sys.stderr)
+        return 1
+    except MemoryError:
+        print(
+            f"hybridtable {args.command}: error: out of memory (the input is too large for "
+            "this machine)",
+            file=sys.stderr,
+        )
         return 1
     except KeyboardInterrupt:
         print("hybridtable: interrupted", file=sys.stderr)

@@ -131,8 +131,6 @@ def _names(text: str | None, flag: str) -> tuple[str, ...]:
 
 
 def run(args: argparse.Namespace) -> int:
-    import json
-    from pathlib import Path
 
     from hybridtable._files import staged_folder
     from hybridtable.commands._common import check_outputs, write_json
@@ -154,16 +152,9 @@ def run(args: argparse.Namespace) -> int:
         run_sweep,
         sweep_points,
     )
+    from hybridtable.studies.paper import load_tables
 
-    tables = None
-    if args.tables is not None:
-        path = Path(args.tables)
-        if not path.is_file():
-            raise CommandError(f"no such tables file: {args.tables}")
-        try:
-            tables = json.loads(path.read_text())
-        except (OSError, json.JSONDecodeError) as err:
-            raise CommandError(f"cannot read {args.tables}: {err}") from None
+    tables = None if args.tables is None else load_tables(args.tables)
     check_outputs(args, files={"--json": args.json}, folders={"--report": args.report})
     settings = SweepSettings(
         compensators=_names(args.compensators, "--compensators"),

@@ -177,6 +177,8 @@ class RunComparison:
                 "samples": f["samples"],
                 "time_fraction": f["time_fraction"],
             }
+            if f["samples"] == 0:
+                phases[name]["note"] = "no tick of the record is in this phase: no error to give"
         return {
             "run_id": self.run_id,
             "compensator": self.run.info.compensator,

@@ -15,7 +15,7 @@ from pathlib import Path
 from hybridtable.errors import MeasurementError
 from hybridtable.measurement.run_format import RUN_COLUMNS
 
-__all__ = ["format_names"]
+__all__ = ["format_names", "shown"]
 
 #: Other names a log may give each format column (lower case), for the
 #: suggestion of a missing column's error.
@@ -41,9 +41,16 @@ def _similarity(column: str, log_name: str) -> float:
     )
 
 
+def shown(text: str, most: int = 40) -> str:
+    """``text`` cut to ``most`` characters for a one-line message (a log's cell
+    or column name may be a megabyte long)."""
+    text = str(text)
+    return text if len(text) <= most else f"{text[:most]}... ({len(text)} characters)"
+
+
 def _column_list(header: Sequence[str], most: int = 10) -> str:
-    shown = ", ".join(header[:most])
-    return shown + (", ..." if len(header) > most else "")
+    listed = ", ".join(shown(c) for c in header[:most])
+    return listed + (f", ... ({len(header)} in all)" if len(header) > most else "")
 
 
 def _missing_message(missing: list[str], header: list[str], leftover: list[str]) -> str:
@@ -102,7 +109,7 @@ def format_names(
         if not c:
             raise MeasurementError(f"{path} line {header_line}: empty column name in the header")
         if name in seen:
-            raise MeasurementError(f"{path} line {header_line}: column {c!r} appears twice")
+            raise MeasurementError(f"{path} line {header_line}: column {shown(c)!r} appears twice")
         seen.add(name)
     unmatched = [f"{f}={log}" for f, log in (column_map or {}).items() if log not in header]
     if unmatched:
@@ -119,7 +126,7 @@ def format_names(
     extra = [c for c, name in zip(header, names, strict=True) if name not in RUN_COLUMNS]
     if extra:
         raise MeasurementError(
-            f"{path} line {header_line}: unexpected column(s) {', '.join(extra)} "
+            f"{path} line {header_line}: unexpected column(s) {_column_list(extra)} "
             f"(the format has {', '.join(RUN_COLUMNS)}; rename with --column-map)"
         )
     return names

@@ -29,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
+from hybridtable._files import regular_file_problem
 from hybridtable.compensators.paper import COMPENSATORS
 from hybridtable.errors import MeasurementError
 from hybridtable.limits import LIMITS
@@ -43,7 +44,7 @@ from hybridtable.measurement.run_format import (
     Run,
     RunInfo,
 )
-from hybridtable.measurement.run_header import format_names
+from hybridtable.measurement.run_header import format_names, shown
 
 __all__ = [
     "MeasurementError",
@@ -95,6 +96,9 @@ def parse_column_map(items: Iterable[str] | None) -> dict[str, str]:
 
 # -- JSON ----------------------------------------------------------------------
 def _read_text(path: Path) -> str:
+    problem = regular_file_problem(path)
+    if problem:
+        raise MeasurementError(f"{path}: {problem}")
     try:
         data = path.read_bytes()
     except OSError as err:
@@ -117,6 +121,8 @@ def _read_info(path: Path) -> RunInfo:
         raise MeasurementError(
             f"{path} line {err.lineno}, column {err.colno}: not valid JSON ({err.msg})"
         ) from None
+    except RecursionError:
+        raise MeasurementError(f"{path}: not a run's JSON (nested too deeply)") from None
     return run_info_from_dict(raw, str(path))
 
 
@@ -282,11 +288,11 @@ def _read_series(
                 x = _parse_cell(cell)
             except ValueError:
                 raise MeasurementError(
-                    f"{path} line {line}, column {names[c]}: not a number ({cell.strip()!r})"
+                    f"{path} line {line}, column {names[c]}: not a number ({shown(cell.strip())!r})"
                 ) from None
             if not math.isfinite(x):
                 raise MeasurementError(
-                    f"{path} line {line}, column {names[c]}: not finite ({cell.strip()})"
+                    f"{path} line {line}, column {names[c]}: not finite ({shown(cell.strip())})"
                 )
             values[r, c] = x
     cols = {name: values[:, names.index(name)].copy() for name in RUN_COLUMNS}
@@ -355,11 +361,14 @@ def read_run(
     csv_path = Path(csv_path)
     json_path = Path(json_path) if json_path is not None else csv_path.with_suffix(".json")
     for p in (csv_path, json_path):
-        if not p.is_file():
+        problem = regular_file_problem(p)
+        if problem == "no such file":
             partner = csv_path if p is json_path else json_path
             raise MeasurementError(
                 f"{p}: no such file" + (f" (the partner of {partner})" if partner.is_file() else "")
             )
+        if problem:
+            raise MeasurementError(f"{p}: {problem}")
     info = _read_info(json_path)
     cols, lines = _read_series(csv_path, column_map)
     _check_time(csv_path, json_path, cols["time_s"], lines, info)
@@ -368,9 +377,11 @@ def read_run(
 
 def _looks_like_run(path: Path) -> bool:
     """True if ``path`` is a JSON object with the format's ``format`` value."""
+    if regular_file_problem(path):
+        return False
     try:
         raw = json.loads(path.read_text(encoding="utf-8-sig"))
-    except (OSError, ValueError):
+    except (OSError, ValueError, RecursionError):
         return False
     return isinstance(raw, dict) and raw.get("format") == FORMAT
 
@@ -392,12 +403,20 @@ def find_run_files(paths: Sequence[str | Path]) -> list[tuple[Path, Path]]:
     for raw in paths:
         p = Path(raw)
         if p.is_dir():
-            stems = sorted({q.stem for q in p.iterdir() if q.suffix in (".csv", ".json")})
+            try:
+                names = list(p.iterdir())
+            except OSError as err:
+                raise MeasurementError(f"{p}: cannot list the folder ({err.strerror})") from None
+            stems = sorted({q.stem for q in names if q.suffix in (".csv", ".json")})
             if not stems:
                 raise MeasurementError(f"{p}: folder holds no runs (no .csv/.json pairs)")
             found = len(pairs)
             for stem in stems:
                 c, j = p / f"{stem}.csv", p / f"{stem}.json"
+                for q in (c, j):
+                    problem = regular_file_problem(q)
+                    if problem and problem != "no such file":
+                        raise MeasurementError(f"{q}: {problem}")
                 if not c.is_file():
                     if not _looks_like_run(j):
                         continue  # another JSON file (e.g. results of compare)

@@ -12,6 +12,8 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from hybridtable._files import regular_file_problem
+from hybridtable.errors import ParameterError
 from hybridtable.loop.params import HybridLoopParams
 
 __all__ = [
@@ -37,10 +39,43 @@ TABLE1_DEFAULTS: dict[str, float] = {
 
 def load_tables(path: str | Path | None = None) -> dict[str, Any]:
     """The paper's tables as a dict (the ``tables.json`` schema): ``path``, or
-    the copy the package ships."""
-    if path is not None:
-        return json.loads(Path(path).read_text())
-    return json.loads(resources.files("hybridtable.data").joinpath("paper_tables.json").read_text())
+    the copy the package ships.
+
+    Raises
+    ------
+    ParameterError
+        One line naming ``path``: not a readable file, not JSON, or not the
+        schema (Table 1's parameters and CoRs, Table 2's rows, each a plausible
+        loop).
+    """
+    if path is None:
+        text = resources.files("hybridtable.data").joinpath("paper_tables.json").read_text()
+        return json.loads(text)
+    problem = regular_file_problem(path)
+    if problem:
+        raise ParameterError(f"{path}: {problem}")
+    try:
+        tables = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError, RecursionError) as err:
+        raise ParameterError(f"{path}: cannot read the paper's tables ({err})") from None
+    try:
+        for c in ("none", "SDC", "MDC", "SDMDC"):
+            float(tables["table1_simulation"]["cor"][c])
+            table1_params(c, tables)
+        rows = table2_rows(tables)
+        for row in rows:
+            float(row["cor_sdmdc"])
+            table2_params(row)
+        if not rows:
+            raise ValueError("Table 2 has no rows")
+    except ParameterError as err:
+        raise ParameterError(f"{path}: {err}") from None
+    except (KeyError, TypeError, ValueError, AttributeError) as err:
+        raise ParameterError(
+            f"{path}: not the paper's tables ({type(err).__name__}: {err}); see "
+            "hybridtable/data/paper_tables.json for the schema"
+        ) from None
+    return tables
 
 
 def paper_params(
