@@ -139,16 +139,34 @@ def regular_file_problem(path: str | Path) -> str | None:
     return "not a regular file"
 
 
+def _exists(path: Path) -> bool | None:
+    """True/False, or None when the system will not say (no permission)."""
+    try:
+        path.lstat()
+    except FileNotFoundError:
+        return False
+    except NotADirectoryError:
+        return False
+    except OSError:
+        return None
+    return True
+
+
 def writable_problem(path: str | Path, folder: bool = False) -> str | None:
     """Why ``path`` (a file, or a folder if ``folder``) cannot be written, in
-    words, or ``None`` if it can: an ancestor that is a file, or the nearest
-    existing folder not writable."""
+    words, or ``None`` if it can: an ancestor that is a file, a folder that
+    cannot be entered or written (tried for real), a read-only file."""
     target = Path(path).absolute()
     probe = target if folder else target.parent
-    while not probe.exists():
-        if probe.is_symlink():
-            return f"{probe} is a broken link"
+    while True:
+        known = _exists(probe)
+        if known is None:
+            return f"the folder {probe.parent} cannot be entered"
+        if known:
+            break
         probe = probe.parent
+    if probe.is_symlink() and not probe.exists():
+        return f"{probe} is a broken link"
     if not probe.is_dir():
         return f"{probe} is a file, not a folder"
     if not os.access(probe, os.W_OK | os.X_OK):
@@ -158,7 +176,7 @@ def writable_problem(path: str | Path, folder: bool = False) -> str | None:
             pass
     except OSError as err:
         return f"the folder {probe} is not writable ({err.strerror})"
-    if target.exists() and not folder and not os.access(target, os.W_OK):
+    if not folder and _exists(target) and not os.access(target, os.W_OK):
         # Replaced by a rename, but a read-only file is the user's "keep this".
         return f"{target} is read-only"
     return None

@@ -246,28 +246,27 @@ def check_outputs(
     for flag, path in (files or {}).items():
         if path is None or str(path) == "-":
             continue
+        problem = writable_problem(path)
+        if problem:
+            raise CommandError(f"{flag} {path}: cannot write it ({problem})")
         target = Path(path).resolve()
         if target in inputs:
             raise CommandError(f"{flag} {path} is one of the input files; not writing over it")
         if target.is_dir():
             raise CommandError(f"{flag} {path} is a folder; give a file name")
-        problem = writable_problem(target)
-        if problem:
-            raise CommandError(f"{flag} {path}: cannot write it ({problem})")
         if target.exists() and not force:
             raise CommandError(f"{flag} {path} exists; give --force to replace it")
     for flag, path in (folders or {}).items():
         if path is None:
             continue
+        problem = writable_problem(path, folder=True) or writable_problem(path)
+        if problem:
+            raise CommandError(f"{flag} {path}: cannot write into it ({problem})")
         d = Path(path).resolve()
         if d.exists() and not d.is_dir():
             raise CommandError(f"{flag} {path} is a file, not a folder")
         if any(d == p.parent or d in p.parents for p in inputs):
             raise CommandError(f"{flag} {path} holds input files; choose another folder")
-        # The files are staged beside the folder, then moved in.
-        problem = writable_problem(d, folder=True) or writable_problem(d)
-        if problem:
-            raise CommandError(f"{flag} {path}: cannot write into it ({problem})")
         if d.is_dir() and any(d.iterdir()) and not force:
             raise CommandError(
                 f"{flag} {path} is not empty; choose a new folder, or give --force to "
