@@ -32,25 +32,33 @@ class Limit:
     """The plausible range ``[low, high]`` of one quantity (both ends included).
 
     ``ideal_inf``: ``math.inf`` is accepted too, as an ideal element (an ideal
-    table has an infinite response frequency).
+    table has an infinite response frequency). ``smallest_nonzero``: with
+    ``low == 0``, the values between 0 and it are refused (a delay of 1e-300 s
+    is no delay a model can hold: give 0).
     """
 
     low: float
     high: float
     unit: str
     ideal_inf: bool = False
+    smallest_nonzero: float | None = None
 
     def contains(self, value: float) -> bool:
         """True if ``value`` lies in the range (``inf`` where ideal)."""
         if self.ideal_inf and value == math.inf:
             return True
+        if self.smallest_nonzero is not None and 0.0 < abs(value) < self.smallest_nonzero:
+            return False
         return math.isfinite(value) and self.low <= value <= self.high
 
     def words(self, unit: bool = True) -> str:
         """The range in words: ``"0.001 to 1e+07 kg"``, ``"0.1 to 1e+04 Hz, or inf"``
         (without the unit if ``unit`` is false)."""
         unit = "" if self.unit == "1" or not unit else f" {self.unit}"
-        text = f"{self.low:g} to {self.high:g}{unit}"
+        if self.smallest_nonzero is not None:
+            text = f"0, or {self.smallest_nonzero:g} to {self.high:g}{unit}"
+        else:
+            text = f"{self.low:g} to {self.high:g}{unit}"
         return text + (", or inf" if self.ideal_inf else "")
 
 
@@ -69,11 +77,11 @@ LIMITS: dict[str, Limit] = {
     "table_response_hz": Limit(0.1, 1e4, "Hz", ideal_inf=True),
     "table_natural_frequency_hz": Limit(0.1, 1e4, "Hz"),
     "table_damping_ratio": Limit(0.0, 10.0, "1"),
-    "sensor_delay_s": Limit(0.0, 1.0, "s"),
+    "sensor_delay_s": Limit(0.0, 1.0, "s", smallest_nonzero=1e-6),
     # the rig computer and its compensator
     "sample_rate_hz": Limit(1.0, 1e6, "Hz"),
-    "lead_time_s": Limit(0.0, 1.0, "s"),
-    "compensator_stiffness_n_per_m": Limit(0.0, 1e10, "N/m"),
+    "lead_time_s": Limit(0.0, 1.0, "s", smallest_nonzero=1e-6),
+    "compensator_stiffness_n_per_m": Limit(1.0, 1e10, "N/m"),
     "compensator_damping_n_s_per_m": Limit(0.0, 1e8, "N s/m"),
     "force_deadband_n": Limit(0.0, 1e6, "N"),
     # the continuous model's integration step

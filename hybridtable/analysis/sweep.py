@@ -124,6 +124,11 @@ class SweepResult:
             "model": {
                 "kind": "sampled" if self.sampled else "continuous",
                 "pade_order": self.pade_order,
+                **(
+                    {"note": "pade_order null: a sampled-data model holds the delay exactly"}
+                    if self.pade_order is None
+                    else {}
+                ),
                 "sample_rate_hz": b.sample_rate_hz,
                 "spacecraft_mass_kg": b.spacecraft_mass_kg,
                 "contact_stiffness_n_per_m": b.contact_stiffness_n_per_m,
@@ -328,4 +333,19 @@ class ValidationPoint:
     error: str | None = None
 
     def to_dict(self) -> dict:
-        return asdict(self)
+        out = asdict(self)
+        why = []
+        if self.cor_sim is None:
+            why.append(f"cor_sim and abs_error null: the simulation failed ({self.error})")
+        else:
+            out["error"] = ""
+        if self.cor_exact_delay is None:
+            why.append("cor_exact_delay null: computed for continuous models only")
+        if self.cor_linear_transient is None or self.cause is None:
+            why.append(
+                "cor_linear_transient and cause null: the linear and simulated CoRs agree "
+                "within the threshold, so the difference is not split into its causes"
+            )
+        if why:
+            out["note"] = "; ".join(why)
+        return out

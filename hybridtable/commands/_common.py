@@ -25,6 +25,7 @@ __all__ = [
     "flag_words",
     "UNIT_METAVARS",
     "write_json",
+    "note_unset",
     "input_paths",
     "read_run_arguments",
     "add_run_arguments",
@@ -86,8 +87,10 @@ def number_type(accepted: str, unit: str = "1"):
             value = float(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+        if math.isinf(value) and "inf" not in text.lower():
+            raise argparse.ArgumentTypeError(f"too large (got {text[:20]}...)")
         if math.isnan(value) or not check(value):
-            raise argparse.ArgumentTypeError(f"must be {words}{unit_text} (got {text})")
+            raise argparse.ArgumentTypeError(f"must be {words}{unit_text} (got {text[:40]})")
         return value
 
     number.__name__ = "number"
@@ -165,6 +168,34 @@ def _jsonable(obj: Any) -> Any:
 
 def _json_text(data: Any) -> str:
     return json.dumps(_jsonable(data), indent=2) + "\n"
+
+
+def _is_unset(value: Any) -> bool:
+    """None, NaN or an infinity, or a list or array holding one."""
+    if value is None:
+        return True
+    if isinstance(value, float):
+        return not math.isfinite(value)
+    if isinstance(value, str):
+        return value in ("inf", "-inf", "nan")
+    if isinstance(value, list | tuple) or hasattr(value, "tolist"):
+        items = value.tolist() if hasattr(value, "tolist") else value
+        items = items if isinstance(items, list) else [items]
+        return any(_is_unset(v) for v in items)
+    return False
+
+
+def note_unset(document: dict, reasons: Mapping[str, str]) -> dict:
+    """Say why values are missing or infinite: for every key of ``reasons`` whose
+    value in ``document`` is None, NaN or infinite (or a list holding one), its
+    reason is added to ``document["note"]`` (one string, sentences joined by
+    "; "). A JSON reader then never meets a null or an infinity without a word
+    why. Returns ``document``."""
+    why = [text for key, text in reasons.items() if key in document and _is_unset(document[key])]
+    if why:
+        old = document.get("note")
+        document["note"] = "; ".join(([old] if old else []) + why)
+    return document
 
 
 def write_json(path: str | Path, data: Any) -> None:

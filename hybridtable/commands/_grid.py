@@ -42,7 +42,12 @@ def parse_list(text: str, name: str, limit: str | None = None) -> np.ndarray:
                 raise ValueError
             values = np.linspace(start, stop, count)
         else:
-            values = np.array([float(v) for v in text.split(",") if v.strip() != ""])
+            items = [v for v in text.split(",") if v.strip() != ""]
+            values = np.array([float(v) for v in items])
+            if any(
+                math.isinf(x) and "inf" not in v.lower() for x, v in zip(values, items, strict=True)
+            ):
+                raise ValueError  # a literal too large for a float, not "inf"
     except ValueError:
         raise CommandError(
             f"{name}: expected comma-separated numbers or start:stop:count, got {text!r}"

@@ -211,6 +211,8 @@ def run_record(args: argparse.Namespace, model) -> dict:
         "nominal": infos[0].to_dict(),
         "runs": truth_runs,
     }
+    if args.model is None:
+        truth_doc["note"] = "model_file null: the nominal model, no --model file"
     # All runs and truth.json appear together, or none (an interruption
     # leaves the folder as it was).
     with staged_folder(folder) as stage:

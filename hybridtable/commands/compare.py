@@ -191,4 +191,6 @@ def _compare_with_model(runs, nominal, added, base, args, quiet: bool):
         "model_file": args.model,
         "added_effects": added_json(model, names),
     }
+    if args.model is None:
+        document["note"] = "model_file null: the nominal model with --add, no --model file"
     return model, comparisons, document

@@ -91,6 +91,7 @@ def run(args: argparse.Namespace) -> int:
     from hybridtable.diagnosis.diagnose import diagnose
     from hybridtable.diagnosis.registry import get_effect
     from hybridtable.errors import CommandError
+    from hybridtable.measurement.comparison import check_comparable
     from hybridtable.reports.diagnose import (
         format_ranking,
         summary_sentence,
@@ -106,6 +107,8 @@ def run(args: argparse.Namespace) -> int:
         if not effects:
             raise CommandError("--effects names no effect")
     runs, splits = read_run_arguments(args)
+    for r in runs:  # no contact, or one that has not ended: no CoR, nothing to fit
+        check_comparable(r)
     inputs = input_paths(runs)
     check_outputs(
         args,

@@ -98,6 +98,11 @@ def effect_json(effect, source: str, scale, where: str) -> dict:
                 "rig_dependent": [k for k, v in fields.items() if callable(v)],
             }
         )
+        if params[-1]["null"] is None:
+            params[-1]["note"] = (
+                "null null: no value of this parameter removes the effect (its absence is "
+                "another parameter's null)"
+            )
     sig = effect.signature
     return {
         "name": effect.name,

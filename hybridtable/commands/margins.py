@@ -381,8 +381,48 @@ def run(args: argparse.Namespace) -> int:
             print(f"wrote {exported} (the linear loop with {export_comp}, for control.ss)")
         print(f"wall time {wall:.1f} s")
     if args.json:
-        write_json(args.json, data)
+        write_json(args.json, _with_notes(data))
     return 0
+
+
+def _with_notes(data: dict) -> dict:
+    """The margins document with a note beside every null or infinity (what it means)."""
+    from hybridtable.commands._common import note_unset
+
+    note_unset(
+        data,
+        {
+            "max_validation_abs_error": "max_validation_abs_error: no nonlinear validation "
+            "(--validate 0)"
+        },
+    )
+    note_unset(
+        data.get("model", {}),
+        {"sample_rate_hz": "sample_rate_hz null: a continuous rig computer (no --sample-rate-hz)"},
+    )
+    grid_words = {
+        "critical_delay_s": "critical_delay_s inf: stable at every delay of the search at "
+        "that table frequency",
+        "critical_table_hz": "critical_table_hz inf: stable at every table frequency of the "
+        "grid at that delay",
+        "cor_limited_delay_s": "cor_limited_delay_s inf: the predicted CoR stays within "
+        "--cor-limit at every delay of the search at that table frequency",
+        "cor_limited_table_hz": "cor_limited_table_hz inf: the predicted CoR stays within "
+        "--cor-limit at every table frequency of the grid at that delay",
+    }
+    for entry in data.get("compensators", {}).values():
+        note_unset(entry, grid_words)
+    point_words = {
+        "gain_margin": "gain_margin and gain_margin_db inf, phase_crossover_rad_per_s null: "
+        "the phase never crosses -180 deg, so no gain makes the loop unstable",
+        "delay_margin_s": "delay_margin_s inf: no gain crossover, so no delay makes the loop "
+        "unstable",
+        "critical_delay_s": "critical_delay_s inf: stable at every delay up to search_max_delay_s",
+    }
+    for key in ("operating_point_margins", "operating_point"):
+        for entry in data.get(key, {}).get("compensators", {}).values():
+            note_unset(entry, point_words)
+    return data
 
 
 def _operating_point(args: argparse.Namespace, base, model, comps) -> tuple[float, float, str]:

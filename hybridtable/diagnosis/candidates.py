@@ -97,7 +97,29 @@ class Candidate:
             "channel_error_before": dict(self.channel_error_before),
             "channel_error_after": dict(self.channel_error_after),
             "notes": list(self.notes),
+            **({"note": "; ".join(why)} if (why := self._unset_reasons()) else {}),
         }
+
+    def _unset_reasons(self) -> list[str]:
+        """Why figures of :meth:`to_json` are null, in words."""
+        why = []
+        if not math.isfinite(self.heldout_z) or not math.isfinite(self.heldout_error_after):
+            why.append(
+                "heldout_error_after and heldout_z null: the held-out test runs only for an "
+                f"effect whose fit is significant (delta_bic > {BIC_THRESHOLD:g}) on two runs "
+                "or more"
+            )
+        if not math.isfinite(self.excess_removed):
+            why.append(
+                "excess_removed null: no held-out error after the effect, or no excess error "
+                "(the model without it is within the noise)"
+            )
+        if self.separation is None:
+            why.append("separating_run null: no other effect fits as well as this one")
+        for name in ("delta_bic", "error_after", "heldout_error_before"):
+            if not math.isfinite(getattr(self, name)):
+                why.append(f"{name} null: not computed (the fit failed or did not run)")
+        return why
 
 
 @dataclass

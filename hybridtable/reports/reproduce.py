@@ -54,6 +54,11 @@ class Reproduction:
             "figures": self.figures,
             "time_step_s": self.time_step_s,
             "contact_gate": self.contact_gate,
+            **(
+                {"note": "time_step_s null: each run's default step, min(2e-4, 1/(5000 f_con)) s"}
+                if self.time_step_s is None
+                else {}
+            ),
         }
 
 

@@ -41,6 +41,7 @@ import numpy as np
 
 from hybridtable._validation import check_nonnegative, check_positive
 from hybridtable.errors import ParameterError
+from hybridtable.studies.run_json import run_json
 
 __all__ = [
     "SCENARIOS",
@@ -186,11 +187,14 @@ class SweepResult:
     figures: list[str] = field(default_factory=list)
 
     def to_json(self) -> dict[str, Any]:
+        settings = asdict(self.settings)
+        if settings.get("sample_rate_hz") is None:
+            settings["note"] = "sample_rate_hz null: a continuous rig computer, as the paper's"
         return {
-            "settings": asdict(self.settings),
+            "settings": settings,
             "points": self.points,
-            "references": self.references,
-            "runs": self.runs,
+            "references": [run_json(r) for r in self.references],
+            "runs": [run_json(r) for r in self.runs],
             "summary": summarize(self),
             "checks": checks(self),
             "figures": self.figures,

@@ -252,12 +252,14 @@ class ModelCompensatorResult:
         return rank(self)
 
     def to_json(self) -> dict[str, Any]:
+        from hybridtable.studies.run_json import run_json
+
         return {
             "compensators": list(self.compensators),
             "passivity": list(self.passivity),
             "points": self.points,
-            "references": self.references,
-            "runs": self.runs,
+            "references": [run_json(r) for r in self.references],
+            "runs": [run_json(r) for r in self.runs],
             "ranking": self.ranking(),
             "figures": self.figures,
             "wall_time_s": self.wall_time_s,

@@ -28,7 +28,7 @@ def test_compensators_command_quick(tmp_path, capsys):
     ]
     assert main([*argv, "--json", str(out)]) == 0
     data = json.loads(out.read_text())
-    assert len(data["runs"]) == 8 and all(r["error"] is None for r in data["runs"])
+    assert len(data["runs"]) == 8 and all(r["error"] == "" for r in data["runs"])
     assert "acceptance" not in data
     found = data["checks"]
     assert found["sdmdc_online"]["passed"] and found["passivity"]["passed"]

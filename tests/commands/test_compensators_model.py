@@ -34,7 +34,7 @@ def test_the_ranking_against_the_damped_contact(model, tmp_path, capsys):
     assert doc["verdict"] == lines[0]
     assert doc["model"]["path"] == str(model)
     assert "contact_damping" in doc["model"]["description"]
-    assert len(doc["runs"]) == 6 and all(r["error"] is None for r in doc["runs"])
+    assert len(doc["runs"]) == 6 and all(r["error"] == "" for r in doc["runs"])
     ranking = {e["key"]: e for e in doc["ranking"]}
     assert set(ranking) == {
         f"{c}{g}" for c in ("none", "SDMDC", "smith") for g in ("", " +passivity")
