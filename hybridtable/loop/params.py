@@ -26,7 +26,7 @@ __all__ = [
 ]
 
 
-TABLE_INITIAL_STATES: tuple[str, ...] = ("tracking", "command", "rest")
+TABLE_INITIAL_STATES: tuple[str, ...] = ("tracking", "command", "rest", "given")
 
 #: The fields checked against their plausible range (:data:`hybridtable.limits.LIMITS`).
 _PLAUSIBLE_FIELDS: tuple[str, ...] = (
@@ -88,7 +88,11 @@ class HybridLoopParams:
         contact sees no start-up transient. ``"command"``: at the initial
         command position with the approach velocity (a rig that starts its
         record while already moving). ``"rest"``: at the initial command, at
-        rest.
+        rest. ``"given"``: at ``table_initial_position_m`` with
+        ``table_initial_velocity_m_per_s`` (a contact event cut from a long log,
+        whose table was following an earlier command).
+    table_initial_position_m, table_initial_velocity_m_per_s : float or None
+        The table's state at t = 0 when ``table_initial_state="given"`` (m, m/s).
     sample_rate_hz : float or None
         ``None``: continuous rig computer. Otherwise the rate of the rig's
         computer loop.
@@ -115,6 +119,8 @@ class HybridLoopParams:
     initial_velocity_m_per_s: float = 0.1
     initial_gap_m: float = 0.001
     table_initial_state: str = "tracking"
+    table_initial_position_m: float | None = None
+    table_initial_velocity_m_per_s: float | None = None
     sample_rate_hz: float | None = None
     time_step_s: float | None = None
     passivity: bool = False
@@ -141,6 +147,20 @@ class HybridLoopParams:
         )
         check_choice("compensator", self.compensator, compensator_names())
         check_choice("table_initial_state", self.table_initial_state, TABLE_INITIAL_STATES)
+        given = (self.table_initial_position_m, self.table_initial_velocity_m_per_s)
+        if self.table_initial_state == "given":
+            if None in given:
+                raise ParameterError(
+                    'table_initial_state "given" needs table_initial_position_m and '
+                    "table_initial_velocity_m_per_s"
+                )
+            check_plausible("p_act_m", given[0], where="table_initial_position_m")
+            check_plausible("v_des_m_per_s", given[1], where="table_initial_velocity_m_per_s")
+        elif given != (None, None):
+            raise ParameterError(
+                "table_initial_position_m and table_initial_velocity_m_per_s need "
+                'table_initial_state "given"'
+            )
         for name in (
             "lead_time_s",
             "compensator_stiffness_n_per_m",
@@ -249,7 +269,9 @@ class HybridLoopParams:
         """Initial spacecraft and table states."""
         x0 = -self.initial_gap_m
         v0 = self.initial_velocity_m_per_s
-        if self.table_initial_state == "rest":
+        if self.table_initial_state == "given":
+            pa, va = self.table_initial_position_m, self.table_initial_velocity_m_per_s
+        elif self.table_initial_state == "rest":
             pa, va = x0, 0.0
         elif self.table_initial_state == "command":
             pa, va = x0, v0

@@ -11,10 +11,13 @@ reset breaks the computer's own arithmetic for one tick (format step 3:
 the start the computer was reset to, which ``compare`` and ``diagnose`` treat
 like any recorded run (and can work on in parallel).
 
-An event starts once the table has settled after the reset (five time
-constants of its decay, so the model's table may start in steady tracking),
-but never later than a few ticks before its contact. A log without resets is
-one run and is returned as it is, however many contacts it holds.
+An event starts at its reset tick: the spacecraft model from the state it was
+reset to (solved from the tick's own arithmetic), the table from steady
+tracking of the command it followed before the reset (the JSON extra
+``table_initial_state``, :data:`hybridtable.measurement.rig.TABLE_START_KEY`),
+so the table's transient after the reset is part of the event and of the
+model. A log without resets is one run and is returned as it is, however
+many contacts it holds.
 """
 
 from __future__ import annotations
@@ -25,7 +28,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from hybridtable.errors import MeasurementError
-from hybridtable.measurement.phases import settle_ticks, true_runs
+from hybridtable.measurement.phases import true_runs
+from hybridtable.measurement.rig import TABLE_START_KEY
 from hybridtable.measurement.run_format import Run
 from hybridtable.systems.table import TableParams
 
@@ -36,9 +40,6 @@ __all__ = ["EventSplit", "reset_ticks", "split_events", "split_runs"]
 #: median |v_des h|) or velocity (the median |v_des|): CSV rounding is far
 #: below, a reset far above.
 _RESET_FRACTION = 0.25
-
-#: Ticks an event keeps before its first contact reading, at least.
-_LEAD_TICKS = 20
 
 #: Fewest ticks in a row with a compensated force that make a contact.
 _CONTACT_TICKS = 3
@@ -109,24 +110,38 @@ def _contact_ticks(run: Run) -> np.ndarray:
 
 
 def _event(run: Run, start: int, end: int, index: int, total: int) -> Run:
-    """The run of ticks ``[start, end)``, its start state the computer's at
-    ``start - 1`` (``start == 0``: the log's own JSON)."""
+    """The run of ticks ``[start, end)``. ``start == 0``: the log's own JSON.
+    Otherwise ``start`` is a reset tick: the spacecraft starts from the state the
+    computer was reset to (solved from the tick's own arithmetic), the table
+    from steady tracking of the command it followed before the reset."""
     info = run.info
     where = (
         f"contact event {index} of {total}, t = {run.time_s[start]:.3f}-{run.time_s[end - 1]:.3f} s"
     )
     if start > 0:
-        x0, v0 = float(run.p_des_m[start - 1]), float(run.v_des_m_per_s[start - 1])
+        h, m = run.sample_period_s, info.spacecraft_mass_kg
+        v0 = float(run.v_des_m_per_s[start] + run.f_comp_n[start] * h / m)
+        x0 = float(run.p_des_m[start] - run.v_des_m_per_s[start] * h)
         if x0 > 0.0 or v0 <= 0.0:
             raise MeasurementError(
-                f"{run.where('csv')} ({where}): the spacecraft model is not approaching at "
-                f"the event's start (p_des = {x0:.4g} m, v_des = {v0:.4g} m/s)"
+                f"{run.where('csv')} ({where}): the model was reset to p = {x0:.4g} m, "
+                f"v = {v0:.4g} m/s, not to an approach (p <= 0, v > 0)"
             )
+        # Steady tracking of the ramp held before the reset: the held command
+        # p_des[start - 1], half a tick on, less the table's ramp lag 2 zeta / omega.
+        v_old = float(run.v_des_m_per_s[start - 1])
+        table = TableParams(info.table_natural_frequency_hz, info.table_damping_ratio)
+        p_table = float(run.p_des_m[start - 1]) + v_old * (0.5 * h - table.ramp_lag_s)
         info = replace(
             info,
             initial_gap_m=-x0,
             initial_velocity_m_per_s=v0,
-            extra={**info.extra, "event_of": info.run_id, "event_ticks": [start, end - 1]},
+            extra={
+                **info.extra,
+                "event_of": info.run_id,
+                "event_ticks": [start, end - 1],
+                TABLE_START_KEY: {"position_m": p_table, "velocity_m_per_s": v_old},
+            },
         )
     info = replace(info, run_id=f"{run.info.run_id}-contact{index:02d}")
     cols = {name: values[start:end].copy() for name, values in run.columns().items()}
@@ -147,8 +162,6 @@ def split_events(run: Run) -> tuple[list[Run], EventSplit | None]:
     resets = reset_ticks(run)
     if not resets:
         return [run], None
-    table = TableParams(run.info.table_natural_frequency_hz, run.info.table_damping_ratio)
-    settle = settle_ticks(table.settling_time_s, run.sample_period_s, run.n)
     bounds = [0, *resets, run.n]
     contact = _contact_ticks(run)
     spans: list[tuple[int, int]] = []
@@ -160,8 +173,7 @@ def split_events(run: Run) -> tuple[list[Run], EventSplit | None]:
                 f"{run.time_s[b - 1]:.3f} s, where the model was reset (a long log's every "
                 "reset must lead to a contact)"
             )
-        start = a if a == 0 else max(a + 1, min(a + settle, int(inside[0]) - _LEAD_TICKS))
-        spans.append((start, b))
+        spans.append((a, b))
     events = [_event(run, s, e, i + 1, len(spans)) for i, (s, e) in enumerate(spans)]
     times = tuple((float(run.time_s[s]), float(run.time_s[e - 1])) for s, e in spans)
     return events, EventSplit(run.run_id, tuple(resets), tuple(spans), times)

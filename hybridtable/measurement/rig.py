@@ -45,6 +45,7 @@ __all__ = [
     "simulate_rig",
     "simulate_rig_contact",
     "set_table_initial_state",
+    "TABLE_START_KEY",
 ]
 
 #: HybridLoopParams fields that describe physics (what :class:`RigPhysics`
@@ -153,7 +154,8 @@ def rig_params(info: RunInfo, source: str | None = None) -> HybridLoopParams:
 
     The table starts at the initial command with the approach velocity
     (``table_initial_state="command"``: the record starts while the rig is
-    already moving), the compensated force is clamped at zero and gated by the
+    already moving; a contact event of a long log gives its own, under the
+    extra key :data:`TABLE_START_KEY`), the compensated force is clamped at zero and gated by the
     measured force, the MDC uses the JSON stiffness and no damping.
 
     Raises
@@ -179,11 +181,28 @@ def rig_params(info: RunInfo, source: str | None = None) -> HybridLoopParams:
             contact_gate="measured_force",
             initial_velocity_m_per_s=info.initial_velocity_m_per_s,
             initial_gap_m=info.initial_gap_m,
-            table_initial_state="command",
             sample_rate_hz=info.sample_rate_hz,
+            **_table_start(info),
         )
     except ParameterError as err:
         raise MeasurementError(f"{source or 'run ' + info.run_id}: {err}") from None
+
+
+#: The key of a run's JSON extras that gives its table's state at t = 0 (set by
+#: :mod:`hybridtable.measurement.events` for a contact event of a long log).
+TABLE_START_KEY = "table_initial_state"
+
+
+def _table_start(info: RunInfo) -> dict:
+    """The table's initial state of a run: ``"command"``, or the one its extras give."""
+    given = info.extra.get(TABLE_START_KEY)
+    if not isinstance(given, dict):
+        return {"table_initial_state": "command"}
+    return {
+        "table_initial_state": "given",
+        "table_initial_position_m": given.get("position_m"),
+        "table_initial_velocity_m_per_s": given.get("velocity_m_per_s"),
+    }
 
 
 def _run_params(run: Run, physics: RigPhysics) -> HybridLoopParams:

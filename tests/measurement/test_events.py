@@ -1,7 +1,7 @@
 """A long log split at the model's resets into contact events: the resets found
-exactly, each event's start state recovered from the record, its CoR kept. The
-log is built from runs of the independent rig simulator (tests/generators/rigsim.py),
-each started from its own state as an operator's reset would."""
+exactly, each event's start state recovered from the record, and the model
+matching every event within the noise. The logs come from the independent
+generator of rig campaigns, ``tests/generators/longlog.py``."""
 
 from __future__ import annotations
 
@@ -9,62 +9,64 @@ import numpy as np
 import pytest
 
 from hybridtable.errors import MeasurementError
-from hybridtable.measurement.audit import audit_run
+from hybridtable.measurement.comparison import compare_run
 from hybridtable.measurement.events import reset_ticks, split_events, split_runs
 from hybridtable.measurement.run_reader import read_run
+from tests.generators.longlog import shortest_period_s, simulate_log, write_log
 from tests.generators.rigsim import NOMINAL, simulate_record, write_run
 
 STARTS = [(0.004, 0.08), (0.003, 0.05), (0.005, 0.12), (0.004, 0.1)]
 
 
-def _log(tmp_path, starts=STARTS, duration_s=1.5):
-    parts, infos = [], []
-    for i, (gap, v) in enumerate(starts):
-        info = {**NOMINAL, "run_id": "log", "initial_gap_m": gap, "initial_velocity_m_per_s": v}
-        parts.append(simulate_record(info, duration_s=duration_s, seed=i))
-        infos.append(info)
-    cols = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
-    cols["time_s"] = np.arange(len(cols["time_s"])) / NOMINAL["sample_rate_hz"]
-    path = write_run(tmp_path, "log", infos[0], cols)
-    joins = list(np.cumsum([len(p["time_s"]) for p in parts])[:-1])
-    return read_run(path), parts, joins
+def _log(tmp_path, starts=STARTS, period_s=None):
+    info = {**NOMINAL, "run_id": "log", "compensator": "SDMDC"}
+    period = period_s or shortest_period_s(info, starts)
+    log = simulate_log(info, starts, period, seed=3)
+    return read_run(write_log(tmp_path, "log", info, log)), log
 
 
-def test_resets_are_found_at_the_joins_and_nowhere_else(tmp_path):
-    run, _, joins = _log(tmp_path)
-    assert reset_ticks(run) == joins
+def test_resets_are_found_exactly_and_nowhere_else(tmp_path):
+    run, log = _log(tmp_path)
+    assert reset_ticks(run) == [int(k) for k in log["reset_ticks"][1:]]
 
 
-def test_each_event_keeps_its_contact_and_starts_from_the_computers_state(tmp_path):
-    run, parts, joins = _log(tmp_path)
+def test_each_event_starts_from_the_state_the_model_was_reset_to(tmp_path):
+    run, log = _log(tmp_path)
     events, split = split_events(run)
-    assert len(events) == len(STARTS) and split.resets == tuple(joins)
+    assert len(events) == len(STARTS) and split.resets == tuple(log["reset_ticks"][1:])
     assert [e.run_id for e in events] == [f"log-contact{i:02d}" for i in range(1, 5)]
     h = run.sample_period_s
-    for i, (event, part) in enumerate(zip(events, parts, strict=True)):
-        # The same contact: the event's channels are its part's, from its start on.
-        offset = split.events[i][0] - (joins[i - 1] if i else 0)
-        for name in ("p_des_m", "p_act_m", "f_mea_n", "f_comp_n", "v_des_m_per_s"):
-            np.testing.assert_allclose(
-                getattr(event, name), part[name][offset:], rtol=1e-9, atol=1e-12
-            )  # the CSV keeps 10 digits
-        # Its time starts at 0 on the format's ticks.
+    for i, (event, (gap, v)) in enumerate(zip(events, STARTS, strict=True)):
+        # The reset state, solved from the reset tick's own arithmetic (the
+        # CSV keeps 10 digits).
+        assert event.info.initial_gap_m == pytest.approx(gap, rel=1e-8)
+        assert event.info.initial_velocity_m_per_s == pytest.approx(v, rel=1e-8)
         assert event.time_s[0] == 0.0
         np.testing.assert_allclose(np.diff(event.time_s), h, rtol=1e-9)
-        # The start state reproduces the record: the audit finds the format's
-        # arithmetic, from the initial gap and velocity, in every event.
-        _, findings = audit_run(event)
-        keys = {f.key for f in findings}
-        assert not keys & {"initial_gap_m", "initial_velocity_m_per_s", "sample_rate_hz"}, keys
+        start, end = split.events[i]
+        np.testing.assert_array_equal(event.f_mea_n, run.f_mea_n[start:end])
         assert event.where("csv").endswith(
-            f"(contact event {i + 1} of 4, t = "
-            f"{run.time_s[split.events[i][0]]:.3f}-"
-            f"{run.time_s[split.events[i][1] - 1]:.3f} s)"
+            f"(contact event {i + 1} of 4, t = {run.time_s[start]:.3f}-{run.time_s[end - 1]:.3f} s)"
         )
-    # The first event is the log's start; the others start after the table settled.
-    assert split.events[0][0] == 0 and events[0].info.initial_gap_m == STARTS[0][0]
-    for (start, _), join in zip(split.events[1:], joins, strict=True):
-        assert join < start <= join + 40
+    assert events[0].info.initial_gap_m == run.info.initial_gap_m  # the log's JSON
+    assert "table_initial_state" not in events[0].info.extra  # the log's own start
+    assert "table_initial_state" in events[1].info.extra
+
+
+def test_the_model_matches_every_event_within_the_noise(tmp_path):
+    # Also where the reset's jump is large and the table is still moving to the
+    # new command when the contact comes: the event starts the model's table in
+    # steady tracking of the command it followed before the reset.
+    run, _ = _log(tmp_path, period_s=0.8)
+    events, _ = split_events(run)
+    for event in events:
+        c = compare_run(event)
+        assert c.within_noise("f_mea_n") and c.within_noise("p_act_m"), (
+            event.run_id,
+            c.error_to_noise("f_mea_n"),
+            c.error_to_noise("p_act_m"),
+        )
+        assert abs(c.cor_model - c.cor_measured) < 0.002
 
 
 def test_a_run_without_resets_is_left_whole(tmp_path):
@@ -76,7 +78,7 @@ def test_a_run_without_resets_is_left_whole(tmp_path):
 
 
 def test_a_reset_that_leads_to_no_contact_is_refused(tmp_path):
-    # The last start is 0.5 m away: no contact before the log ends.
-    run, _, _ = _log(tmp_path, starts=[(0.004, 0.08), (0.5, 0.08)])
-    with pytest.raises(MeasurementError, match="no contact between t = 1.501 s and 3.001 s"):
+    # The second start is 0.5 m away: no contact before the log ends.
+    run, _ = _log(tmp_path, starts=[(0.004, 0.08), (0.5, 0.08)], period_s=1.5)
+    with pytest.raises(MeasurementError, match="no contact between t = 1.500 s and 2.999 s"):
         split_events(run)
