@@ -210,14 +210,14 @@ def write_json(path: str | Path, data: Any) -> None:
     write_text_atomic(path, text)
 
 
-def read_run_arguments(args: argparse.Namespace):
+def read_run_arguments(args: argparse.Namespace, tail_s: float | None = None):
     """The runs of ``RUN...`` (with ``--column-map``), every long log split into
-    its contact events (:func:`hybridtable.measurement.events.split_runs`):
-    ``(runs, splits)``."""
+    its contact events (:func:`hybridtable.measurement.events.split_runs`, each
+    cut ``tail_s`` after its contact if given): ``(runs, splits)``."""
     from hybridtable.measurement.events import split_runs
     from hybridtable.measurement.run_reader import parse_column_map, read_runs
 
-    return split_runs(read_runs(args.runs, parse_column_map(args.column_map)))
+    return split_runs(read_runs(args.runs, parse_column_map(args.column_map)), tail_s)
 
 
 def input_paths(runs) -> list[Path]:

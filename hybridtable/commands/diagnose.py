@@ -79,6 +79,10 @@ def diagnosis_json(d) -> dict:
     return out
 
 
+#: How long [s] each contact event of a long log keeps after its contact.
+EVENT_TAIL_S = 1.0
+
+
 def run(args: argparse.Namespace) -> int:
     from hybridtable._files import staged_folder
     from hybridtable.commands._common import (
@@ -106,7 +110,9 @@ def run(args: argparse.Namespace) -> int:
             get_effect(e)
         if not effects:
             raise CommandError("--effects names no effect")
-    runs, splits = read_run_arguments(args)
+    # A long log's events keep a second after their contact: a ringing table
+    # or a backlash shows there, and the rest is free flight (the fits' time).
+    runs, splits = read_run_arguments(args, tail_s=EVENT_TAIL_S)
     for r in runs:  # no contact, or one that has not ended: no CoR, nothing to fit
         check_comparable(r)
     inputs = input_paths(runs)

@@ -22,6 +22,7 @@ many contacts it holds.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
@@ -149,9 +150,13 @@ def _event(run: Run, start: int, end: int, index: int, total: int) -> Run:
     return Run(info=info, csv_path=run.csv_path, json_path=run.json_path, part=where, **cols)
 
 
-def split_events(run: Run) -> tuple[list[Run], EventSplit | None]:
+def split_events(run: Run, tail_s: float | None = None) -> tuple[list[Run], EventSplit | None]:
     """The contact events of a long log (see the module), or ``[run]`` and
     ``None`` when the model was never reset.
+
+    ``tail_s``: keep at most this long [s] of each event after its last
+    contact tick (the free flight that follows holds little of the contact
+    and most of the ticks); ``None`` keeps it all, up to the next reset.
 
     Raises
     ------
@@ -173,19 +178,26 @@ def split_events(run: Run) -> tuple[list[Run], EventSplit | None]:
                 f"{run.time_s[b - 1]:.3f} s, where the model was reset (a long log's every "
                 "reset must lead to a contact)"
             )
+        if tail_s is not None:
+            end = min(b, int(inside[-1]) + 1 + math.ceil(tail_s / run.sample_period_s))
+            while end < b and run.f_comp_n[end - 1] != 0.0:  # end with no force
+                end += 1
+            b = end
         spans.append((a, b))
     events = [_event(run, s, e, i + 1, len(spans)) for i, (s, e) in enumerate(spans)]
     times = tuple((float(run.time_s[s]), float(run.time_s[e - 1])) for s, e in spans)
     return events, EventSplit(run.run_id, tuple(resets), tuple(spans), times)
 
 
-def split_runs(runs: Sequence[Run]) -> tuple[list[Run], list[EventSplit]]:
-    """Every run split into its contact events (:func:`split_events`), in
-    order, and the splits that happened."""
+def split_runs(
+    runs: Sequence[Run], tail_s: float | None = None
+) -> tuple[list[Run], list[EventSplit]]:
+    """Every run split into its contact events (:func:`split_events`, with
+    ``tail_s``), in order, and the splits that happened."""
     out: list[Run] = []
     splits: list[EventSplit] = []
     for run in runs:
-        events, split = split_events(run)
+        events, split = split_events(run, tail_s)
         out.extend(events)
         if split is not None:
             splits.append(split)

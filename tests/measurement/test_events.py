@@ -69,6 +69,18 @@ def test_the_model_matches_every_event_within_the_noise(tmp_path):
         assert abs(c.cor_model - c.cor_measured) < 0.002
 
 
+def test_a_tail_keeps_a_given_time_after_the_contact(tmp_path):
+    run, log = _log(tmp_path, period_s=2.0)
+    events, split = split_events(run, tail_s=0.25)
+    full, _ = split_events(run)
+    for i, event in enumerate(events):
+        last_contact = int(log["contact_end_ticks"][i])
+        start, end = split.events[i]
+        assert event.f_comp_n[-1] == 0.0  # the contact has ended in the event
+        assert end - 1 <= last_contact + 250 + 20 and end < full[i].n + start
+        np.testing.assert_array_equal(event.v_des_m_per_s, full[i].v_des_m_per_s[: end - start])
+
+
 def test_a_run_without_resets_is_left_whole(tmp_path):
     info = {**NOMINAL, "run_id": "one"}
     run = read_run(write_run(tmp_path, "one", info, simulate_record(info)))
