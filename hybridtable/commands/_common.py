@@ -13,7 +13,7 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
-from hybridtable._files import writable_problem, write_text_atomic
+from hybridtable._files import regular_file_problem, writable_problem, write_text_atomic
 from hybridtable.errors import CommandError
 
 __all__ = [
@@ -285,6 +285,9 @@ def check_outputs(
             raise CommandError(f"{flag} {path} is one of the input files; not writing over it")
         if target.is_dir():
             raise CommandError(f"{flag} {path} is a folder; give a file name")
+        kind = regular_file_problem(target)
+        if kind is not None and kind != "no such file":  # a FIFO, a device, a socket
+            raise CommandError(f"{flag} {path} is {kind}; not writing over it")
         if target.exists() and not force:
             raise CommandError(f"{flag} {path} exists; give --force to replace it")
     for flag, path in (folders or {}).items():

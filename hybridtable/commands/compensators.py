@@ -117,6 +117,17 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
+def default_jobs() -> int:
+    """Worker processes of the sweep: the CPUs available, at most 4."""
+    import os
+
+    try:
+        n = len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover
+        n = os.cpu_count() or 1
+    return max(1, min(4, n))
+
+
 def _names(text: str | None, flag: str) -> tuple[str, ...]:
     """The names of a comma-separated flag; () when not given, an error when
     given empty (``--scenarios=`` must not mean "all")."""
@@ -148,7 +159,6 @@ def run(args: argparse.Namespace) -> int:
     from hybridtable.studies.compensator_sweep import (
         SCENARIOS,
         SweepSettings,
-        default_jobs,
         run_sweep,
         sweep_points,
     )

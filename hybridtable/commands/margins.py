@@ -418,6 +418,8 @@ def _with_notes(data: dict) -> dict:
         "delay_margin_s": "delay_margin_s inf: no gain crossover, so no delay makes the loop "
         "unstable",
         "critical_delay_s": "critical_delay_s inf: stable at every delay up to search_max_delay_s",
+        "cor_limited_delay_s": "cor_limited_delay_s inf: the predicted CoR stays within "
+        "cor_limit at every delay up to search_max_delay_s",
     }
     for key in ("operating_point_margins", "operating_point"):
         for entry in data.get(key, {}).get("compensators", {}).values():

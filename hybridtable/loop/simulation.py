@@ -200,9 +200,12 @@ def _collect(loop: HybridLoop, context, steps: int) -> SimulationResult:
         keep = np.append(np.diff(t) > 0, True)
         t, data = t[keep], data[:, keep]
     rows = dict(zip(LOG_ROWS, data, strict=True))
-    metrics = contact_metrics(
-        t, rows["v_des_m_per_s"], rows["f_act_n"], rows["f_comp_n"], params.spacecraft_mass_kg
-    )
+    try:
+        metrics = contact_metrics(
+            t, rows["v_des_m_per_s"], rows["f_act_n"], rows["f_comp_n"], params.spacecraft_mass_kg
+        )
+    except ValueError as err:  # e.g. a noisy reading pushed the model away before contact
+        raise SimulationError(f"{err} within the {t[-1]:.3g} s simulated") from None
     return SimulationResult(
         params=params,
         time_s=np.array(t),

@@ -32,7 +32,6 @@ at ratio 1 only: their results hold for every ratio.
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Any
@@ -56,7 +55,6 @@ __all__ = [
     "run_sweep",
     "summarize",
     "checks",
-    "default_jobs",
     "ONLINE_COR_TOLERANCE",
     "PASSIVITY_MAX_COR",
 ]
@@ -401,10 +399,8 @@ def _key(r: dict[str, Any]) -> str:
 
 
 def _max_abs(values: list[float]) -> float:
-    if not values:
-        return math.nan
     arr = np.asarray(values, dtype=float)
-    return math.inf if np.isnan(arr).any() else float(np.max(np.abs(arr)))
+    return math.nan if not arr.size else math.inf if np.isnan(arr).any() else np.abs(arr).max()
 
 
 def summarize(result: SweepResult) -> dict[str, dict[str, Any]]:
@@ -431,6 +427,8 @@ def summarize(result: SweepResult) -> dict[str, dict[str, Any]]:
                 "max_abs_energy_drift": _max_abs([r["energy_drift"] for r in rs]),
                 "max_energy_created": _max_abs([r["energy_created"] for r in rs]),
             }
+            if scen[name]["failed"] or not nominal:
+                scen[name]["note"] = "inf: a run failed; nan: no run at the true stiffness"
         out[key] = scen
     return out
 
@@ -475,6 +473,7 @@ def checks(result: SweepResult) -> dict[str, Any]:
             "max_abs_cor_error": online_err,
             "tolerance": ONLINE_COR_TOLERANCE,
             "passed": bool(online) and online_err <= ONLINE_COR_TOLERANCE,
+            **({} if online else {"note": "no sdmdc-online run in this sweep"}),
         },
         "passivity": {
             "runs": len(guarded),
@@ -489,12 +488,3 @@ def checks(result: SweepResult) -> dict[str, Any]:
         "sdmdc_online_at_half_k": online_half,
     }
     return out
-
-
-def default_jobs() -> int:
-    """Worker processes: the CPUs available, at most 4."""
-    try:
-        n = len(os.sched_getaffinity(0))
-    except AttributeError:  # pragma: no cover
-        n = os.cpu_count() or 1
-    return max(1, min(4, n))

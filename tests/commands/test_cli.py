@@ -12,7 +12,10 @@ from hybridtable.cli import main
 @pytest.mark.parametrize(
     "args, name",
     [
-        (["--sensor-delay-s", "-0.001"], "--sensor-delay-s: must be 0, or 1e-06 to 1 [s] (got -0.001)"),
+        (
+            ["--sensor-delay-s", "-0.001"],
+            "--sensor-delay-s: must be 0, or 1e-06 to 1 [s] (got -0.001)",
+        ),
         (
             ["--contact-stiffness-n-per-m", "nan"],
             "--contact-stiffness-n-per-m: must be 1 to 1e+10 [N/m]",
@@ -26,7 +29,10 @@ from hybridtable.cli import main
         (["--initial-velocity-m-per-s", "abc"], "--initial-velocity-m-per-s: not a number"),
         (["--table-response-hz", "0"], "--table-response-hz: must be 0.1 to 10000, or inf [Hz]"),
         (["--table-response-hz", "1e6"], "--table-response-hz: must be 0.1 to 10000, or inf [Hz]"),
-        (["--sensor-delay-s", "1e300"], "--sensor-delay-s: must be 0, or 1e-06 to 1 [s] (got 1e300)"),
+        (
+            ["--sensor-delay-s", "1e300"],
+            "--sensor-delay-s: must be 0, or 1e-06 to 1 [s] (got 1e300)",
+        ),
         (["--sensor-delay-s", "1e-300"], "--sensor-delay-s: must be 0, or 1e-06 to 1 [s]"),
         (["--table-response-hz", "1" + "0" * 400], "--table-response-hz: too large"),
         (["--initial-gap-m", "1e300"], "--initial-gap-m: must be 0 to 10 [m] (got 1e300)"),

@@ -71,7 +71,10 @@ ERRORS = {
     "delay": (["--sensor-delay-s", "0.0055"], "--sensor-delay-s 0.005 or 0.006"),
     "gap": (["--initial-gap-m", "0.3"], "needs --initial-gap-m <= 0.19"),
     "damping": (["--contact-damping-n-s-per-m", "2e5"], "critical damping (31831 N s/m"),
-    "magnify": (["--html", "x.html", "--magnify", "0"], "--magnify: must be 0.001 to 1e+06 (got 0)"),
+    "magnify": (
+        ["--html", "x.html", "--magnify", "0"],
+        "--magnify: must be 0.001 to 1e+06 (got 0)",
+    ),
     "drawing only": (["--magnify", "3"], "of --html or --meshcat"),
     "record": (["--record", "runs"], "not with --record"),
 }
