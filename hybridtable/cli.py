@@ -126,8 +126,12 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``hybridtable`` console script."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    stdout = sys.stdout
+    sys.stdout = reader = _ReaderMayLeave(stdout)
     try:
-        return int(args.func(args) or 0)
+        code = int(args.func(args) or 0)
+        # The files are written; only what went to the console was lost.
+        return 141 if reader.gone and getattr(args, "json", None) == "-" else code
     except (ParameterError, CommandError) as err:
         sub = _sub_parser(parser, args.command)
         text = _one_line(_flag_message(err, sub))
@@ -147,9 +151,52 @@ def main(argv: list[str] | None = None) -> int:
         print("hybridtable: interrupted", file=sys.stderr)
         return 130
     except BrokenPipeError:  # the reader (``| head``) closed stdout: stop quietly
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())  # no second error when Python flushes at exit
+        _silence(stdout)
         return 141
+    finally:
+        sys.stdout = stdout
+
+
+def _silence(stream) -> None:
+    """Point ``stream``'s file descriptor at /dev/null (no second error when
+    Python flushes it at exit)."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, stream.fileno())
+    except (OSError, ValueError):  # no descriptor (a test's captured stream)
+        pass
+
+
+class _ReaderMayLeave:
+    """``sys.stdout`` for a command: when the reader (``| head -1``) closes the
+    pipe, the console text stops and the command goes on to write its files
+    (``--json FILE``, ``--report``) instead of dying half way."""
+
+    def __init__(self, stream) -> None:
+        self._stream = stream
+        self.gone = False
+
+    def write(self, text: str) -> int:
+        if not self.gone:
+            try:
+                return self._stream.write(text)
+            except BrokenPipeError:
+                self._leave()
+        return len(text)
+
+    def flush(self) -> None:
+        if not self.gone:
+            try:
+                self._stream.flush()
+            except BrokenPipeError:
+                self._leave()
+
+    def _leave(self) -> None:
+        self.gone = True
+        _silence(self._stream)
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -236,6 +236,47 @@ def declared_inputs(args: argparse.Namespace) -> list[Path]:
     return [Path(p).resolve() for p in paths if p and Path(p).is_file()]
 
 
+#: Names the output folders write (reports, figures, recorded runs): an output
+#: file of the same command with such a name inside such a folder would be
+#: replaced by it.
+FOLDER_OUTPUT_NAMES = ("report.md", "report.html", "truth.json", "*.png", "run*.csv", "run*.json")
+
+
+def _folder_would_write(d: Path, target: Path) -> bool:
+    import fnmatch
+
+    return target.parent == d and any(
+        fnmatch.fnmatch(target.name, pattern) for pattern in FOLDER_OUTPUT_NAMES
+    )
+
+
+def _check_distinct(args, files: Mapping, folders: Mapping) -> None:
+    """Refuse two outputs of one command that are the same file, or a file an
+    output folder writes (one would silently replace the other). The outputs
+    of earlier calls of this command are remembered on ``args``."""
+    seen: dict[Path, str] = dict(getattr(args, "_outputs_seen", {}))
+    dirs: dict[Path, str] = dict(getattr(args, "_folders_seen", {}))
+    for flag, path in files.items():
+        if path is None or str(path) == "-":
+            continue
+        target = Path(path).resolve()
+        if target in seen and seen[target] != flag:
+            raise CommandError(f"{flag} and {seen[target]} name the same file {path}")
+        for d, other in dirs.items():
+            if _folder_would_write(d, target):
+                raise CommandError(f"{flag} {path}: the {other} folder writes that file")
+        seen[target] = flag
+    for flag, path in folders.items():
+        if path is None:
+            continue
+        d = Path(path).resolve()
+        for target, other in seen.items():
+            if _folder_would_write(d, target):
+                raise CommandError(f"{other} {target}: the {flag} folder writes that file")
+        dirs[d] = flag
+    args._outputs_seen, args._folders_seen = seen, dirs
+
+
 def check_outputs(
     args: argparse.Namespace,
     inputs: Iterable[Path] = (),
@@ -274,6 +315,7 @@ def check_outputs(
     """
     force = bool(getattr(args, "force", False))
     inputs = {Path(p).resolve() for p in inputs} | set(declared_inputs(args))
+    _check_distinct(args, files or {}, folders or {})
     for flag, path in (files or {}).items():
         if path is None or str(path) == "-":
             continue

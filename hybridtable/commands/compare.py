@@ -64,7 +64,11 @@ def run(args: argparse.Namespace) -> int:
         parse_added,
         write_model,
     )
-    from hybridtable.measurement.comparison import check_comparable, compare_run
+    from hybridtable.measurement.comparison import (
+        check_comparable,
+        compare_run,
+        pool_noise_floors,
+    )
     from hybridtable.reports.compare import format_table, format_whiteness, verdict, write_report
 
     load_plugins(args)
@@ -87,6 +91,7 @@ def run(args: argparse.Namespace) -> int:
 
         iterator = tqdm(runs, desc="compare", unit="run", file=sys.stderr, leave=False)
     comparisons = [compare_run(r, max_lag_s=args.max_lag_s) for r in iterator]
+    pool_noise_floors(comparisons)
     sentence = verdict(comparisons)
     document = {"verdict": sentence, "runs": [c.to_json() for c in comparisons]}
     if splits:

@@ -17,7 +17,7 @@ from hybridtable.diagnosis.effects import Effect, RigScale
 from hybridtable.diagnosis.fit import fit_given
 from hybridtable.diagnosis.model_file import FittedEffect, RigModel
 from hybridtable.errors import ParameterError
-from hybridtable.measurement.comparison import RunComparison, compare_run
+from hybridtable.measurement.comparison import RunComparison, compare_run, pool_noise_floors
 from hybridtable.measurement.run_format import Run
 
 __all__ = ["model_with_effects", "compare_with_model", "added_json"]
@@ -83,7 +83,7 @@ def compare_with_model(
     """Compare ``runs`` with ``model`` (replay and closed loop, errors in noise
     units), like :func:`~hybridtable.measurement.comparison.compare_run` the
     nominal model."""
-    return [
+    comparisons = [
         compare_run(
             model.closed_loop_run(r),
             model.physics(r.run_id, name="+".join(model.effect_names) or "nominal"),
@@ -91,6 +91,8 @@ def compare_with_model(
         )
         for r in runs
     ]
+    pool_noise_floors(comparisons)
+    return comparisons
 
 
 def added_json(model: RigModel, names: Sequence[str]) -> list[dict[str, Any]]:

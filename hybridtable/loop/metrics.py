@@ -76,8 +76,13 @@ def contact_metrics(
     f_act = np.asarray(f_act_n, dtype=float)
     f_comp = np.asarray(f_comp_n, dtype=float)
     model_force = np.flatnonzero(f_comp != 0.0)
-    if model_force.size == 0 or not (f_act > 0).any():
+    if not (f_act > 0).any():
         raise ValueError("no contact in this record: the devices never touched")
+    if model_force.size == 0:
+        raise ValueError(
+            "the model never felt the contact: the compensated force stayed 0 (every "
+            "reading at or below force_deadband_n?)"
+        )
     i_in = max(model_force[0] - 1, 0)
     v_in = float(v[i_in])
     v_out = float(v[-1])

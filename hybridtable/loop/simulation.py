@@ -177,6 +177,12 @@ def run_loop(
     if not started:
         raise SimulationError(f"no contact within t_max = {t_max:.3f} s")
     if stop_at_separation and not separated:
+        if f_comp == 0.0 and f_act > 0.0 and f_mea <= params.force_deadband_n:
+            raise SimulationError(
+                f"the contact did not end within t_max = {t_max:.3f} s: the compensated force "
+                f"is 0 while the contact pushes {f_act:.3g} N (every reading at or below "
+                f"force_deadband_n = {params.force_deadband_n:g} N), so the model never slows"
+            )
         raise SimulationError(
             f"the contact did not end within t_max = {t_max:.3f} s (spacecraft captured or "
             "loop unstable)"

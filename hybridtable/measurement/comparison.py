@@ -55,6 +55,7 @@ Definitions (``y`` measured, ``y_hat`` model, residual ``e = y - y_hat``):
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -89,6 +90,8 @@ from hybridtable.systems.sensor import delay_samples
 __all__ = [
     "COMPARE_ACCURACY",
     "WITHIN_NOISE_RATIO",
+    "COR_MATCH_TOLERANCE",
+    "pool_noise_floors",
     "RunComparison",
     "check_comparable",
     "compare_run",
@@ -100,6 +103,11 @@ __all__ = [
 #: ``sqrt(1.2^2 - 1) = 0.66`` noise RMS, well above the few-percent scatter of
 #: the noise estimate from a few thousand quiet ticks.
 WITHIN_NOISE_RATIO = 1.2
+
+#: Largest |CoR of the closed-loop model - recorded CoR| of a matching model:
+#: ten times what the sensor noise moves the closed loop's CoR on the shipped
+#: runs (<= 0.002), a tenth of what SDMDC removes at the paper's Table 1 point.
+COR_MATCH_TOLERANCE = 0.01
 
 
 # -- one run -------------------------------------------------------------------
@@ -148,6 +156,11 @@ class RunComparison:
         :data:`WITHIN_NOISE_RATIO` times its noise RMS (False if there is no
         noise estimate)."""
         return bool(self.error_to_noise(channel) <= WITHIN_NOISE_RATIO)
+
+    def cor_matches(self) -> bool:
+        """True if the closed loop's CoR is within :data:`COR_MATCH_TOLERANCE`
+        of the recorded one."""
+        return bool(abs(self.cor_model - self.cor_measured) <= COR_MATCH_TOLERANCE)
 
     def phase_error_to_noise(self, channel: str, phase: str) -> float:
         """RMS replay error of ``channel`` in ``phase`` over the noise RMS."""
@@ -323,8 +336,13 @@ def compare_run(
         "p_act_m": phase_breakdown(e_p, labels),
     }
     u = np.diff(run.p_des_m, prepend=-info.initial_gap_m)
-    max_lag = 50 if max_lag_s is None else max(1, round(max_lag_s / h))
-    max_lag = max(1, min(max_lag, run.n // 4))
+    wanted = 50 if max_lag_s is None else max(1, round(max_lag_s / h))
+    max_lag = max(1, min(wanted, run.n // 4))
+    if max_lag < wanted and max_lag_s is not None:
+        notes.append(
+            f"whiteness lags cut to {max_lag * h:.3g} s (a quarter of the record), not "
+            f"--max-lag-s {max_lag_s:g}"
+        )
     whiteness = {
         "f_mea_n": correlation(e_f, u, max_lag, h),
         "p_act_m": correlation(e_p, u, max_lag, h),
@@ -368,3 +386,34 @@ def compare_run(
         physics=physics.name,
         notes=notes,
     )
+
+
+def pool_noise_floors(comparisons: Sequence[RunComparison]) -> None:
+    """One noise floor per recording: the contact events of one long log
+    (:mod:`hybridtable.measurement.events`) were read by the same sensors, so
+    each channel's noise RMS is pooled over them (``sqrt(sum n s^2 / sum n)``),
+    in place. An event's own quiet ticks are few (a short approach), and an
+    estimate from 30 ticks scatters by 13 %; pooled over 20 events, by 3 %.
+    Runs that are not events keep their own."""
+    groups: dict[tuple, list[RunComparison]] = {}
+    for c in comparisons:
+        log = c.run.info.extra.get("event_of")
+        if log is not None:
+            groups.setdefault((str(c.run.csv_path), log), []).append(c)
+    for group in groups.values():
+        if len(group) < 2:
+            continue
+        for ch in ("f_mea_n", "p_act_m"):
+            pairs = [
+                (c.noise_samples[ch], c.noise_rms[ch])
+                for c in group
+                if c.noise_samples.get(ch, 0) > 0 and math.isfinite(c.noise_rms[ch])
+            ]
+            n = sum(k for k, _ in pairs)
+            if n == 0:
+                continue
+            pooled = math.sqrt(sum(k * s * s for k, s in pairs) / n)
+            for c in group:
+                c.noise_rms[ch], c.noise_samples[ch] = pooled, n
+        for c in group:
+            c.notes.append(f"noise floor pooled over the {len(group)} contact events of one log")

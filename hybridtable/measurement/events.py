@@ -139,12 +139,14 @@ def _event(run: Run, start: int, end: int, index: int, total: int) -> Run:
             initial_velocity_m_per_s=v0,
             extra={
                 **info.extra,
-                "event_of": info.run_id,
-                "event_ticks": [start, end - 1],
                 TABLE_START_KEY: {"position_m": p_table, "velocity_m_per_s": v_old},
             },
         )
-    info = replace(info, run_id=f"{run.info.run_id}-contact{index:02d}")
+    info = replace(
+        info,
+        run_id=f"{run.info.run_id}-contact{index:02d}",
+        extra={**info.extra, "event_of": run.info.run_id, "event_ticks": [start, end - 1]},
+    )
     cols = {name: values[start:end].copy() for name, values in run.columns().items()}
     cols["time_s"] = cols["time_s"] - run.time_s[start]
     return Run(info=info, csv_path=run.csv_path, json_path=run.json_path, part=where, **cols)
@@ -201,6 +203,11 @@ def split_runs(
         out.extend(events)
         if split is not None:
             splits.append(split)
-    if len({r.run_id for r in out}) != len(out):
-        raise MeasurementError("two contact events have the same run id; rename a run")
+    ids = [r.run_id for r in out]
+    twice = sorted({i for i in ids if ids.count(i) > 1})
+    if twice:
+        raise MeasurementError(
+            f"run id {twice[0]!r} names two runs (a run and a contact event of a long log); "
+            "rename one"
+        )
     return out, splits

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hybridtable.measurement.comparison import RunComparison
+from hybridtable.measurement.comparison import COR_MATCH_TOLERANCE, RunComparison
 from hybridtable.measurement.phases import PHASES
 from hybridtable.measurement.run_format import RUN_COLUMNS
 from hybridtable.reports.compare_figures import (
@@ -69,7 +69,8 @@ def verdict(comparisons: Sequence[RunComparison], subject: str = "The model") ->
 
     A run is matched when the replay RMS error of force and position is at most
     :data:`~hybridtable.measurement.comparison.WITHIN_NOISE_RATIO` times its noise
-    RMS. The ratios are printed as ``1.03x`` (error over noise), the fit in %
+    RMS and the closed loop's CoR is within
+    :data:`~hybridtable.measurement.comparison.COR_MATCH_TOLERANCE` of the recorded one. The ratios are printed as ``1.03x`` (error over noise), the fit in %
     (``100 (1 - NRMSE)``, see :func:`~hybridtable.measurement.stats.channel_error`).
     """
     n = len(comparisons)
@@ -78,7 +79,10 @@ def verdict(comparisons: Sequence[RunComparison], subject: str = "The model") ->
         c for c in comparisons if not all(math.isfinite(c.error_to_noise(ch)) for ch in chans)
     ]
     missed = [
-        c for c in comparisons if c not in unjudged and not all(c.within_noise(ch) for ch in chans)
+        c
+        for c in comparisons
+        if not c.cor_matches()
+        or (c not in unjudged and not all(c.within_noise(ch) for ch in chans))
     ]
     if missed:
         if len(missed) < n:
@@ -87,7 +91,7 @@ def verdict(comparisons: Sequence[RunComparison], subject: str = "The model") ->
             where = {1: "the run", 2: "both runs"}.get(n, f"all {n} runs")
         parts = []
         for ch in chans:
-            bad = [c for c in missed if not c.within_noise(ch)]
+            bad = [c for c in missed if c not in unjudged and not c.within_noise(ch)]
             if not bad:
                 continue
             worst = max(bad, key=lambda c: c.error_to_noise(ch))
@@ -97,6 +101,15 @@ def verdict(comparisons: Sequence[RunComparison], subject: str = "The model") ->
                 f"{_CHANNEL_WORDS[ch]} error {up_to}{worst.error_to_noise(ch):.2f}x the noise, "
                 f"worst in {phase.replace('_', ' ')} "
                 f"({worst.phase_error_to_noise(ch, phase):.1f}x)"
+            )
+        off = [c for c in missed if not c.cor_matches()]
+        if off:
+            worst = max(off, key=lambda c: abs(c.cor_model - c.cor_measured))
+            up_to = "" if len(off) == 1 else "up to "
+            parts.append(
+                f"CoR off by {up_to}{worst.cor_model - worst.cor_measured:+.3f} (measured "
+                f"{worst.cor_measured:.3f}, model {worst.cor_model:.3f}, tolerance "
+                f"{COR_MATCH_TOLERANCE:g})"
             )
         return (
             f"{subject} misses something in {where}: {'; '.join(parts)}; try hybridtable diagnose"

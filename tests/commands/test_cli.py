@@ -167,15 +167,28 @@ def test_help_shows_every_default():
     assert missing == []
 
 
-def test_a_closed_pipe_stops_quietly():
-    # `hybridtable simulate | head -0`: the reader has gone before the first line.
+def test_a_closed_pipe_stops_quietly_and_the_files_are_written(tmp_path):
+    # `hybridtable simulate --json out.json | head -0`: the reader has gone
+    # before the first line; the console text stops, the JSON is still written.
+    out = tmp_path / "out.json"
     proc = subprocess.Popen(
-        [sys.executable, "-m", "hybridtable.cli", "simulate"],
+        [sys.executable, "-m", "hybridtable.cli", "simulate", "--json", str(out)],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
     )
     proc.stdout.close()
     err = proc.stderr.read()
-    assert proc.wait() == 141
+    assert proc.wait() == 0
     assert "Traceback" not in err and "BrokenPipe" not in err, err
+    assert json.loads(out.read_text())["cor"] > 1.1
+    # With the JSON itself on the closed stdout, it is lost: exit 141.
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "hybridtable.cli", "simulate", "--json", "-"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    proc.stdout.close()
+    err = proc.stderr.read()
+    assert proc.wait() == 141 and "Traceback" not in err, err

@@ -110,3 +110,16 @@ def test_an_absurd_cell_names_its_row_and_range(tmp_path):
 
     text = _refused(_write(tmp_path, spike))
     assert "row 301 (t = 0.3 s), column f_mea_n: 1e+30 N is outside" in text
+
+
+def test_a_long_log_with_a_large_reset_is_not_taken_for_a_flipped_column(tmp_path):
+    # The model reset 0.5 m back between two contacts: one tick breaks the
+    # computer's arithmetic by far more than the thousands of others keep it
+    # (a least-squares slope over the log is 0.44, the median tick's is 1).
+    from tests.generators.longlog import simulate_log, write_log
+
+    info = {**NOMINAL, "run_id": "log"}
+    log = simulate_log(info, [(0.002, 0.08), (0.5, 0.5), (0.002, 0.08)], 1.5, seed=1)
+    step = log["v_des_m_per_s"][1:] * 1e-3
+    assert np.dot(step, np.diff(log["p_des_m"])) / np.dot(step, step) < 0.5
+    check_channels(read_run(write_log(tmp_path, "log", info, log)))

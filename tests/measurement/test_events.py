@@ -94,3 +94,20 @@ def test_a_reset_that_leads_to_no_contact_is_refused(tmp_path):
     run, _ = _log(tmp_path, starts=[(0.004, 0.08), (0.5, 0.08)], period_s=1.5)
     with pytest.raises(MeasurementError, match="no contact between t = 1.500 s and 2.999 s"):
         split_events(run)
+
+
+def test_events_of_one_log_share_one_noise_floor(tmp_path):
+    # At the shortest period each event has only a few quiet ticks; pooled over
+    # the log, the floor is the generator's noise (2 N, 2 um) and the right model
+    # matches every event.
+    from hybridtable.measurement.comparison import pool_noise_floors
+
+    run, _ = _log(tmp_path, starts=STARTS * 3)
+    events, _ = split_events(run)
+    comparisons = [compare_run(e) for e in events]
+    pool_noise_floors(comparisons)
+    assert len({c.noise_rms["p_act_m"] for c in comparisons}) == 1
+    assert comparisons[0].noise_rms["p_act_m"] == pytest.approx(2e-6, rel=0.15)
+    assert comparisons[0].noise_rms["f_mea_n"] == pytest.approx(2.0, rel=0.15)
+    assert all(c.within_noise("f_mea_n") and c.within_noise("p_act_m") for c in comparisons)
+    assert all("pooled over the 12 contact events" in c.notes[-1] for c in comparisons)
