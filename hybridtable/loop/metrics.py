@@ -79,10 +79,7 @@ def contact_metrics(
     if not (f_act > 0).any():
         raise ValueError("no contact in this record: the devices never touched")
     if model_force.size == 0:
-        raise ValueError(
-            "the model never felt the contact: the compensated force stayed 0 (every "
-            "reading at or below force_deadband_n?)"
-        )
+        raise ValueError("the model never felt the contact: the compensated force stayed 0")
     i_in = max(model_force[0] - 1, 0)
     v_in = float(v[i_in])
     v_out = float(v[-1])

@@ -483,6 +483,7 @@ def checks(result: SweepResult) -> dict[str, Any]:
             else {k: worst[k] for k in ("point", "scenario", "compensator", "prior_ratio")},
             "limit": PASSIVITY_MAX_COR,
             "passed": bool(guarded) and guarded_ok,
+            **({} if guarded else {"note": "no run with the passivity guard in this sweep"}),
         },
         "fixed_k_sdmdc_at_half_k": half,
         "sdmdc_online_at_half_k": online_half,

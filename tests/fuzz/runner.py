@@ -11,7 +11,9 @@ Each result gets one outcome:
 ``hang``
     killed at its time bound;
 ``traceback``
-    stderr holds ``Traceback``, or the exit code is not 0 or 2, or a signal ended it;
+    stderr holds ``Traceback``, or the exit code is not 0, 1 or 2, or a signal ended
+    it, or exit 1 without exactly one ``... error: ...`` line (exit 1 with one such
+    line is the documented "simulation failed": right for an ``either`` case);
 ``unclear_refusal``
     exit 2, but stderr is not exactly one non-empty line (progress bars aside),
     or that line is longer than :data:`MAX_LINE_CHARS`;
@@ -458,6 +460,15 @@ def _judge(raw: _Raw, allowed: set[str]) -> tuple[str, str]:
         return "traceback", (lines[-1][:240] if lines else "")
     if raw.signal is not None:
         return "traceback", f"signal {raw.signal}; " + _first(lines)
+    if raw.exit_code == 1 and len(lines) == 1 and ": error: " in lines[0]:
+        # A simulation that diverged, could not be simulated or never made a
+        # contact: the documented exit 1, one line. Right where a clean result
+        # or a refusal are both right; not a refusal of certainly invalid input.
+        if case.expect == "either":
+            return "ok", lines[0][:240]
+        if case.expect == "refuse":
+            return "wrong_accept", "exit 1 (simulation failed), not refused: " + lines[0][:200]
+        return "wrong_refusal", lines[0][:240]
     if raw.exit_code not in (0, 2):
         return "traceback", f"exit {raw.exit_code}: " + _first(lines)
     if raw.exit_code == 2:
