@@ -17,6 +17,7 @@ Every output of every command goes through here:
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import shutil
 import stat
@@ -32,6 +33,8 @@ __all__ = [
     "Staging",
     "writable_problem",
     "regular_file_problem",
+    "read_user_text",
+    "read_user_json",
 ]
 
 
@@ -150,6 +153,43 @@ def _exists(path: Path) -> bool | None:
     except OSError:
         return None
     return True
+
+
+def read_user_text(path: str | Path, error: type[Exception] = ValueError) -> str:
+    """The UTF-8 text (a BOM allowed) of a file a user gave, or ``error`` with
+    one line naming it: not a regular file (a FIFO or device would block or
+    never end), unreadable, or not UTF-8 (the byte that is not)."""
+    path = Path(path)
+    problem = regular_file_problem(path)
+    if problem:
+        raise error(f"{path}: {problem}")
+    try:
+        data = path.read_bytes()
+    except OSError as err:
+        raise error(f"{path}: cannot read ({err.strerror})") from None
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as err:
+        raise error(
+            f"{path}: not a UTF-8 text file (byte {err.start}: {data[err.start]:#04x})"
+        ) from None
+
+
+def read_user_json(path: str | Path, error: type[Exception] = ValueError) -> object:
+    """The JSON value of a file a user gave (:func:`read_user_text`), or
+    ``error`` with one line: empty, not valid JSON (its line and column), or
+    nested too deeply for Python's parser."""
+    text = read_user_text(path, error)
+    if not text.strip():
+        raise error(f"{path}: empty file")
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as err:
+        raise error(
+            f"{path} line {err.lineno}, column {err.colno}: not valid JSON ({err.msg})"
+        ) from None
+    except RecursionError:
+        raise error(f"{path}: not valid JSON here (nested too deeply)") from None
 
 
 def writable_problem(path: str | Path, folder: bool = False) -> str | None:

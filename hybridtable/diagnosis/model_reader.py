@@ -16,7 +16,7 @@ from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
-from hybridtable._files import regular_file_problem
+from hybridtable._files import read_user_json
 from hybridtable.diagnosis.effects import RigScale
 from hybridtable.diagnosis.model_file import (
     MODEL_FORMAT,
@@ -197,24 +197,4 @@ def load_model(path: str | Path) -> RigModel:
         One line naming the file: unreadable, not JSON, not a model of this
         format version, an effect not registered, a value out of bounds.
     """
-    path = Path(path)
-    problem = regular_file_problem(path)
-    if problem == "no such file":
-        raise ParameterError(f"{path}: no such model file")
-    if problem:
-        raise ParameterError(f"{path}: {problem}")
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ParameterError(f"{path}: no such model file") from None
-    except (OSError, UnicodeDecodeError) as err:
-        raise ParameterError(f"{path}: cannot read the model file ({err})") from None
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as err:
-        raise ParameterError(
-            f"{path} line {err.lineno}, column {err.colno}: not valid JSON ({err.msg})"
-        ) from None
-    except RecursionError:
-        raise ParameterError(f"{path}: not a model file (nested too deeply)") from None
-    return model_from_json(data, str(path))
+    return model_from_json(read_user_json(path, ParameterError), str(path))

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hybridtable._files import regular_file_problem
+from hybridtable._files import read_user_json, read_user_text, regular_file_problem
 from hybridtable.compensators.paper import COMPENSATORS
 from hybridtable.errors import MeasurementError
 from hybridtable.limits import LIMITS
@@ -96,33 +96,11 @@ def parse_column_map(items: Iterable[str] | None) -> dict[str, str]:
 
 # -- JSON ----------------------------------------------------------------------
 def _read_text(path: Path) -> str:
-    problem = regular_file_problem(path)
-    if problem:
-        raise MeasurementError(f"{path}: {problem}")
-    try:
-        data = path.read_bytes()
-    except OSError as err:
-        raise MeasurementError(f"{path}: cannot read ({err.strerror})") from None
-    try:
-        return data.decode("utf-8-sig")
-    except UnicodeDecodeError as err:
-        raise MeasurementError(
-            f"{path}: not a UTF-8 text file (byte {err.start}: {data[err.start]:#04x})"
-        ) from None
+    return read_user_text(path, MeasurementError)
 
 
 def _read_info(path: Path) -> RunInfo:
-    text = _read_text(path)
-    if not text.strip():
-        raise MeasurementError(f"{path}: empty file")
-    try:
-        raw = json.loads(text)
-    except json.JSONDecodeError as err:
-        raise MeasurementError(
-            f"{path} line {err.lineno}, column {err.colno}: not valid JSON ({err.msg})"
-        ) from None
-    except RecursionError:
-        raise MeasurementError(f"{path}: not a run's JSON (nested too deeply)") from None
+    raw = read_user_json(path, MeasurementError)
     return run_info_from_dict(raw, str(path))
 
 

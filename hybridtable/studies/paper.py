@@ -12,7 +12,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from hybridtable._files import regular_file_problem
+from hybridtable._files import read_user_json
 from hybridtable.errors import ParameterError
 from hybridtable.loop.params import HybridLoopParams
 
@@ -51,13 +51,7 @@ def load_tables(path: str | Path | None = None) -> dict[str, Any]:
     if path is None:
         text = resources.files("hybridtable.data").joinpath("paper_tables.json").read_text()
         return json.loads(text)
-    problem = regular_file_problem(path)
-    if problem:
-        raise ParameterError(f"{path}: {problem}")
-    try:
-        tables = json.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError, RecursionError) as err:
-        raise ParameterError(f"{path}: cannot read the paper's tables ({err})") from None
+    tables = read_user_json(path, ParameterError)
     try:
         for c in ("none", "SDC", "MDC", "SDMDC"):
             float(tables["table1_simulation"]["cor"][c])
