@@ -12,7 +12,6 @@ import argparse
 
 __all__ = [
     "LOOP_OPTIONS",
-    "LOOP_RANGES",
     "add_loop_arguments",
     "given_loop_options",
     "loop_value",
@@ -45,10 +44,6 @@ LOOP_OPTIONS: dict[str, tuple[object, str, str]] = {
     "time_step_s": (None, "s", "continuous-mode step (default: min(2e-4, 1/(5000 f_con)))"),
 }
 
-#: The accepted range of each loop option: its plausible range
-#: (:data:`hybridtable.limits.LIMITS`, the same the parameters are checked against).
-LOOP_RANGES: dict[str, str] = {name: name for name in LOOP_OPTIONS}
-
 
 def add_loop_arguments(parser: argparse.ArgumentParser) -> None:
     """Options shared by the commands that set up one loop (defaults: Table 1)."""
@@ -65,7 +60,7 @@ def add_loop_arguments(parser: argparse.ArgumentParser) -> None:
     for name, (default, unit, text) in LOOP_OPTIONS.items():
         words, _, derived = text.partition(" (default")
         shown = f" (default{derived}" if derived else f" (default {default:g})"
-        accepted = LOOP_RANGES[name]
+        accepted = name  # its plausible range, hybridtable.limits.LIMITS
         g.add_argument(
             "--" + name.replace("_", "-"),
             type=number_type(accepted, unit),
