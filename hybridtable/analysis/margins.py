@@ -51,6 +51,7 @@ __all__ = [
     "crossover_phase_margin",
     "growth_of",
     "critical_sensor_delay",
+    "first_crossing_delay",
     "critical_table_frequency",
 ]
 
@@ -318,25 +319,46 @@ def critical_sensor_delay(
 
     if sig(0.0) > -tol:
         return 0.0
+    bracket = first_crossing_delay(lambda T: sig(T) > -tol, params, max_delay_s, scan_points)
+    if bracket is None:
+        return math.inf
+    last_stable, first_unstable = bracket
+    if params.sample_period_s is not None:
+        return first_unstable  # the first unstable whole sample
+    return brentq(sig, last_stable, first_unstable, xtol=1e-12, rtol=1e-10)
+
+
+def first_crossing_delay(
+    crossed: Callable[[float], bool],
+    params: HybridLoopParams,
+    max_delay_s: float,
+    scan_points: int,
+) -> tuple[float, float] | None:
+    """The first sensor delay bracket ``(a, b)`` [s] with ``crossed(a)`` false and
+    ``crossed(b)`` true, scanning from 0 (not crossed there) to ``max_delay_s``,
+    or None. A sampled model (``params.sample_period_s``) is scanned over whole
+    samples, every ``max_delay / scan_points`` samples and then sample by sample,
+    so ``b - a`` is one sample; a continuous one over ``scan_points`` delays (the
+    caller refines the bracket). A window narrower than a scan step can be
+    missed."""
     h = params.sample_period_s
     if h is not None:
         n_max = max(1, math.floor(max_delay_s / h + 1e-9))
         step = max(1, n_max // (scan_points - 1))
         prev = 0
         for n in [*range(step, n_max + 1, step), n_max]:
-            if sig(n * h) > -tol:
-                for m in range(prev + 1, n + 1):  # first unstable whole sample
-                    if sig(m * h) > -tol:
-                        return m * h
+            if crossed(n * h):
+                for k in range(prev + 1, n + 1):
+                    if crossed(k * h):
+                        return (k - 1) * h, k * h
             prev = n
-        return math.inf
-    ts = np.linspace(0.0, max_delay_s, scan_points)
+        return None
     prev_t = 0.0
-    for t in ts[1:]:
-        if sig(t) > -tol:
-            return brentq(sig, prev_t, t, xtol=1e-12, rtol=1e-10)
-        prev_t = t
-    return math.inf
+    for t in np.linspace(0.0, max_delay_s, scan_points)[1:]:
+        if crossed(float(t)):
+            return prev_t, float(t)
+        prev_t = float(t)
+    return None
 
 
 def critical_table_frequency(

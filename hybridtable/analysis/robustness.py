@@ -56,6 +56,7 @@ from hybridtable.analysis.margins import (
     contact_reference_frequency,
     continuous_poles,
     cor_from_pole,
+    first_crossing_delay,
     ideal_crossover_frequency,
 )
 from hybridtable.analysis.sweep import SweepResult
@@ -218,34 +219,22 @@ def cor_limited_delay(
     if max_delay_s is None:
         max_delay_s = 0.25 / params.contact_frequency_hz
 
+    seen: dict[float, float] = {}
+
     def excess(T: float) -> float:
         x = cor(params.with_(sensor_delay_s=T)) - cor_limit
-        return x if math.isfinite(x) else math.inf
+        seen[T] = x if math.isfinite(x) else math.inf
+        return seen[T]
 
     if excess(0.0) > 0.0:
         return 0.0
-    h = params.sample_period_s
-    if h is not None:
-        n_max = max(1, math.floor(max_delay_s / h + 1e-9))
-        step = max(1, n_max // (scan_points - 1))
-        prev = 0
-        for n in [*range(step, n_max + 1, step), n_max]:
-            if excess(n * h) > 0.0:
-                for k in range(prev + 1, n + 1):
-                    if excess(k * h) > 0.0:
-                        return (k - 1) * h
-            prev = n
+    bracket = first_crossing_delay(lambda T: excess(T) > 0.0, params, max_delay_s, scan_points)
+    if bracket is None:
         return math.inf
-    ts = np.linspace(0.0, max_delay_s, scan_points)
-    prev_t = 0.0
-    for t in ts[1:]:
-        e = excess(float(t))
-        if e > 0.0:
-            if not math.isfinite(e):
-                return prev_t
-            return brentq(excess, prev_t, float(t), xtol=1e-12, rtol=1e-10)
-        prev_t = float(t)
-    return math.inf
+    within, beyond = bracket
+    if params.sample_period_s is not None or not math.isfinite(seen[beyond]):
+        return within  # the last whole sample (or scanned delay) within the limit
+    return brentq(excess, within, beyond, xtol=1e-12, rtol=1e-10)
 
 
 def _first_excess(values: np.ndarray, limit: float) -> int | None:
