@@ -24,6 +24,7 @@ from hybridtable.commands import (
     margins,
     reproduce,
     simulate,
+    sweep,
 )
 from hybridtable.commands._common import add_force_argument
 from hybridtable.errors import CommandError, ParameterError, SimulationError
@@ -37,7 +38,17 @@ __all__ = [
 
 #: Modules that register sub-commands, in the order ``--help`` lists them.
 #: Each keeps its heavy imports inside ``run`` so that ``--help`` starts fast.
-COMMANDS = (simulate, reproduce, compare, diagnose, effects, compensators, margins, diagram)
+COMMANDS = (
+    simulate,
+    reproduce,
+    compare,
+    diagnose,
+    effects,
+    compensators,
+    margins,
+    sweep,
+    diagram,
+)
 
 
 class _HelpFormatter(argparse.HelpFormatter):

@@ -9,9 +9,13 @@ exception                 raised when
                           key); exit 2
 ``WorkspaceError``        a commanded pose leaves the Stewart platform's
                           workspace or a leg's stroke; exit 2
+``SpecError``             a sweep spec is malformed (names the file and the
+                          key); exit 2
 ``CommandError``          any other bad command-line input; exit 2
 ``SimulationError``       a simulation diverged or its contact never ended;
                           exit 1
+``DivergenceError``       the SimulationError of a loop whose force grew without
+                          bound (a sweep records the run as ``diverged``)
 ``LinearizationError``    Drake could not linearize a system
 ``InterconnectionError``  the wiring of linear blocks is inconsistent
 ========================  ====================================================
@@ -23,8 +27,10 @@ __all__ = [
     "ParameterError",
     "MeasurementError",
     "WorkspaceError",
+    "SpecError",
     "CommandError",
     "SimulationError",
+    "DivergenceError",
     "LinearizationError",
     "InterconnectionError",
 ]
@@ -43,12 +49,22 @@ class WorkspaceError(ParameterError):
     """A commanded pose leaves the platform's workspace or a leg's stroke."""
 
 
+class SpecError(ParameterError):
+    """A sweep spec (``hybridtable sweep SPEC.toml``) is malformed; the message
+    is one line naming the file and the key."""
+
+
 class CommandError(Exception):
     """A user-facing error: printed as one line, exit code 2."""
 
 
 class SimulationError(RuntimeError):
     """The simulation diverged or the contact never ended."""
+
+
+class DivergenceError(SimulationError):
+    """The loop's force grew without bound: the loop is unstable for these
+    parameters."""
 
 
 class LinearizationError(RuntimeError):

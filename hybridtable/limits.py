@@ -84,6 +84,10 @@ LIMITS: dict[str, Limit] = {
     "compensator_stiffness_n_per_m": Limit(1.0, 1e10, "N/m"),
     "compensator_damping_n_s_per_m": Limit(0.0, 1e8, "N s/m"),
     "force_deadband_n": Limit(0.0, 1e6, "N"),
+    "compensator_stiffness_ratio": Limit(1e-3, 1e3, "1"),
+    # what the rig computer reads: noise standard deviations
+    "force_noise_n": Limit(0.0, 1e6, "N"),
+    "position_noise_m": Limit(0.0, 1.0, "m"),
     # the continuous model's integration step
     "time_step_s": Limit(1e-9, 1.0, "s"),
     # recorded channels (hybridtable-run/1): a docking axis of at most tens of

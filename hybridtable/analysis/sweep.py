@@ -36,6 +36,7 @@ __all__ = [
     "CompensatorSweep",
     "SweepResult",
     "ValidationPoint",
+    "check_supported",
     "model_function",
     "sweep_margins",
 ]
@@ -158,7 +159,9 @@ def model_function(
     return SampledLoopLinearizer(lin).open_loop, lin
 
 
-def _check_supported(params: HybridLoopParams, compensators: Sequence[str]) -> None:
+def check_supported(params: HybridLoopParams, compensators: Sequence[str]) -> None:
+    """Raise ParameterError unless the linear models hold ``compensators`` and
+    ``params`` (the paper's four compensators, no passivity guard)."""
     for c in compensators:
         if c not in COMPENSATORS:
             raise ParameterError(
@@ -207,7 +210,7 @@ def sweep_margins(
         grid axes stay the parameters before it.
     """
     t0 = time.perf_counter()
-    _check_supported(base, compensators)
+    check_supported(base, compensators)
     delays = np.asarray(sensor_delay_s, dtype=float)
     tables = np.asarray(table_response_hz, dtype=float)
     if delays.ndim != 1 or tables.ndim != 1 or delays.size == 0 or tables.size == 0:

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 from pydrake.systems.analysis import Simulator
 
-from hybridtable.errors import SimulationError
+from hybridtable.errors import DivergenceError, SimulationError
 from hybridtable.loop.budget import check_budget, check_steps_taken
 from hybridtable.loop.builder import LOG_ROWS, HybridLoop, build_hybrid_loop
 from hybridtable.loop.metrics import ContactMetrics, contact_metrics
@@ -161,7 +161,7 @@ def run_loop(
         if not all(math.isfinite(x) for x in (f_act, f_mea, f_comp)) or (
             abs(f_comp) > DIVERGED_FORCE_RATIO * f_scale
         ):
-            raise SimulationError(
+            raise DivergenceError(
                 f"simulation diverged by t = {t:.4f} s: the force passed "
                 f"{DIVERGED_FORCE_RATIO:g} times the undamped peak force v sqrt(k m) = "
                 f"{f_scale:.3g} N (the loop is unstable for these parameters)"

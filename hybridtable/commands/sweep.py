@@ -1,0 +1,158 @@
+"""``hybridtable sweep SPEC.toml``: a grid and/or Monte Carlo campaign on Dask
+(:mod:`hybridtable.sweeps`), a row per run in one Parquet file."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+__all__ = ["register", "run"]
+
+
+def register(sub) -> None:
+    from hybridtable.commands._common import integer_type
+
+    p = sub.add_parser(
+        "sweep",
+        help="run a campaign (grid and/or Monte Carlo) from a spec, on Dask",
+        description="Run every run of a sweep spec (a TOML file: fixed parameters, grid axes, "
+        "explicit points, Monte Carlo draws, compensators, metrics; see docs/sweeps.md and "
+        "examples/sweeps/) on Dask distributed: a local cluster of worker processes, or an "
+        "existing scheduler. Writes one Parquet file, a row per run (the swept inputs, "
+        "compensator, the metrics, status, message, engine, seconds), sorted by run; results "
+        "do not depend on the cluster, the number of workers or the order of completion. A run "
+        "that diverges or fails is a row with its status; the file is rewritten every few "
+        "seconds, so a killed campaign leaves the runs it finished and --resume runs the rest.",
+    )
+    p.add_argument("spec", metavar="SPEC.toml", help="the campaign's spec")
+    p.add_argument(
+        "--out", metavar="FILE.parquet", required=True, help="the results (a row per run)"
+    )
+    p.add_argument("--report", metavar="DIR", help="write figures and report.md to DIR")
+    p.add_argument("--json", metavar="FILE", help="write the summary as JSON (- for stdout)")
+    p.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="a running Dask scheduler, e.g. tcp://10.0.0.5:8786 (default: a local cluster)",
+    )
+    p.add_argument(
+        "--workers",
+        type=integer_type(1, 256),
+        default=None,
+        help="local cluster: its worker processes, 1 to 256 (default: the cores); with "
+        "--scheduler: wait until this many workers have joined",
+    )
+    p.add_argument(
+        "--resume",
+        action="store_true",
+        help="keep the runs FILE.parquet already holds (it must be this spec's) and run the rest",
+    )
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+
+
+def _check_outputs(args: argparse.Namespace, spec) -> None:
+    from pathlib import Path
+
+    from hybridtable.commands._common import check_outputs, check_suffix
+    from hybridtable.errors import CommandError
+
+    check_suffix("--out", args.out, [".parquet"])
+    inputs = [Path(args.spec)] + ([Path(spec.model_path)] if spec.model_path else [])
+    if args.resume and args.force:
+        raise CommandError("--resume keeps FILE.parquet's runs, --force replaces it: give one")
+    if args.resume and Path(args.out).exists():
+        # Resuming writes the file over on purpose: check it as --force would.
+        check_outputs(
+            argparse.Namespace(**{**vars(args), "force": True}), inputs, files={"--out": args.out}
+        )
+        if args.json not in (None, "-") and Path(args.json).resolve() == Path(args.out).resolve():
+            raise CommandError(f"--json {args.json} and --out {args.out} name the same file")
+        check_outputs(args, inputs, files={"--json": args.json}, folders={"--report": args.report})
+    else:
+        check_outputs(
+            args,
+            inputs,
+            files={"--out": args.out, "--json": args.json},
+            folders={"--report": args.report},
+        )
+
+
+def run(args: argparse.Namespace) -> int:
+    from hybridtable.commands._common import write_json
+    from hybridtable.reports.sweep_summary import format_summary, summarize, verdict
+    from hybridtable.sweeps.engine import run_campaign
+    from hybridtable.sweeps.spec import load_spec
+    from hybridtable.sweeps.store import read_results
+
+    spec = load_spec(args.spec)
+    _check_outputs(args, spec)
+    quiet = args.json == "-"
+
+    def started(result) -> None:
+        if not quiet:
+            where = f"scheduler {args.scheduler}" if args.scheduler else "a local cluster"
+            print(
+                f"sweep {spec.name}: {spec.n_runs} runs on {result.workers} Dask workers "
+                f"({where}); dashboard {result.dashboard}",
+                file=sys.stderr,
+            )
+
+    result = run_campaign(
+        spec,
+        args.out,
+        scheduler=args.scheduler,
+        workers=args.workers,
+        resume=args.resume,
+        progress=not args.no_progress and not quiet,
+        on_start=started,
+    )
+    table = read_results(args.out, spec)
+    summary = summarize(table, spec.n_runs, spec.metrics)
+    figures: list[str] = []
+    if args.report and table.num_rows:
+        from hybridtable._files import staged_folder
+        from hybridtable.reports.sweep import write_report
+
+        with staged_folder(args.report) as stage:
+            written = write_report(table, spec, summary, stage.path)
+        figures = [str(stage.final(f)) for f in written]
+    if not quiet:
+        print(format_summary(spec.name, summary, spec.metrics))
+        print(f"wrote {args.out}")
+        for f in figures:
+            print(f"wrote {f}")
+        new = result.written - result.resumed
+        rate = new / result.wall_time_s if result.wall_time_s > 0 else 0.0
+        print(
+            f"{new} runs in {result.wall_time_s:.1f} s "
+            f"({rate:.1f} runs/s on {result.workers} workers)"
+            + (f"; {result.resumed} were already in the file" if result.resumed else "")
+        )
+    if args.json:
+        write_json(
+            args.json,
+            {
+                "verdict": verdict(spec.name, summary),
+                "spec": spec.to_json(),
+                "out": str(args.out),
+                "complete": result.complete,
+                "interrupted": result.interrupted,
+                "resumed": result.resumed,
+                "workers": result.workers,
+                "scheduler": result.scheduler,
+                "dashboard": result.dashboard,
+                "wall_time_s": result.wall_time_s,
+                "retried_runs": result.retried,
+                "figures": figures,
+                **summary,
+            },
+        )
+    if result.interrupted:
+        print(
+            f"hybridtable sweep: interrupted: {result.written} of {spec.n_runs} runs are in "
+            f"{args.out}; run again with --resume to finish",
+            file=sys.stderr,
+        )
+        return 130
+    return 0

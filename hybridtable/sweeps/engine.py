@@ -1,0 +1,292 @@
+"""Run a campaign on Dask distributed: a local cluster or an existing one.
+
+The runs are cut into tasks of a few runs each and submitted to a
+``distributed.Client``: a ``LocalCluster`` of worker processes (one thread
+each; as many as the machine has cores, or ``workers``) or the scheduler at
+``scheduler`` (``dask scheduler`` and ``dask worker`` started by the user, on
+one machine or many; every worker needs hybridtable installed). Rows come back
+in any order; the file is written sorted by run, so it does not depend on the
+backend, the number of workers or the order of completion.
+
+Faults:
+
+- a run that diverges or raises is a row with its status (:mod:`.runner`);
+- a worker lost mid-campaign costs only its tasks, which the scheduler runs
+  again elsewhere; a task that kills every worker it lands on
+  (``KilledWorker``) is retried run by run, and a run that still kills its
+  worker is recorded as ``error``;
+- the file is rewritten (atomically) every few seconds, so a campaign killed
+  even with SIGKILL leaves a valid Parquet file of its finished runs, and
+  ``resume=True`` runs only the missing ones;
+- Ctrl-C stops the campaign, writes the finished runs and returns
+  (``interrupted``).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from hybridtable.errors import CommandError
+from hybridtable.sweeps.runner import blank_row, run_many
+from hybridtable.sweeps.spec import SweepSpec
+from hybridtable.sweeps.store import read_results, write_results
+
+__all__ = ["CampaignResult", "run_campaign", "default_workers", "task_size"]
+
+#: Seconds between two writes of the file (at least; a slow write waits longer).
+CHECKPOINT_S = 2.0
+
+
+@dataclass
+class CampaignResult:
+    """What :func:`run_campaign` did.
+
+    Attributes
+    ----------
+    path : Path
+        The Parquet file.
+    n_runs : int
+        Runs in the spec.
+    written : int
+        Rows in the file now.
+    resumed : int
+        Rows that were already in the file (``resume``).
+    interrupted : bool
+        Stopped by Ctrl-C before every run finished.
+    workers : int
+        Dask workers at the start.
+    scheduler : str
+        The scheduler's address.
+    dashboard : str or None
+        The Dask dashboard's address.
+    wall_time_s : float
+    run_seconds : float
+        The runs' own time, summed.
+    retried : list of int
+        Runs retried alone after their task killed its workers.
+    """
+
+    path: Path
+    n_runs: int
+    written: int = 0
+    resumed: int = 0
+    interrupted: bool = False
+    workers: int = 0
+    scheduler: str = ""
+    dashboard: str | None = None
+    wall_time_s: float = 0.0
+    run_seconds: float = 0.0
+    retried: list[int] = field(default_factory=list)
+
+    @property
+    def complete(self) -> bool:
+        return self.written == self.n_runs
+
+
+def default_workers() -> int:
+    """Worker processes of a local cluster: the cores this process may use."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def task_size(n_todo: int, workers: int) -> int:
+    """Runs per task: about 16 tasks per worker, at most 32 runs each, so
+    that the progress bar moves, a lost worker costs little and the scheduler's
+    overhead (a few ms per task) stays small next to the runs."""
+    return max(1, min(32, math.ceil(n_todo / (16 * max(workers, 1)))))
+
+
+def _quiet_dask() -> None:
+    for name in ("distributed", "bokeh", "tornado"):
+        logging.getLogger(name).setLevel(logging.ERROR)
+
+
+def _client(scheduler: str | None, workers: int | None):
+    from distributed import Client, LocalCluster
+
+    _quiet_dask()
+    if scheduler:
+        try:
+            client = Client(scheduler, timeout="20s")
+        except (OSError, TimeoutError) as err:
+            raise CommandError(
+                f"--scheduler {scheduler}: no Dask scheduler answers there ({err})"
+            ) from None
+        if workers is not None:
+            # Wait for the workers the user says are there (a cluster starting up).
+            try:
+                client.wait_for_workers(workers, timeout=60)
+            except TimeoutError:
+                client.close()
+                raise CommandError(
+                    f"--scheduler {scheduler}: fewer than {workers} workers after 60 s"
+                ) from None
+        return client, None
+    cluster = LocalCluster(
+        n_workers=workers or default_workers(),
+        threads_per_worker=1,
+        processes=True,
+        silence_logs=logging.ERROR,
+    )
+    return Client(cluster), cluster
+
+
+def run_campaign(
+    spec: SweepSpec,
+    out: str | Path,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    resume: bool = False,
+    progress: bool = True,
+    on_start=None,
+) -> CampaignResult:
+    """Run every run of ``spec`` not yet in ``out`` and write ``out``.
+
+    Parameters
+    ----------
+    spec : SweepSpec
+    out : path
+        The Parquet file (replaced unless ``resume``).
+    scheduler : str, optional
+        Address of a running Dask scheduler (``tcp://host:8786``); default: a
+        local cluster.
+    workers : int, optional
+        Local cluster: its worker processes (default: the cores). Existing
+        scheduler: wait until this many workers have joined.
+    resume : bool
+        Keep the runs ``out`` already holds (it must be this spec's) and run
+        the others.
+    progress : bool
+        A progress bar on stderr (runs done, runs per second, ETA).
+    on_start : callable, optional
+        Called with the :class:`CampaignResult` once the cluster is up (the
+        command prints the dashboard's address there).
+
+    Raises
+    ------
+    ParameterError
+        ``resume`` on a file of another spec.
+    CommandError
+        No scheduler at ``scheduler``, or the workers cannot run a task.
+    """
+    t0 = time.perf_counter()
+    path = Path(out)
+    result = CampaignResult(path, spec.n_runs)
+    rows: dict[int, dict[str, Any]] = {}
+    if resume and path.exists():
+        for row in read_results(path, spec).to_pylist():
+            rows[row["run"]] = row
+        result.resumed = len(rows)
+    todo = [i for i in range(spec.n_runs) if i not in rows]
+    if not todo:
+        result.written = write_results(path, spec, rows.values())
+        result.wall_time_s = time.perf_counter() - t0
+        return result
+
+    client, cluster = _client(scheduler, workers)
+    try:
+        info = client.scheduler_info()
+        result.workers = len(info.get("workers", {}))
+        result.scheduler = str(info.get("address", scheduler or ""))
+        result.dashboard = client.dashboard_link
+        if on_start is not None:
+            on_start(result)
+        _run(client, spec, path, todo, rows, result, progress)
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+    result.wall_time_s = time.perf_counter() - t0
+    result.run_seconds = float(sum(r["seconds"] for r in rows.values()))
+    return result
+
+
+def _run(client, spec, path, todo, rows, result, progress) -> None:
+    from distributed import as_completed
+    from tqdm import tqdm
+
+    size = task_size(len(todo), max(result.workers, 1))
+    futures = {}
+    for start in range(0, len(todo), size):
+        chunk = todo[start : start + size]
+        futures[client.submit(run_many, spec, chunk, pure=False)] = chunk
+    bar = tqdm(
+        total=spec.n_runs,
+        initial=len(rows),
+        desc=f"sweep {spec.name}",
+        unit="run",
+        disable=not progress,
+        file=sys.stderr,
+        leave=False,
+    )
+    last_write, write_cost = time.monotonic(), 0.0
+    pending = as_completed(list(futures))
+    try:
+        for future in pending:
+            chunk = futures.pop(future)
+            for row in _rows_of(client, spec, future, chunk, result):
+                rows[row["run"]] = row
+            bar.update(len(chunk))
+            now = time.monotonic()
+            if now - last_write >= max(CHECKPOINT_S, 5.0 * write_cost):
+                write_cost = _write(path, spec, rows)
+                last_write = time.monotonic()
+    except KeyboardInterrupt:
+        result.interrupted = True
+        for f in futures:
+            f.cancel()
+    finally:
+        bar.close()
+        result.written = len(rows)
+        _write(path, spec, rows)
+
+
+def _write(path, spec, rows) -> float:
+    t = time.monotonic()
+    write_results(path, spec, rows.values())
+    return time.monotonic() - t
+
+
+def _rows_of(client, spec, future, chunk, result) -> list[dict[str, Any]]:
+    """The rows of a finished task; a task whose workers died is retried run
+    by run."""
+    from distributed import KilledWorker
+
+    try:
+        return future.result()
+    except KilledWorker:
+        pass
+    except Exception as err:  # the workers cannot run our code at all
+        raise CommandError(
+            f"a Dask worker could not run the campaign ({type(err).__name__}: "
+            f"{' '.join(str(err).split())[:300]}); is hybridtable installed on every worker?"
+        ) from None
+    out = []
+    for index in chunk:
+        result.retried.append(index)
+        try:
+            out += client.submit(run_many, spec, [index], pure=False).result()
+        except KilledWorker:
+            row = _lost_row(spec, index)
+            out.append(row)
+    return out
+
+
+def _lost_row(spec: SweepSpec, index: int) -> dict[str, Any]:
+    row = blank_row(spec, spec.run_inputs(index))
+    row.update(
+        status="error",
+        message="the run killed every Dask worker it was given (a crash inside the simulation)",
+        engine="",
+        seconds=math.nan,
+    )
+    return row

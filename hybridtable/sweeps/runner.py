@@ -1,0 +1,184 @@
+"""One run of a campaign: its inputs -> the loop -> one row of results.
+
+A run never raises: a loop that diverges is recorded as ``diverged``, one
+that fails otherwise (no separation, over the simulation budget) as
+``failed``, inputs that make no loop (a drawn value out of range, a sampled
+delay that is not a whole number of ticks) as ``invalid``, and anything else
+as ``error`` with the exception's type; each with its one-line message and
+NaN metrics. Rows are plain dicts of plain values, the same on any worker.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+from hybridtable.errors import DivergenceError, ParameterError, SimulationError
+from hybridtable.sweeps.inputs import NOISE_INPUTS, loop_params, noise_params
+from hybridtable.sweeps.metrics import MARGINS, METRICS, SIMULATION
+from hybridtable.sweeps.spec import RunInputs, SweepSpec
+
+__all__ = ["STATUSES", "ID_COLUMNS", "run_one", "run_many", "blank_row", "empty_metrics"]
+
+#: What became of a run, best first.
+STATUSES: tuple[str, ...] = ("ok", "diverged", "failed", "invalid", "error")
+
+#: The columns before the inputs: the run's index, point, sample and seed.
+ID_COLUMNS: tuple[str, ...] = ("run", "point", "sample", "seed")
+
+# Per-process caches: a worker builds these once per campaign.
+_MODELS: dict[str, Any] = {}
+_LINEAR: dict[tuple[int, bool], Any] = {}
+
+
+def empty_metrics(spec: SweepSpec) -> dict[str, Any]:
+    """The metric columns of a run that produced none (NaN; None for flags)."""
+    return {m: (None if METRICS[m].kind == "bool" else math.nan) for m in spec.metrics}
+
+
+def blank_row(spec: SweepSpec, inputs: RunInputs) -> dict[str, Any]:
+    """A run's ids, swept inputs, ``compensator`` and empty metrics."""
+    row: dict[str, Any] = {
+        "run": inputs.index,
+        "point": inputs.point,
+        "sample": inputs.sample,
+        "seed": inputs.seed,
+    }
+    for name in spec.swept:
+        row[name] = inputs.values[name]
+    row["compensator"] = inputs.values.get("compensator", "none")
+    row.update(empty_metrics(spec))
+    return row
+
+
+def _model(spec: SweepSpec):
+    if spec.model is None:
+        return None
+    key = spec.fingerprint()
+    if key not in _MODELS:
+        from hybridtable.diagnosis.model_reader import model_from_json
+
+        _MODELS[key] = model_from_json(spec.model, spec.model_path or "model")
+    return _MODELS[key]
+
+
+def _engine(spec: SweepSpec, params, values: dict[str, Any]) -> str:
+    """``diagram`` or ``fast`` for this run; raises ParameterError when the
+    spec demands the fast engine and it does not apply."""
+    needs_diagram = spec.model is not None or any(values.get(n, 0.0) for n in NOISE_INPUTS)
+    if spec.engine == "diagram" or needs_diagram:
+        return "diagram"
+    from hybridtable.loop.fast import fast_unsupported
+
+    why = fast_unsupported(params)
+    if why is None:
+        return "fast"
+    if spec.engine == "fast":
+        raise ParameterError(f"the fast engine cannot run this: {why}")
+    return "diagram"
+
+
+def _simulate(spec: SweepSpec, params, values: dict[str, Any], seed: int, engine: str):
+    """ContactMetrics of one run through the contact."""
+    if engine == "fast":
+        from hybridtable.loop.fast import simulate_fast
+
+        return simulate_fast(params)
+    model = _model(spec)
+    if model is not None:
+        from hybridtable.studies.model_compensators import simulate_model
+
+        return simulate_model(model, params).metrics
+    from hybridtable.loop.builder import build_hybrid_loop
+    from hybridtable.loop.simulation import run_loop
+
+    noise = noise_params(values, seed)
+    compensator = None
+    if noise is not None:
+        from hybridtable.compensators.registry import make_compensator
+        from hybridtable.systems.noise import with_measurement_noise
+
+        period = build_hybrid_loop(params, log=False).computer_period_s
+        # add_hybrid_loop wraps it in the passivity guard when params.passivity.
+        inner = make_compensator(params.with_(passivity=False), period)
+        compensator = with_measurement_noise(inner, noise, period)
+    return run_loop(build_hybrid_loop(params, compensator=compensator)).metrics
+
+
+def _margins(spec: SweepSpec, params) -> dict[str, Any]:
+    from hybridtable.analysis.margins import critical_sensor_delay, growth_of, loop_margins
+    from hybridtable.analysis.sweep import check_supported, model_function
+
+    check_supported(params, (params.compensator,))
+    key = (spec.pade_order, params.sample_rate_hz is not None)
+    if key not in _LINEAR:
+        _LINEAR[key] = model_function(params, spec.pade_order)[0]
+    linear = _LINEAR[key]
+    model = _model(spec)
+    if model is not None:
+        from hybridtable.studies.model_compensators import model_transform
+
+        transform = model_transform(model)
+
+        def linear_model(p):
+            return _LINEAR[key](transform(p))
+
+        linear = linear_model
+    out: dict[str, Any] = {}
+    m = loop_margins(linear(params), pm_method="fast")
+    for name in ("stable", "predicted_cor", "phase_margin_deg", "damping_ratio"):
+        out[name] = bool(m.stable) if name == "stable" else float(getattr(m, name))
+    out["growth_rate_per_s"] = float(m.growth_rate_per_s)
+    if "critical_sensor_delay_s" in spec.metrics:
+        max_delay = max(0.25 / params.contact_frequency_hz, params.sensor_delay_s)
+        out["critical_sensor_delay_s"] = float(
+            critical_sensor_delay(growth_of(linear), params, max_delay_s=max_delay)
+        )
+    return out
+
+
+def run_one(spec: SweepSpec, index: int) -> dict[str, Any]:
+    """The row of run ``index``: ids, swept inputs, ``compensator``, metrics,
+    ``status``, ``message``, ``engine``, ``seconds``."""
+    t0 = time.perf_counter()
+    inputs = spec.run_inputs(index)
+    values = inputs.values
+    row = blank_row(spec, inputs)
+    status, message = "ok", ""
+    engine = "" if spec.needs_simulation else "linear"
+    try:
+        params = loop_params(values)
+        if spec.needs_simulation:
+            engine = _engine(spec, params, values)
+            m = _simulate(spec, params, values, inputs.seed, engine)
+            found = m.to_dict()
+            found["energy_ratio"] = m.cor**2
+            for name in spec.metrics:
+                if METRICS[name].source == SIMULATION:
+                    row[name] = float(found[name])
+        if spec.needs_margins:
+            found = _margins(spec, params)
+            for name in spec.metrics:
+                if METRICS[name].source == MARGINS:
+                    row[name] = found[name]
+    except DivergenceError as err:
+        status, message = "diverged", str(err)
+    except SimulationError as err:
+        status, message = "failed", str(err)
+    except ParameterError as err:
+        status, message = "invalid", str(err)
+    except Exception as err:  # a run must never end the campaign
+        status, message = "error", f"{type(err).__name__}: {err}"
+    if status != "ok":
+        row.update(empty_metrics(spec))
+    row["status"] = status
+    row["message"] = " ".join(message.split())[:500]
+    row["engine"] = engine
+    row["seconds"] = time.perf_counter() - t0
+    return row
+
+
+def run_many(spec: SweepSpec, indices: list[int]) -> list[dict[str, Any]]:
+    """The rows of several runs (one task of the campaign)."""
+    return [run_one(spec, i) for i in indices]

@@ -1,0 +1,513 @@
+"""A sweep spec: what a campaign runs (``hybridtable sweep SPEC.toml``).
+
+A spec is a TOML file (``docs/sweeps.md`` has the whole format)::
+
+    name = "delay_vs_table"          # used in reports
+    seed = 7                         # Monte Carlo and noise seeds derive from it
+    engine = "auto"                  # auto | diagram | fast
+    metrics = ["cor", "peak_force_n"]
+    compensators = ["none", "SDC", "MDC", "SDMDC"]   # an innermost axis
+
+    [base]                           # fixed inputs of every run
+    contact_frequency_hz = 1.0
+
+    [grid]                           # every combination of the axes
+    sensor_delay_s = [0.001, 0.003, 0.005]
+    table_response_hz = {start = 10.0, stop = 100.0, num = 5, scale = "log"}
+
+    [[points]]                       # explicit rows, run at every grid cell
+    contact_stiffness_n_per_m = 1e5
+
+    [monte_carlo]
+    samples = 100                    # draws, each run at every point and cell
+    [monte_carlo.draw]
+    initial_velocity_m_per_s = {distribution = "uniform", low = 0.05, high = 0.2}
+
+The runs are every point x every sample x every grid cell (the last grid axis,
+then ``compensators``, varying fastest). Each Monte Carlo sample is drawn once
+and run at every point and cell, so compensators are compared on the same
+draws. Run ``i``'s draws come from the seed and the sample's index, its own
+seed (noise) from the seed and ``i``: no result depends on the worker, the
+number of workers or the order of completion.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from hybridtable.errors import ParameterError, SpecError
+from hybridtable.sweeps.distributions import Distribution, parse_distribution
+from hybridtable.sweeps.inputs import CONFLICTS, INPUTS, NOISE_INPUTS, check_value
+from hybridtable.sweeps.metrics import DEFAULT_METRICS, MARGINS, METRICS, SIMULATION
+
+__all__ = [
+    "SPEC_FORMAT",
+    "ENGINES",
+    "MAX_RUNS",
+    "RunInputs",
+    "SweepSpec",
+    "load_spec",
+    "parse_spec",
+]
+
+#: The format name a spec may state (``format = "hybridtable-sweep/1"``).
+SPEC_FORMAT = "hybridtable-sweep/1"
+
+#: How a run is simulated: ``diagram`` (the Drake diagram, the model of
+#: record), ``fast`` (the exact discrete update, :mod:`hybridtable.loop.fast`,
+#: refused per run where it does not apply), ``auto`` (fast where it applies).
+ENGINES: tuple[str, ...] = ("auto", "diagram", "fast")
+
+#: The most runs one spec may hold.
+MAX_RUNS = 10_000_000
+
+#: Most values one grid range may generate.
+_MAX_AXIS = 100_000
+
+_TOP_KEYS = (
+    "format",
+    "name",
+    "description",
+    "seed",
+    "engine",
+    "metrics",
+    "compensators",
+    "model",
+    "pade_order",
+    "base",
+    "grid",
+    "points",
+    "monte_carlo",
+)
+
+
+@dataclass(frozen=True)
+class RunInputs:
+    """The inputs of run ``index``.
+
+    Attributes
+    ----------
+    index : int
+        The run's position in the campaign (0-based).
+    point, sample : int
+        Its explicit point and Monte Carlo sample.
+    seed : int
+        Its own seed (noise), from the spec's seed and ``index``.
+    values : dict
+        Every input the spec gives it (base, point, grid cell, draws).
+    """
+
+    index: int
+    point: int
+    sample: int
+    seed: int
+    values: dict[str, Any]
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """A parsed and checked spec (see the module docstring).
+
+    Attributes
+    ----------
+    name, description : str
+    seed : int
+    engine : str
+        One of :data:`ENGINES`.
+    metrics : tuple of str
+        Names in :data:`~hybridtable.sweeps.metrics.METRICS`.
+    base : tuple of (name, value)
+    grid : tuple of (name, tuple of values)
+        The axes, slowest first.
+    points : tuple of tuple of (name, value)
+    samples : int
+        Monte Carlo samples (1: none).
+    draws : tuple of (name, Distribution)
+    model : dict or None
+        The model file's JSON (``hybridtable-model/1``), carried to the workers.
+    model_path : str or None
+        Where it was read from (for reports).
+    pade_order : int
+        Pade order of the continuous linear model (margin metrics).
+    source : str
+        The spec file, for messages.
+    """
+
+    name: str
+    seed: int = 0
+    engine: str = "auto"
+    metrics: tuple[str, ...] = DEFAULT_METRICS
+    base: tuple[tuple[str, Any], ...] = ()
+    grid: tuple[tuple[str, tuple[Any, ...]], ...] = ()
+    points: tuple[tuple[tuple[str, Any], ...], ...] = ((),)
+    samples: int = 1
+    draws: tuple[tuple[str, Distribution], ...] = ()
+    model: dict[str, Any] | None = None
+    model_path: str | None = None
+    pade_order: int = 3
+    description: str = ""
+    source: str = field(default="<spec>", compare=False)
+
+    # -- the runs ----------------------------------------------------------
+    @property
+    def cells(self) -> int:
+        """Grid cells (1 without a grid)."""
+        return math.prod(len(v) for _, v in self.grid)
+
+    @property
+    def n_runs(self) -> int:
+        """Runs in the campaign."""
+        return len(self.points) * self.samples * self.cells
+
+    @property
+    def swept(self) -> tuple[str, ...]:
+        """The inputs that vary between runs, in column order: the points'
+        keys, the grid axes, the drawn inputs."""
+        names = [k for k, _ in self.points[0]]
+        names += [k for k, _ in self.grid]
+        names += [k for k, _ in self.draws]
+        return tuple(names)
+
+    @property
+    def needs_simulation(self) -> bool:
+        return any(METRICS[m].source == SIMULATION for m in self.metrics)
+
+    @property
+    def needs_margins(self) -> bool:
+        return any(METRICS[m].source == MARGINS for m in self.metrics)
+
+    def run_inputs(self, index: int) -> RunInputs:
+        """The inputs of run ``index`` (0 <= index < :attr:`n_runs`)."""
+        if not 0 <= index < self.n_runs:
+            raise IndexError(f"run {index} is not in 0..{self.n_runs - 1}")
+        rest, cell = divmod(index, self.cells)
+        point, sample = divmod(rest, self.samples)
+        values: dict[str, Any] = dict(self.base)
+        values.update(self.points[point])
+        for name, axis in reversed(self.grid):
+            cell, i = divmod(cell, len(axis))
+            values[name] = axis[i]
+        if self.draws:
+            rng = np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=(0, sample)))
+            for name, dist in self.draws:
+                values[name] = dist.draw(rng)
+        seed = int(np.random.SeedSequence(self.seed, spawn_key=(1, index)).generate_state(1)[0])
+        return RunInputs(index, point, sample, seed, values)
+
+    # -- identity ----------------------------------------------------------
+    def to_json(self) -> dict[str, Any]:
+        """The spec as JSON (what the Parquet file's metadata holds)."""
+        return {
+            "format": SPEC_FORMAT,
+            "name": self.name,
+            "description": self.description,
+            "seed": self.seed,
+            "engine": self.engine,
+            "metrics": list(self.metrics),
+            "base": {k: _json_value(v) for k, v in self.base},
+            "grid": {k: [_json_value(x) for x in v] for k, v in self.grid},
+            "points": [{k: _json_value(v) for k, v in p} for p in self.points],
+            "samples": self.samples,
+            "draws": {k: d.to_json() for k, d in self.draws},
+            "model": self.model,
+            "model_path": self.model_path,
+            "pade_order": self.pade_order,
+            "n_runs": self.n_runs,
+        }
+
+    def fingerprint(self) -> str:
+        """SHA-256 of the canonical JSON of what decides the results (the
+        runs, the metrics, the engine, the model), not of the file's text."""
+        d = self.to_json()
+        for key in ("name", "description", "model_path"):
+            d.pop(key)
+        text = json.dumps(d, sort_keys=True, allow_nan=True, separators=(",", ":"))
+        return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _json_value(v: Any) -> Any:
+    if isinstance(v, float) and math.isinf(v):
+        return "inf"
+    return v
+
+
+# -- parsing -------------------------------------------------------------------
+def load_spec(path: str | Path) -> SweepSpec:
+    """Read and check a spec file.
+
+    Raises
+    ------
+    SpecError
+        One line naming the file and the key (exit 2 on the command line).
+    """
+    from hybridtable._files import read_user_text
+
+    path = Path(path)
+    text = read_user_text(path, SpecError)
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise SpecError(f"{path}: not valid TOML ({err})") from None
+    return parse_spec(raw, source=str(path), folder=path.parent)
+
+
+def parse_spec(raw: Mapping[str, Any], source: str = "<spec>", folder: Path | None = None):
+    """A :class:`SweepSpec` from a spec's parsed TOML (see :func:`load_spec`)."""
+    try:
+        return _parse(raw, source, folder or Path("."))
+    except SpecError:
+        raise
+    except ParameterError as err:
+        raise SpecError(f"{source}: {err}") from None
+
+
+class _Key:
+    """Prefixes a ParameterError raised inside with the key it concerns."""
+
+    def __init__(self, key: str) -> None:
+        self.key = key
+
+    def __enter__(self) -> None:
+        return None
+
+    def __exit__(self, kind, err, tb) -> bool:
+        if kind is not None and issubclass(kind, ParameterError) and kind is not SpecError:
+            raise ParameterError(f"{self.key}: {err}") from None
+        return False
+
+
+def _parse(raw: Mapping[str, Any], source: str, folder: Path) -> SweepSpec:
+    unknown = [k for k in raw if k not in _TOP_KEYS]
+    if unknown:
+        raise ParameterError(
+            f"unknown key {unknown[0]!r} (a spec has {', '.join(_TOP_KEYS)}; "
+            "parameters go in [base], [grid], [[points]] or [monte_carlo.draw])"
+        )
+    if "format" in raw and raw["format"] != SPEC_FORMAT:
+        raise ParameterError(f"format must be {SPEC_FORMAT!r} (got {raw['format']!r})")
+    name = raw.get("name", Path(source).stem)
+    if not isinstance(name, str) or not name.strip():
+        raise ParameterError(f"name must be a non-empty string (got {name!r})")
+    description = raw.get("description", "")
+    if not isinstance(description, str):
+        raise ParameterError("description must be a string")
+    seed = raw.get("seed", 0)
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**63:
+        raise ParameterError(f"seed must be a whole number 0..2^63-1 (got {seed!r})")
+    engine = raw.get("engine", "auto")
+    if engine not in ENGINES:
+        raise ParameterError(f"engine must be one of {', '.join(ENGINES)} (got {engine!r})")
+    metrics = _metrics(raw.get("metrics", list(DEFAULT_METRICS)))
+    pade_order = raw.get("pade_order", 3)
+    if isinstance(pade_order, bool) or not isinstance(pade_order, int) or not 1 <= pade_order <= 10:
+        raise ParameterError(f"pade_order must be a whole number 1..10 (got {pade_order!r})")
+
+    where: dict[str, str] = {}
+
+    def claim(name: str, key: str) -> None:
+        if name not in INPUTS:
+            close = [n for n in INPUTS if name.split("_")[0] in n][:3]
+            hint = f"; did you mean {' or '.join(close)}?" if close else ""
+            raise ParameterError(f"{key}: unknown parameter {name!r}{hint} (see docs/sweeps.md)")
+        if name in where:
+            raise ParameterError(f"{key}: {name} is already given in {where[name]}")
+        where[name] = key.split(".")[0].split("[")[0]
+
+    base = []
+    base_raw = _table(raw.get("base", {}), "base")
+    for k, v in base_raw.items():
+        claim(k, f"base.{k}")
+        with _Key(f"base.{k}"):
+            base.append((k, check_value(k, v)))
+
+    grid = []
+    for k, v in _table(raw.get("grid", {}), "grid").items():
+        claim(k, f"grid.{k}")
+        grid.append((k, _axis(k, v)))
+    if "compensators" in raw:
+        claim("compensator", "compensators")
+        grid.append(("compensator", _axis("compensator", raw["compensators"], "compensators")))
+
+    points = _points(raw.get("points"), claim)
+
+    samples, draws = 1, []
+    if "monte_carlo" in raw:
+        mc = _table(raw["monte_carlo"], "monte_carlo")
+        bad = [k for k in mc if k not in ("samples", "draw")]
+        if bad:
+            raise ParameterError(f"monte_carlo.{bad[0]}: unknown key (it has samples and draw)")
+        if "samples" not in mc:
+            raise ParameterError("monte_carlo.samples: missing (how many draws)")
+        samples = mc["samples"]
+        if isinstance(samples, bool) or not isinstance(samples, int) or samples < 1:
+            raise ParameterError(
+                f"monte_carlo.samples: must be a whole number >= 1 (got {samples!r})"
+            )
+        for k, v in _table(mc.get("draw", {}), "monte_carlo.draw").items():
+            key = f"monte_carlo.draw.{k}"
+            claim(k, key)
+            with _Key(key):
+                dist = parse_distribution(v)
+                if INPUTS[k].kind != "number" and dist.kind != "choice":
+                    raise ParameterError(f"{k} is {INPUTS[k].kind}: only choice can draw it")
+                if INPUTS[k].kind == "number" and dist.kind == "choice":
+                    dist = Distribution(
+                        "choice",
+                        values=tuple(check_value(k, x) for x in dist.values),
+                        weights=dist.weights,
+                    )
+                else:
+                    for x in dist.extremes():
+                        check_value(k, x)
+            draws.append((k, dist))
+
+    for a, b in CONFLICTS:
+        if a in where and b in where:
+            raise ParameterError(
+                f"{b} (in {where[b]}) and {a} (in {where[a]}) set the same quantity: give one"
+            )
+    model, model_path = _model(raw.get("model"), folder)
+    spec = SweepSpec(
+        name=name.strip(),
+        seed=seed,
+        engine=engine,
+        metrics=metrics,
+        base=tuple(base),
+        grid=tuple(grid),
+        points=points,
+        samples=samples,
+        draws=tuple(draws),
+        model=model,
+        model_path=model_path,
+        pade_order=pade_order,
+        description=description,
+        source=source,
+    )
+    if spec.n_runs > MAX_RUNS:
+        raise ParameterError(
+            f"{spec.n_runs} runs is more than one spec may hold ({MAX_RUNS}); split the campaign"
+        )
+    if spec.engine == "fast" and (model is not None or any(n in where for n in NOISE_INPUTS)):
+        raise ParameterError(
+            'engine = "fast" cannot run a model file or measurement noise: use "auto" or "diagram"'
+        )
+    if spec.needs_margins and any(n in where for n in NOISE_INPUTS):
+        raise ParameterError("margin metrics are of the linear loop: it has no noise inputs")
+    return spec
+
+
+def _table(value: Any, key: str) -> Mapping[str, Any]:
+    if not isinstance(value, Mapping):
+        raise ParameterError(f"{key}: must be a table of parameter = value (got {value!r})")
+    return value
+
+
+def _metrics(value: Any) -> tuple[str, ...]:
+    if not isinstance(value, list) or not value:
+        raise ParameterError(f"metrics: must be a non-empty list of names (got {value!r})")
+    for m in value:
+        if m not in METRICS:
+            raise ParameterError(f"metrics: unknown metric {m!r} (one of {', '.join(METRICS)})")
+    if len(set(value)) != len(value):
+        raise ParameterError("metrics: a metric is listed twice")
+    return tuple(value)
+
+
+def _axis(name: str, value: Any, key: str | None = None) -> tuple[Any, ...]:
+    key = key or f"grid.{name}"
+    if isinstance(value, Mapping):
+        values = _range(name, value, key)
+    elif isinstance(value, list):
+        values = value
+    else:
+        raise ParameterError(
+            f"{key}: must be a list of values or a range {{start, stop, num, scale}} "
+            f"(got {value!r})"
+        )
+    if not values:
+        raise ParameterError(f"{key}: the axis is empty (give at least one value)")
+    out = []
+    for i, v in enumerate(values):
+        with _Key(f"{key}[{i}]"):
+            out.append(check_value(name, v))
+    return tuple(out)
+
+
+def _range(name: str, value: Mapping[str, Any], key: str) -> list[float]:
+    bad = [k for k in value if k not in ("start", "stop", "num", "scale")]
+    if bad:
+        raise ParameterError(f"{key}.{bad[0]}: unknown key (a range has start, stop, num, scale)")
+    for k in ("start", "stop", "num"):
+        if k not in value:
+            raise ParameterError(f"{key}.{k}: missing (a range has start, stop, num, scale)")
+    num = value["num"]
+    if isinstance(num, bool) or not isinstance(num, int) or not 1 <= num <= _MAX_AXIS:
+        raise ParameterError(f"{key}.num: must be a whole number 1..{_MAX_AXIS} (got {num!r})")
+    scale = value.get("scale", "linear")
+    if scale not in ("linear", "log"):
+        raise ParameterError(f"{key}.scale: must be linear or log (got {scale!r})")
+    ends = []
+    for k in ("start", "stop"):
+        v = value[k]
+        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+            raise ParameterError(f"{key}.{k}: must be a finite number (got {v!r})")
+        ends.append(float(v))
+    if INPUTS[name].kind != "number":
+        raise ParameterError(f"{key}: {name} is not a number; list its values")
+    if scale == "log":
+        if min(ends) <= 0.0:
+            raise ParameterError(f"{key}: a log range needs start and stop > 0")
+        return [float(x) for x in np.geomspace(ends[0], ends[1], num)]
+    return [float(x) for x in np.linspace(ends[0], ends[1], num)]
+
+
+def _points(value: Any, claim) -> tuple[tuple[tuple[str, Any], ...], ...]:
+    if value is None:
+        return ((),)
+    if not isinstance(value, list) or not value:
+        raise ParameterError("points: must be a non-empty array of tables ([[points]])")
+    out = []
+    keys0: list[str] | None = None
+    for i, p in enumerate(value):
+        p = _table(p, f"points[{i}]")
+        if keys0 is None:
+            keys0 = list(p)
+            if not keys0:
+                raise ParameterError("points[0]: empty (give at least one parameter)")
+            for k in keys0:
+                claim(k, f"points[0].{k}")
+        elif sorted(p) != sorted(keys0):
+            raise ParameterError(
+                f"points[{i}]: has {', '.join(sorted(p))}; every point must give the same "
+                f"parameters as points[0] ({', '.join(sorted(keys0))})"
+            )
+        row = []
+        for k in keys0:
+            with _Key(f"points[{i}].{k}"):
+                row.append((k, check_value(k, p[k])))
+        out.append(tuple(row))
+    return tuple(out)
+
+
+def _model(value: Any, folder: Path) -> tuple[dict[str, Any] | None, str | None]:
+    if value is None:
+        return None, None
+    if not isinstance(value, str) or not value:
+        raise ParameterError(f"model: must be the path of a model file (got {value!r})")
+    from hybridtable._files import read_user_json
+    from hybridtable.diagnosis.model_reader import model_from_json
+
+    path = Path(value) if Path(value).is_absolute() else folder / value
+    with _Key("model"):
+        data = read_user_json(path, ParameterError)
+        model_from_json(data, str(path))
+    return data, str(path)
