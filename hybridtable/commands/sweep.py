@@ -93,7 +93,8 @@ def run(args: argparse.Namespace) -> int:
         if not quiet:
             where = f"scheduler {args.scheduler}" if args.scheduler else "a local cluster"
             print(
-                f"sweep {spec.name}: {spec.n_runs} runs on {result.workers} Dask workers "
+                f"sweep {spec.name}: {spec.n_runs} runs on {result.workers} Dask "
+                f"worker{'s' if result.workers != 1 else ''} "
                 f"({where}); dashboard {result.dashboard}",
                 file=sys.stderr,
             )

@@ -131,12 +131,17 @@ def _client(scheduler: str | None, workers: int | None):
                     f"--scheduler {scheduler}: fewer than {workers} workers after 60 s"
                 ) from None
         return client, None
-    cluster = LocalCluster(
-        n_workers=workers or default_workers(),
-        threads_per_worker=1,
-        processes=True,
-        silence_logs=logging.ERROR,
-    )
+    import warnings
+
+    with warnings.catch_warnings():
+        # Port 8787 taken (another cluster): Dask picks another; we print it.
+        warnings.filterwarnings("ignore", message="Port .* is already in use")
+        cluster = LocalCluster(
+            n_workers=workers or default_workers(),
+            threads_per_worker=1,
+            processes=True,
+            silence_logs=logging.ERROR,
+        )
     return Client(cluster), cluster
 
 
