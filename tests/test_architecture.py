@@ -42,9 +42,10 @@ LAYERS: dict[str, int] = {
     "analysis": 5,
     "diagnosis": 5,
     "studies": 5,
-    "reports": 6,
-    "commands": 7,
-    "cli": 8,
+    "sweeps": 6,
+    "reports": 7,
+    "commands": 8,
+    "cli": 9,
 }
 
 #: Longest module without a reason written at its top.

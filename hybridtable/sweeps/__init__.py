@@ -15,7 +15,8 @@ from hybridtable._lazy import lazy_exports
 __all__, __getattr__, __dir__ = lazy_exports(
     __name__,
     {
-        "spec": ("SweepSpec", "load_spec", "parse_spec"),
+        "plan": ("SweepSpec", "RunInputs"),
+        "spec": ("load_spec", "parse_spec"),
         "engine": ("CampaignResult", "run_campaign"),
         "runner": ("run_one",),
         "store": ("read_results", "write_results"),

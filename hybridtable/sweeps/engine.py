@@ -34,8 +34,8 @@ from pathlib import Path
 from typing import Any
 
 from hybridtable.errors import CommandError
+from hybridtable.sweeps.plan import SweepSpec
 from hybridtable.sweeps.runner import blank_row, run_many
-from hybridtable.sweeps.spec import SweepSpec
 from hybridtable.sweeps.store import read_results, write_results
 
 __all__ = ["CampaignResult", "run_campaign", "default_workers", "task_size"]

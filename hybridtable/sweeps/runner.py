@@ -17,7 +17,7 @@ from typing import Any
 from hybridtable.errors import DivergenceError, ParameterError, SimulationError
 from hybridtable.sweeps.inputs import NOISE_INPUTS, loop_params, noise_params
 from hybridtable.sweeps.metrics import MARGINS, METRICS, SIMULATION
-from hybridtable.sweeps.spec import RunInputs, SweepSpec
+from hybridtable.sweeps.plan import RunInputs, SweepSpec
 
 __all__ = ["STATUSES", "ID_COLUMNS", "run_one", "run_many", "blank_row", "empty_metrics"]
 

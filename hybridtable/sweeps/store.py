@@ -25,8 +25,8 @@ import pyarrow.parquet as pq
 from hybridtable.errors import ParameterError
 from hybridtable.sweeps.inputs import INPUTS
 from hybridtable.sweeps.metrics import METRICS
+from hybridtable.sweeps.plan import SweepSpec
 from hybridtable.sweeps.runner import ID_COLUMNS
-from hybridtable.sweeps.spec import SweepSpec
 
 __all__ = [
     "RESULTS_FORMAT",
