@@ -14,10 +14,13 @@
   along :data:`~hybridtable.loop.wiring.LOOP_WIRING`, the one table of the
   loop's connections that the linear models of :mod:`hybridtable.analysis` reuse;
 - :mod:`~hybridtable.loop.simulation`: :func:`simulate` runs one contact;
-- :mod:`~hybridtable.loop.metrics`: CoR, contact duration, peak force, energy gained.
+- :mod:`~hybridtable.loop.metrics`: CoR, contact duration, peak force, energy gained;
+- :mod:`~hybridtable.loop.fast`: :func:`simulate_fast`, the same loop as one exact
+  discrete update per rig-computer tick (the campaigns' fast engine).
 """
 
 from hybridtable.loop.builder import LOGGED, HybridLoop, add_hybrid_loop, build_hybrid_loop
+from hybridtable.loop.fast import fast_unsupported, simulate_fast
 from hybridtable.loop.metrics import ContactMetrics, contact_metrics
 from hybridtable.loop.params import HybridLoopParams
 from hybridtable.loop.simulation import SimulationResult, run_loop, simulate
@@ -31,6 +34,8 @@ __all__ = [
     "add_hybrid_loop",
     "build_hybrid_loop",
     "contact_metrics",
+    "fast_unsupported",
     "run_loop",
     "simulate",
+    "simulate_fast",
 ]

@@ -14,7 +14,18 @@ from hybridtable.loop.builder import LOG_ROWS, HybridLoop, build_hybrid_loop
 from hybridtable.loop.metrics import ContactMetrics, contact_metrics
 from hybridtable.loop.params import HybridLoopParams
 
-__all__ = ["DIVERGED_FORCE_RATIO", "SimulationError", "SimulationResult", "simulate", "run_loop"]
+__all__ = [
+    "DIVERGED_FORCE_RATIO",
+    "SimulationError",
+    "SimulationResult",
+    "simulate",
+    "run_loop",
+    "default_t_max_s",
+    "expected_duration_s",
+    "settle_window_s",
+    "check_interval_s",
+    "undamped_peak_force_n",
+]
 
 _F_ACT = LOG_ROWS.index("f_act_n")
 
@@ -60,19 +71,48 @@ def _approach_s(params: HybridLoopParams) -> float:
     )
 
 
-def _default_t_max(params: HybridLoopParams) -> float:
+def default_t_max_s(params: HybridLoopParams) -> float:
     """The longest a run through one contact may last: the approach, ten contact
     periods, twenty effective delays and a second."""
     tail = 20.0 * params.effective_delay_s + 1.0
     return _approach_s(params) + 10.0 / params.contact_frequency_hz + tail
 
 
-def _expected_duration_s(params: HybridLoopParams) -> float:
+def expected_duration_s(params: HybridLoopParams) -> float:
     """How long a run through one contact lasts when it separates: the approach,
     two contact periods (the contact itself lasts about half of one), twenty
     effective delays and a second."""
     tail = 20.0 * params.effective_delay_s + 1.0
     return _approach_s(params) + 2.0 / params.contact_frequency_hz + tail
+
+
+def settle_window_s(params: HybridLoopParams, computer_period_s: float) -> float:
+    """How long no force may act before a run counts as separated [s]: the sensor
+    delay, five computer periods and, for a real table, five time constants of
+    its decay, at most 20 of its periods (a lightly damped table rings long
+    after the devices have parted)."""
+    table = params.table()
+    settle = params.sensor_delay_s + 5.0 * computer_period_s
+    if not table.is_ideal:
+        settle += min(
+            5.0 / max(table.damping_ratio * table.omega_rad_per_s, 1e-9),
+            20.0 / table.response_frequency_hz,
+        )
+    return settle
+
+
+def check_interval_s(params: HybridLoopParams, computer_period_s: float) -> float:
+    """Simulated time between two looks at the forces (stop rule, divergence) [s]."""
+    return max(10.0 * computer_period_s, settle_window_s(params, computer_period_s) / 4.0)
+
+
+def undamped_peak_force_n(params: HybridLoopParams) -> float:
+    """Peak force ``v sqrt(k m)`` of an undamped, undelayed contact [N]."""
+    return (
+        params.contact_stiffness_n_per_m
+        * params.initial_velocity_m_per_s
+        / (2 * math.pi * params.contact_frequency_hz)
+    )
 
 
 def run_loop(
@@ -101,10 +141,10 @@ def run_loop(
     """
     params = loop.params
     diagram = loop.diagram
-    t_max = _default_t_max(params) if t_max_s is None else t_max_s
+    t_max = default_t_max_s(params) if t_max_s is None else t_max_s
     # The estimate of a run that stops at separation is its expected length;
     # one that does not separate is stopped by the steps it really takes.
-    duration = min(t_max, _expected_duration_s(params)) if stop_at_separation else t_max
+    duration = min(t_max, expected_duration_s(params)) if stop_at_separation else t_max
     check_budget(params, duration, loop.computer_period_s)
     simulator = Simulator(diagram)
     context = simulator.get_mutable_context()
@@ -119,20 +159,8 @@ def run_loop(
     else:
         integ.set_target_accuracy(accuracy)
 
-    table = params.table()
-    settle = params.sensor_delay_s + 5.0 * loop.computer_period_s
-    if not table.is_ideal:
-        # Five time constants of the table's decay, at most 20 of its periods
-        # (a lightly damped table rings long after the devices have parted).
-        settle += min(
-            5.0 / max(table.damping_ratio * table.omega_rad_per_s, 1e-9),
-            20.0 / table.response_frequency_hz,
-        )
-    f_scale = (
-        params.contact_stiffness_n_per_m
-        * params.initial_velocity_m_per_s
-        / (2 * math.pi * params.contact_frequency_hz)
-    )
+    settle = settle_window_s(params, loop.computer_period_s)
+    f_scale = undamped_peak_force_n(params)
     contact_ctx = loop.contact.GetMyContextFromRoot(context)
     sensor_ctx = loop.sensor.GetMyContextFromRoot(context)
     comp_ctx = loop.compensator.GetMyContextFromRoot(context)
@@ -143,7 +171,7 @@ def run_loop(
     # Advance in chunks and look at the forces between chunks (a per-step
     # Python monitor would cost as much as the systems themselves). The
     # logger holds every step; a chunk only decides when to stop.
-    chunk = max(10.0 * loop.computer_period_s, settle / 4.0)
+    chunk = check_interval_s(params, loop.computer_period_s)
     simulator.Initialize()
     started, last_active = False, -math.inf
     t = 0.0

@@ -1,0 +1,450 @@
+"""The fast path of one hybrid-loop run: the diagram's rig computer as an exact discrete update.
+
+The Drake diagram (:func:`hybridtable.loop.simulation.simulate`) stays the model
+of record; :func:`simulate_fast` reproduces its contact metrics, in a few
+milliseconds, for the parameters :func:`fast_unsupported` accepts.
+
+Why it is exact: the rig computer is discrete with period ``h`` (the delay
+line's ``h = T / (N + 1/2)``, or the sample period). Between two ticks the
+measured force and the lead's stored sample are held, and the continuous states
+(spacecraft ``p_des, v_des`` of a continuous loop, table ``p_act, v_act``)
+obey linear ODEs: the contact force enters the loop only through the delay
+line's samples. A tick is one matrix exponential of ``[p_des, v_des, p_act,
+v_act, u]`` (``u``: the held force term), computed once per run. Where the
+force law switches inside a tick (no delay: the gate follows the contact;
+``contact_gate="table_position"`` or ``clamp_nonnegative`` with the MDC term)
+the switching instant is found on the exact trajectory (Brent's method).
+
+What tick ``k`` reads (Drake's discrete updates at ``t_k`` all read the
+context before any of them; the first tick is ``t = 0``): in a continuous loop
+the delay line samples ``F[k] = f_act(t_k)`` and outputs ``F[k - N]`` until
+``t_k+1``, the lead's stored sample is ``F[k - N - 1]`` (no delay: ``f_act(t)``
+itself, and ``f_act(t_k)``); in a sampled loop (delay ``M`` ticks) the
+compensator reads ``F[k - M]``, the table at ``t_k`` and the command ``s_k``,
+and the spacecraft steps (semi-implicit Euler) to ``s_k+1``, which the table
+follows, held, until ``t_k+1``.
+
+The record differs from the diagram's: the diagram logs every integrator step
+of a continuous loop, the fast path the ticks (before their update, as the
+diagram does there). The CoR is the same up to the diagram integrator's error
+(``v_in`` and ``v_out`` are read where no force acts); the peak forces may
+differ by the force's change within a tick, the contact duration by a tick.
+The stop rule of :func:`~hybridtable.loop.simulation.run_loop` is evaluated at
+the first tick at or after each of its check times.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.linalg import expm
+from scipy.optimize import brentq
+
+from hybridtable.compensators.paper import COMPENSATORS
+from hybridtable.errors import DivergenceError, ParameterError, SimulationError
+from hybridtable.loop.budget import check_budget, check_steps_taken
+from hybridtable.loop.metrics import ContactMetrics, contact_metrics
+from hybridtable.loop.params import HybridLoopParams
+from hybridtable.loop.simulation import (
+    DIVERGED_FORCE_RATIO,
+    check_interval_s,
+    default_t_max_s,
+    expected_duration_s,
+    settle_window_s,
+    undamped_peak_force_n,
+)
+from hybridtable.systems.sensor import continuous_delay_period, delay_samples
+
+__all__ = ["fast_unsupported", "simulate_fast"]
+
+_OFF = (False, False, False)  # mode (force on, contact term, MDC term)
+
+
+def fast_unsupported(params: HybridLoopParams) -> str | None:
+    """Why :func:`simulate_fast` cannot reproduce the diagram for ``params``, or None.
+
+    Returns
+    -------
+    str or None
+        None when the fast path applies; otherwise one plain phrase naming the
+        feature it does not model (e.g. ``"the passivity guard"``).
+    """
+    if params.compensator not in COMPENSATORS:
+        return (
+            f"a plug-in compensator ({params.compensator!r}); the fast path models the "
+            "paper's none, SDC, MDC and SDMDC only"
+        )
+    if params.passivity:
+        return "the passivity guard (its energy observer is not a linear update)"
+    return None
+
+
+class _StopRule:
+    """The stop rule of ``run_loop``, checked at the first tick at or after each check time."""
+
+    def __init__(self, params: HybridLoopParams, period_s: float) -> None:
+        self.t_max = default_t_max_s(params)
+        self.settle = settle_window_s(params, period_s)
+        self.chunk = check_interval_s(params, period_s)
+        self.limit = DIVERGED_FORCE_RATIO * undamped_peak_force_n(params)
+        self.deadband = params.force_deadband_n
+        self.eps = 1e-6 * period_s
+        self.due = min(self.chunk, self.t_max) - self.eps
+        self.t = 0.0
+        self.started = self.separated = self.touched = False
+        self.last_active = -math.inf
+        self.last = (0.0, 0.0, 0.0)
+
+    def check(self, ticks: int, f_act: float, f_mea: float, f_comp: float) -> bool:
+        """Evaluate the rule at the check time; True when the run ends here. The
+        diagram's integrator takes at least a step per tick: the same step budget."""
+        t = self.t = min(self.t + self.chunk, self.t_max)
+        check_steps_taken(ticks, t)
+        self.due = min(t + self.chunk, self.t_max) - self.eps
+        self.last = (f_act, f_mea, f_comp)
+        if not all(math.isfinite(x) for x in self.last) or abs(f_comp) > self.limit:
+            raise DivergenceError(
+                f"simulation diverged by t = {t:.4f} s: the force passed "
+                f"{DIVERGED_FORCE_RATIO:g} times the undamped peak force v sqrt(k m) = "
+                f"{self.limit / DIVERGED_FORCE_RATIO:.3g} N (the loop is unstable for these "
+                "parameters)"
+            )
+        if f_act > 0.0 or f_mea > self.deadband or f_comp != 0.0:
+            self.started, self.last_active = True, t
+        elif not self.started and self.touched:
+            self.started, self.last_active = True, t
+        elif self.started and t - self.last_active > self.settle:
+            self.separated = True
+            return True
+        return t >= self.t_max
+
+    def verdict(self) -> None:
+        """Raise the diagram's error when the run found no contact or no separation."""
+        if not self.started:
+            raise SimulationError(f"no contact within t_max = {self.t_max:.3f} s")
+        if self.separated:
+            return
+        f_act, f_mea, f_comp = self.last
+        if f_comp == 0.0 and f_act > 0.0 and f_mea <= self.deadband:
+            raise SimulationError(
+                f"the contact did not end within t_max = {self.t_max:.3f} s: the compensated "
+                f"force is 0 while the contact pushes {f_act:.3g} N (every reading at or below "
+                f"force_deadband_n = {self.deadband:g} N), so the model never slows"
+            )
+        raise SimulationError(
+            f"the contact did not end within t_max = {self.t_max:.3f} s (spacecraft captured "
+            "or loop unstable)"
+        )
+
+
+def _law(params: HybridLoopParams, h: float):
+    """The compensator's constants: lead gain ``T_lead / h``, MDC gains, flags."""
+    cp = params.compensator_params()
+    table = params.table()
+    mdc = cp.uses_motion_correction and not table.is_ideal  # ideal: p_des - p_act = 0
+    return (
+        (cp.lead_time_s if cp.uses_lead else 0.0) / h,
+        cp.stiffness_n_per_m if mdc else 0.0,
+        cp.damping_n_s_per_m if mdc else 0.0,
+        cp.contact_gate == "measured_force",
+        cp.clamp_nonnegative,
+    )
+
+
+def _unrolled(e):
+    """``z -> E z`` for a 5x5 ``E`` whose last row keeps ``u`` (scalar Python: no array
+    overhead on a 5-vector)."""
+    (a0, a1, a2, a3, a4), (b0, b1, b2, b3, b4), (c0, c1, c2, c3, c4), (d0, d1, d2, d3, d4) = (
+        [float(x) for x in row] for row in e[:4]
+    )
+
+    def step(p, v, pa, va, u):
+        return (
+            a0 * p + a1 * v + a2 * pa + a3 * va + a4 * u,
+            b0 * p + b1 * v + b2 * pa + b3 * va + b4 * u,
+            c0 * p + c1 * v + c2 * pa + c3 * va + c4 * u,
+            d0 * p + d1 * v + d2 * pa + d3 * va + d4 * u,
+        )
+
+    return step
+
+
+class _Continuous:
+    """The continuous loop between ticks: modes, their exact steps, their switches."""
+
+    def __init__(self, params: HybridLoopParams, h: float) -> None:
+        self.h = h
+        self.ideal = params.table().is_ideal
+        self.k, self.c = params.contact_stiffness_n_per_m, params.contact_damping_n_s_per_m
+        self.db = params.force_deadband_n
+        self.undelayed = params.sensor_delay_s == 0.0
+        lead, kc, cc, self.by_force, self.clamp = _law(params, h)
+        self.lead = lead
+        self.mdc = kc > 0.0 or cc > 0.0
+        a = np.zeros((4, 4))
+        a[0, 1] = a[2, 3] = 1.0
+        if self.ideal:  # the table is the spacecraft: rows 2, 3 copy rows 0, 1
+            a[3] = a[1]
+        else:
+            w, z = params.table().omega_rad_per_s, params.table_damping_ratio
+            a[3] = (w * w, 0.0, -w * w, -2.0 * z * w)
+        self.a = a
+        self.b = np.array([0.0, -1.0 / params.spacecraft_mass_kg, 0.0, 0.0])
+        self.g_raw = np.array([0.0, 0.0, self.k, self.c, 0.0])  # k p_act + c v_act
+        self.g_mdc = np.array([kc, cc, -kc, -cc, 0.0])
+        self.cache: dict[tuple, tuple] = {}
+        # The switching functions (functional of z, offset) whose signs set the mode.
+        sig = []
+        if self.undelayed or not self.by_force:
+            sig.append((np.array([0.0, 0.0, 1.0, 0.0, 0.0]), 0.0))
+        if self.undelayed:
+            sig += [(self.g_raw, 0.0)] + ([(self.g_raw, -self.db)] if self.db > 0.0 else [])
+        if self.clamp:
+            sig += [(self.force_row(m), 0.0) for m in self.modes_on()]
+        self.sigmas = sig
+        self.switches = self.undelayed or (self.mdc and (self.clamp or not self.by_force))
+
+    def modes_on(self) -> list[tuple]:
+        """The modes with a force (contact term only without delay, MDC term if any)."""
+        contacts, mdcs = dict.fromkeys((False, self.undelayed)), dict.fromkeys((False, self.mdc))
+        return [(True, c, m) for c in contacts for m in mdcs]
+
+    def force_row(self, mode) -> np.ndarray:
+        """The compensated force of ``mode`` as a functional of ``z`` (N)."""
+        on, contact, mdc = mode
+        row = np.zeros(5)
+        if on:
+            row[4] = 1.0
+            if contact:
+                row += (1.0 + self.lead) * self.g_raw
+            if mdc:
+                row += self.g_mdc
+        return row
+
+    def matrix(self, mode) -> np.ndarray:
+        m = np.zeros((5, 5))
+        m[:4, :4] = self.a
+        m[:4, :] += np.outer(self.b, self.force_row(mode))
+        if self.ideal:
+            m[2:4] = m[0:2]
+        return m
+
+    def exp(self, mode, tau: float) -> np.ndarray:
+        e = expm(self.matrix(mode) * tau)
+        if self.ideal:
+            e[2:4] = e[0:2]  # keeps p_act == p_des bit for bit
+        return e
+
+    def mode_data(self, mode):
+        """(exact step over h, force row as a tuple) of ``mode``, cached."""
+        if mode not in self.cache:
+            self.cache[mode] = (
+                _unrolled(self.exp(mode, self.h)),
+                tuple(self.force_row(mode).tolist()),
+            )
+        return self.cache[mode]
+
+    def mode_of(self, z, gate: bool):
+        """The force law's mode at ``z`` (``gate``: the held reading is above the deadband)."""
+        p, v, pa, va, u = z
+        contact = False
+        raw = self.k * pa + self.c * va
+        if self.undelayed:
+            contact = pa > 0.0 and raw > 0.0
+            gate = contact and raw > self.db
+        if self.by_force and not gate:
+            return _OFF
+        mdc = self.mdc and (self.by_force or pa > 0.0)
+        mode = (True, contact, mdc)
+        if self.clamp and sum(f * x for f, x in zip(self.mode_data(mode)[1], z, strict=True)) < 0.0:
+            return _OFF
+        return mode
+
+    def interval(self, z, mode, gate: bool):
+        """State after one tick from ``z`` in ``mode``, with every switch located; and
+        the mode at the end."""
+        z1 = (*self.mode_data(mode)[0](*z), z[4])
+        if not self.switches or self.mode_of(z1, gate) == mode:
+            return z1, mode
+        rem, x = self.h, np.array(z)
+        for _ in range(8):  # a few switches per tick at most; then the rest in one mode
+            tau = self.first_switch(x, rem, mode, gate)
+            x = self.exp(mode, tau) @ x
+            rem -= tau
+            mode = self.mode_of(tuple(x.tolist()), gate)
+            if rem <= 0.0:
+                return tuple(x.tolist()), mode
+            end = self.exp(mode, rem) @ x
+            if self.mode_of(tuple(end.tolist()), gate) == mode:
+                return tuple(end.tolist()), mode
+        return tuple(end.tolist()), self.mode_of(tuple(end.tolist()), gate)
+
+    def first_switch(self, x, rem: float, mode, gate: bool) -> float:
+        """The first instant in ``(0, rem]`` after which the mode is not ``mode`` (s)."""
+        ends = self.exp(mode, rem) @ x
+        roots = []
+        for g, c0 in self.sigmas:
+            s0, s1 = g @ x + c0, g @ ends + c0
+            if (s0 > 0.0) != (s1 > 0.0) or (s0 >= 0.0) != (s1 >= 0.0):
+                roots.append(
+                    brentq(
+                        lambda t, g=g, c0=c0: g @ (self.exp(mode, t) @ x) + c0, 0.0, rem, xtol=1e-15
+                    )
+                )
+        step = 1e-12 * self.h
+        for r in sorted(roots):
+            tau = min(rem, r + step)
+            if self.mode_of(tuple((self.exp(mode, tau) @ x).tolist()), gate) != mode:
+                return tau
+        return rem
+
+
+def _computer_period(params: HybridLoopParams) -> tuple[float, int]:
+    """The rig computer's period ``h`` (s) and the delay in ticks (the delay line's ``N``
+    of a continuous loop, ``M`` of a sampled one), as the diagram's builder sets them."""
+    if params.sample_rate_hz is not None:
+        h = params.sample_period_s
+        return h, delay_samples(params.sensor_delay_s, h)
+    if params.sensor_delay_s > 0.0:
+        return continuous_delay_period(params.sensor_delay_s, params.step_s)
+    return params.step_s, 0
+
+
+def _run_continuous(params: HybridLoopParams, h: float, n: int, rule: _StopRule):
+    """Tick log ``(v, f_act, f_comp)`` of a continuous loop (before each tick's update)."""
+    loop = _Continuous(params, h)
+    k_con, c_con, lead, db, by_force = loop.k, loop.c, loop.lead, loop.db, loop.by_force
+    undelayed, mode_of, mode_data = loop.undelayed, loop.mode_of, loop.mode_data
+    # Held: the force law is fixed over a tick by the held reading (no switch inside).
+    held, clamp = not loop.switches, loop.clamp
+    on = (True, False, loop.mdc)
+    step_on, (c0, c1, c2, c3, _) = mode_data(on)
+    step_off = mode_data(_OFF)[0]
+    ic = params.initial_conditions()
+    p, v = ic["p_des_m"], ic["v_des_m_per_s"]
+    pa, va = (p, v) if loop.ideal else (ic["p_act_m"], ic["v_act_m_per_s"])
+    u = 0.0  # the held part of the force (none before t = 0)
+    mode = mode_of((p, v, pa, va, u), False)
+    F = [0.0] * (n + 2)  # F[j] = f_act(t_j) at index j + n + 2; zeros before t = 0
+    vs, fas, fcs = [], [], []
+    k, due = 0, rule.due
+    while True:
+        raw = k_con * pa + c_con * va
+        f_act = raw if (pa > 0.0 and raw > 0.0) else 0.0
+        if mode is on:
+            f_comp = c0 * p + c1 * v + c2 * pa + c3 * va + u
+        elif mode == _OFF:
+            f_comp = 0.0
+        else:
+            row = mode_data(mode)[1]
+            f_comp = row[0] * p + row[1] * v + row[2] * pa + row[3] * va + row[4] * u
+        vs.append(v)
+        fas.append(f_act)
+        fcs.append(f_comp)
+        if f_act > 0.0:
+            rule.touched = True
+        if k * h >= due:
+            if rule.check(k, f_act, f_act if undelayed else F[k + 1], f_comp):
+                return vs, fas, fcs
+            due = rule.due
+        if undelayed:
+            u, gate = -lead * f_act, False
+        else:
+            F.append(f_act)
+            f_mea = F[k + 2]
+            u, gate = f_mea + lead * (f_mea - F[k + 1]), f_mea > db
+        if held:  # clamp here means no MDC term: the force is u
+            if (gate or not by_force) and not (clamp and u < 0.0):
+                mode = on
+                p, v, pa, va = step_on(p, v, pa, va, u)
+            else:
+                mode = _OFF
+                p, v, pa, va = step_off(p, v, pa, va, u)
+        else:
+            z = (p, v, pa, va, u)
+            (p, v, pa, va, u), mode = loop.interval(z, mode_of(z, gate), gate)
+            if mode == on:
+                mode = on
+        k += 1
+
+
+def _run_sampled(params: HybridLoopParams, h: float, n_delay: int, rule: _StopRule):
+    """Row log ``(v, f_act, f_comp)`` of a sampled loop (row k: what tick k read and
+    computed, and the spacecraft state after its update)."""
+    lead, kc, cc, by_force, clamp = _law(params, h)
+    k_con, c_con = params.contact_stiffness_n_per_m, params.contact_damping_n_s_per_m
+    db = params.force_deadband_n
+    h_m = h / params.spacecraft_mass_kg
+    table = params.table()
+    ideal = table.is_ideal
+    ic = params.initial_conditions()
+    p, v, pa, va = ic["p_des_m"], ic["v_des_m_per_s"], ic["p_act_m"], ic["v_act_m_per_s"]
+    if not ideal:  # the table over one tick under a held command: [p_act, v_act, p_cmd]
+        w, zeta = table.omega_rad_per_s, table.damping_ratio
+        m = np.array([[0.0, 1.0, 0.0], [-w * w, -2 * zeta * w, w * w], [0.0, 0.0, 0.0]])
+        (e00, e01, e02), (e10, e11, e12) = expm(m * h)[:2].tolist()
+    F = [0.0] * n_delay  # F[j] = f_act(t_j) at index j + n_delay
+    prev = 0.0
+    vs, fas, fcs = [], [], []
+    k = 0
+    while True:
+        if ideal:
+            pa, va = p, v
+        raw = k_con * pa + c_con * va
+        f_act = raw if (pa > 0.0 and raw > 0.0) else 0.0
+        if f_act > 0.0:
+            rule.touched = True
+        F.append(f_act)
+        f_mea = F[k]
+        if by_force and not f_mea > db:
+            f_comp = 0.0
+        else:
+            f_comp = f_mea + lead * (f_mea - prev)
+            if (kc > 0.0 or cc > 0.0) and (by_force or pa > 0.0):
+                f_comp += kc * (p - pa) + cc * (v - va)
+            if clamp and f_comp < 0.0:
+                f_comp = 0.0
+        if k * h >= rule.due and rule.check(k, f_act, f_mea, f_comp):
+            return vs, fas, fcs
+        prev = f_mea
+        v -= f_comp * h_m
+        p += h * v
+        if not ideal:
+            pa, va = e00 * pa + e01 * va + e02 * p, e10 * pa + e11 * va + e12 * p
+        vs.append(v)
+        fas.append(f_act)
+        fcs.append(f_comp)
+        k += 1
+
+
+def simulate_fast(params: HybridLoopParams) -> ContactMetrics:
+    """Contact metrics of one run of the hybrid loop, by the exact discrete update.
+
+    Same stop rule, ``t_max``, budget and errors as
+    :func:`~hybridtable.loop.simulation.run_loop` on the diagram of ``params``.
+
+    Raises
+    ------
+    ParameterError
+        If :func:`fast_unsupported` names a reason (use the diagram).
+    DivergenceError
+        If the compensated force passes ``DIVERGED_FORCE_RATIO`` times ``v sqrt(k m)``.
+    SimulationError
+        If no contact happens, the contact does not end within ``t_max``, or the run
+        is over the simulation budget.
+    """
+    why = fast_unsupported(params)
+    if why is not None:
+        raise ParameterError(f"the fast path cannot run these parameters: {why}")
+    h, n = _computer_period(params)
+    check_budget(params, min(default_t_max_s(params), expected_duration_s(params)), h)
+    rule = _StopRule(params, h)
+    run = _run_sampled if params.sample_rate_hz is not None else _run_continuous
+    vs, fas, fcs = run(params, h, n, rule)
+    rule.verdict()
+    t = np.arange(len(vs)) * h
+    try:
+        return contact_metrics(t, vs, fas, fcs, params.spacecraft_mass_kg)
+    except ValueError as err:
+        raise SimulationError(f"{err} within the {t[-1]:.3g} s simulated") from None
