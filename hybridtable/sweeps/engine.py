@@ -69,6 +69,8 @@ class CampaignResult:
     wall_time_s : float
     run_seconds : float
         The runs' own time, summed.
+    compute_time_s : float
+        From the first task submitted to the last result (no cluster start-up).
     retried : list of int
         Runs retried alone after their task killed its workers.
     """
@@ -83,6 +85,7 @@ class CampaignResult:
     dashboard: str | None = None
     wall_time_s: float = 0.0
     run_seconds: float = 0.0
+    compute_time_s: float = 0.0
     retried: list[int] = field(default_factory=list)
 
     @property
@@ -153,6 +156,7 @@ def run_campaign(
     resume: bool = False,
     progress: bool = True,
     on_start=None,
+    client=None,
 ) -> CampaignResult:
     """Run every run of ``spec`` not yet in ``out`` and write ``out``.
 
@@ -175,6 +179,9 @@ def run_campaign(
     on_start : callable, optional
         Called with the :class:`CampaignResult` once the cluster is up (the
         command prints the dashboard's address there).
+    client : distributed.Client, optional
+        Run on this client (left open) instead of starting one from
+        ``scheduler`` and ``workers``.
 
     Raises
     ------
@@ -197,7 +204,10 @@ def run_campaign(
         result.wall_time_s = time.perf_counter() - t0
         return result
 
-    client, cluster = _client(scheduler, workers)
+    own = client is None
+    cluster = None
+    if own:
+        client, cluster = _client(scheduler, workers)
     try:
         info = client.scheduler_info()
         result.workers = len(info.get("workers", {}))
@@ -207,7 +217,8 @@ def run_campaign(
             on_start(result)
         _run(client, spec, path, todo, rows, result, progress)
     finally:
-        client.close()
+        if own:
+            client.close()
         if cluster is not None:
             cluster.close()
     result.wall_time_s = time.perf_counter() - t0
@@ -219,6 +230,7 @@ def _run(client, spec, path, todo, rows, result, progress) -> None:
     from distributed import as_completed
     from tqdm import tqdm
 
+    t0 = time.perf_counter()
     size = task_size(len(todo), max(result.workers, 1))
     futures = {}
     for start in range(0, len(todo), size):
@@ -251,6 +263,7 @@ def _run(client, spec, path, todo, rows, result, progress) -> None:
             f.cancel()
     finally:
         bar.close()
+        result.compute_time_s = time.perf_counter() - t0
         result.written = len(rows)
         _write(path, spec, rows)
 
