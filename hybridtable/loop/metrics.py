@@ -1,4 +1,4 @@
-"""Contact metrics of a run: CoR, contact duration, peak force, energy gained."""
+"""Contact metrics of a run: CoR, contact duration, peak force, energy gained and created."""
 
 from __future__ import annotations
 
@@ -28,6 +28,11 @@ class ContactMetrics:
     energy_gain_j : float
         Kinetic energy of the spacecraft model after minus before the contact
         (positive: the loop created energy).
+    energy_created : float
+        The largest excess of the spacecraft model's kinetic energy over its
+        value before the contact, at any sample of the record, relative to it
+        [1] (> 0: the loop created energy at some instant, even if it took it
+        back; a passive contact never does).
     """
 
     cor: float
@@ -37,6 +42,7 @@ class ContactMetrics:
     peak_force_n: float
     peak_compensated_force_n: float
     energy_gain_j: float
+    energy_created: float = 0.0
 
     def to_dict(self) -> dict[str, float]:
         return asdict(self)
@@ -96,4 +102,5 @@ def contact_metrics(
         peak_force_n=float(f_act.max()),
         peak_compensated_force_n=float(f_comp.max()),
         energy_gain_j=0.5 * mass_kg * (v_out**2 - v_in**2),
+        energy_created=max(0.0, float(np.max(v * v)) - v_in**2) / v_in**2,
     )

@@ -73,9 +73,11 @@ class CampaignResult:
         From the first task submitted to the last result (no cluster start-up).
     retried : list of int
         Runs retried alone after their task killed its workers.
+    rows : list of dict
+        The rows, sorted by run.
     """
 
-    path: Path
+    path: Path | None
     n_runs: int
     written: int = 0
     resumed: int = 0
@@ -87,6 +89,7 @@ class CampaignResult:
     run_seconds: float = 0.0
     compute_time_s: float = 0.0
     retried: list[int] = field(default_factory=list)
+    rows: list[dict[str, Any]] = field(default_factory=list, repr=False)
 
     @property
     def complete(self) -> bool:
@@ -150,21 +153,23 @@ def _client(scheduler: str | None, workers: int | None):
 
 def run_campaign(
     spec: SweepSpec,
-    out: str | Path,
+    out: str | Path | None,
     scheduler: str | None = None,
     workers: int | None = None,
     resume: bool = False,
     progress: bool = True,
     on_start=None,
     client=None,
+    in_process: bool = False,
 ) -> CampaignResult:
     """Run every run of ``spec`` not yet in ``out`` and write ``out``.
 
     Parameters
     ----------
     spec : SweepSpec
-    out : path
-        The Parquet file (replaced unless ``resume``).
+    out : path or None
+        The Parquet file (replaced unless ``resume``); None: the rows are only
+        returned (a study that post-processes them).
     scheduler : str, optional
         Address of a running Dask scheduler (``tcp://host:8786``); default: a
         local cluster.
@@ -182,6 +187,10 @@ def run_campaign(
     client : distributed.Client, optional
         Run on this client (left open) instead of starting one from
         ``scheduler`` and ``workers``.
+    in_process : bool
+        Run here, one run after the other, without Dask: for campaigns that
+        take less time than a cluster takes to start (the margins of a grid of
+        linear models). The rows are the same.
 
     Raises
     ------
@@ -191,19 +200,26 @@ def run_campaign(
         No scheduler at ``scheduler``, or the workers cannot run a task.
     """
     t0 = time.perf_counter()
-    path = Path(out)
+    path = None if out is None else Path(out)
     result = CampaignResult(path, spec.n_runs)
     rows: dict[int, dict[str, Any]] = {}
-    if resume and path.exists():
+    if resume and path is not None and path.exists():
         for row in read_results(path, spec).to_pylist():
             rows[row["run"]] = row
         result.resumed = len(rows)
     todo = [i for i in range(spec.n_runs) if i not in rows]
     if not todo:
-        result.written = write_results(path, spec, rows.values())
+        result.written = _write(path, spec, rows)[1]
+        result.rows = [rows[i] for i in sorted(rows)]
         result.wall_time_s = time.perf_counter() - t0
         return result
 
+    if in_process:
+        _run(None, spec, path, todo, rows, result, progress)
+        result.rows = [rows[i] for i in sorted(rows)]
+        result.wall_time_s = time.perf_counter() - t0
+        result.run_seconds = float(sum(r["seconds"] for r in rows.values()))
+        return result
     own = client is None
     cluster = None
     if own:
@@ -221,21 +237,20 @@ def run_campaign(
             client.close()
         if cluster is not None:
             cluster.close()
+    result.rows = [rows[i] for i in sorted(rows)]
     result.wall_time_s = time.perf_counter() - t0
     result.run_seconds = float(sum(r["seconds"] for r in rows.values()))
     return result
 
 
 def _run(client, spec, path, todo, rows, result, progress) -> None:
-    from distributed import as_completed
+    """Run ``todo`` on ``client`` (None: here), collecting into ``rows`` and
+    writing ``path`` every few seconds and at the end, even on Ctrl-C."""
     from tqdm import tqdm
 
     t0 = time.perf_counter()
     size = task_size(len(todo), max(result.workers, 1))
-    futures = {}
-    for start in range(0, len(todo), size):
-        chunk = todo[start : start + size]
-        futures[client.submit(run_many, spec, chunk, pure=False)] = chunk
+    chunks = [todo[start : start + size] for start in range(0, len(todo), size)]
     bar = tqdm(
         total=spec.n_runs,
         initial=len(rows),
@@ -246,16 +261,15 @@ def _run(client, spec, path, todo, rows, result, progress) -> None:
         leave=False,
     )
     last_write, write_cost = time.monotonic(), 0.0
-    pending = as_completed(list(futures))
+    futures: dict[Any, list[int]] = {}
     try:
-        for future in pending:
-            chunk = futures.pop(future)
-            for row in _rows_of(client, spec, future, chunk, result):
+        for chunk, found in _results(client, spec, chunks, futures, result):
+            for row in found:
                 rows[row["run"]] = row
             bar.update(len(chunk))
             now = time.monotonic()
             if now - last_write >= max(CHECKPOINT_S, 5.0 * write_cost):
-                write_cost = _write(path, spec, rows)
+                write_cost = _write(path, spec, rows)[0]
                 last_write = time.monotonic()
     except KeyboardInterrupt:
         result.interrupted = True
@@ -268,10 +282,28 @@ def _run(client, spec, path, todo, rows, result, progress) -> None:
         _write(path, spec, rows)
 
 
-def _write(path, spec, rows) -> float:
+def _results(client, spec, chunks, futures, result):
+    """``(chunk, rows)`` as the tasks finish (here, in order, without a client)."""
+    if client is None:
+        for chunk in chunks:
+            yield chunk, run_many(spec, chunk)
+        return
+    from distributed import as_completed
+
+    for chunk in chunks:
+        futures[client.submit(run_many, spec, chunk, pure=False)] = chunk
+    for future in as_completed(list(futures)):
+        chunk = futures.pop(future)
+        yield chunk, _rows_of(client, spec, future, chunk, result)
+
+
+def _write(path, spec, rows) -> tuple[float, int]:
+    """Write the rows (none without a path); return the seconds it took and
+    the rows written."""
     t = time.monotonic()
-    write_results(path, spec, rows.values())
-    return time.monotonic() - t
+    if path is not None:
+        write_results(path, spec, rows.values())
+    return time.monotonic() - t, len(rows)
 
 
 def _rows_of(client, spec, future, chunk, result) -> list[dict[str, Any]]:

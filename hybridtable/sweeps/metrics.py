@@ -42,6 +42,12 @@ _ALL = (
     Metric("cor", "1", SIMULATION, "coefficient of restitution |v_out| / |v_in|"),
     Metric("energy_ratio", "1", SIMULATION, "kinetic energy after / before the contact (CoR^2)"),
     Metric("energy_gain_j", "J", SIMULATION, "kinetic energy after minus before the contact"),
+    Metric(
+        "energy_created",
+        "1",
+        SIMULATION,
+        "largest excess of the kinetic energy over its value before the contact, relative",
+    ),
     Metric("peak_force_n", "N", SIMULATION, "largest actual contact force"),
     Metric("peak_compensated_force_n", "N", SIMULATION, "largest force fed to the model"),
     Metric("contact_duration_s", "s", SIMULATION, "time the contact force was on"),

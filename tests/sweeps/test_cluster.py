@@ -138,7 +138,7 @@ def test_the_scheduler_a_local_cluster_and_one_worker_write_the_same_file(
     a, b, c = (_without_timing(p) for p in (remote, local, single))
     assert a.num_rows == 200
     assert a.column("run").to_pylist() == list(range(200))
-    assert a.equals(b) and a.equals(c)
+    assert repr(a.to_pylist()) == repr(b.to_pylist()) == repr(c.to_pylist())
     # the metadata too (the spec and its fingerprint), not only the rows
     assert pq.read_schema(remote).metadata == pq.read_schema(local).metadata
     status = a.column("status").to_pylist()
@@ -233,7 +233,7 @@ def test_a_lost_worker_costs_only_its_runs(cluster, tmp_path):
         )
         == 0
     )
-    assert table.equals(_without_timing(reference))
+    assert repr(table.to_pylist()) == repr(_without_timing(reference).to_pylist())
 
 
 def test_no_scheduler_at_the_address_is_one_line(tmp_path, capsys):
