@@ -1,6 +1,6 @@
 """Benchmark: margins over a 40 x 40 (delay, table frequency) grid, four compensators.
 
-Times :func:`hybridtable.analysis.sweep.sweep_margins` (Drake block linearization, assembly,
+Times :func:`hybridtable.sweeps.margins_grid.sweep_margins` (Drake block linearization, assembly,
 closed-loop poles, phase margin at the contact crossover, critical delay per
 table frequency and critical table frequency per delay, and the check of the
 assembled model against a direct ``Linearize`` of the full diagram) for:
@@ -23,9 +23,9 @@ import time
 
 import numpy as np
 
-from hybridtable.analysis.sweep import sweep_margins
 from hybridtable.compensators.paper import COMPENSATORS
 from hybridtable.studies.paper import paper_params
+from hybridtable.sweeps.margins_grid import sweep_margins
 
 
 def run_case(name: str, base, delays, tables) -> dict:

@@ -55,7 +55,7 @@ __all__, __getattr__, __dir__ = lazy_exports(
         "sweep": (
             "CompensatorSweep",
             "SweepResult",
-            "sweep_margins",
+            "margins_from_rows",
         ),
         "validation": (
             "ValidationPoint",

@@ -3,7 +3,9 @@
 For each compensator, every grid point ``(sensor_delay_s[i],
 table_response_hz[j])`` gets the figures of :mod:`hybridtable.analysis.margins` from the
 Drake-linearized model (continuous with a Pade delay, or sampled when the base
-parameters have a sample rate); every table frequency gets its critical
+parameters have a sample rate): the points are the runs of a campaign
+(:mod:`hybridtable.sweeps.margins_grid`), whose rows :func:`margins_from_rows`
+turns into per-compensator arrays; every table frequency gets its critical
 sensor delay and every delay its critical table frequency.
 :mod:`hybridtable.analysis.validation` compares the predictions with the nonlinear
 simulation.
@@ -11,7 +13,6 @@ simulation.
 
 from __future__ import annotations
 
-import sys
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
@@ -19,12 +20,11 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from hybridtable.analysis.blockwise import ContactLoopLinearizer
-from hybridtable.analysis.linearize import LinearLoop
+from hybridtable.analysis.linearize import LinearLoop, linearization_notes
 from hybridtable.analysis.margins import (
     critical_sensor_delay,
     critical_table_frequency,
     growth_of,
-    loop_margins,
 )
 from hybridtable.analysis.sampled import SampledLoopLinearizer
 from hybridtable.compensators.paper import COMPENSATORS
@@ -37,8 +37,8 @@ __all__ = [
     "SweepResult",
     "ValidationPoint",
     "check_supported",
+    "margins_from_rows",
     "model_function",
-    "sweep_margins",
 ]
 
 #: Per-grid-point arrays of a :class:`CompensatorSweep`.
@@ -172,18 +172,29 @@ def check_supported(params: HybridLoopParams, compensators: Sequence[str]) -> No
         raise ParameterError("the margins analysis does not model the passivity guard")
 
 
-def sweep_margins(
+def margins_from_rows(
     base: HybridLoopParams,
     sensor_delay_s: Sequence[float],
     table_response_hz: Sequence[float],
-    compensators: Sequence[str] = COMPENSATORS,
+    compensators: Sequence[str],
+    rows: Sequence[dict],
     pade_order: int = 3,
     critical: bool = True,
     verify: bool = True,
-    progress: bool = False,
     transform: Callable[[HybridLoopParams], HybridLoopParams] | None = None,
+    wall_time_s: float = 0.0,
 ) -> SweepResult:
-    """Margins of every compensator over the (delay, table frequency) grid.
+    """The :class:`SweepResult` of a margins campaign's rows.
+
+    The grid's points are runs of a campaign (:mod:`hybridtable.sweeps`; the
+    margins command and :func:`hybridtable.sweeps.margins_grid.sweep_margins`
+    build it): ``rows`` are its rows in run order, sensor delay slowest,
+    compensator fastest, with the margin metrics of :data:`GRID_FIELDS` and
+    ``stable``. Here they become the per-compensator arrays; every table
+    frequency gets its critical sensor delay and every delay its critical
+    table frequency (1-D searches on the same linear model), and the
+    block-assembled model is checked against a direct ``Linearize`` of the
+    whole diagram at two grid points per compensator (``verify``).
 
     Parameters
     ----------
@@ -193,21 +204,25 @@ def sweep_margins(
     sensor_delay_s, table_response_hz : sequence of float
         Grid axes (``inf`` allowed for an ideal table).
     compensators : sequence of str
+    rows : sequence of dict
+        The campaign's rows.
     pade_order : int
         Pade order of the continuous model (ignored when sampled).
     critical : bool
         Compute the critical delay / table frequency curves.
     verify : bool
-        Compare the block-assembled continuous model with a direct ``Linearize``
-        of the full Drake diagram at two grid points per compensator.
-    progress : bool
-        Show a tqdm progress bar.
+        Compare the block-assembled continuous model with a direct ``Linearize``.
     transform : callable, optional
         ``params -> params``: what the linear model is built from at each
-        point (and in the critical searches and the verification), e.g. a rig
-        model's physics as the linear models see it
-        (:meth:`~hybridtable.diagnosis.model_file.RigModel.linear_params`). The
-        grid axes stay the parameters before it.
+        point (a rig model's physics as the linear models see it), as the
+        campaign's rows had it. The grid axes stay the parameters before it.
+    wall_time_s : float
+        The campaign's time, added to the searches'.
+
+    Raises
+    ------
+    ParameterError
+        If a grid point's linear model could not be made (its row's message).
     """
     t0 = time.perf_counter()
     check_supported(base, compensators)
@@ -215,6 +230,12 @@ def sweep_margins(
     tables = np.asarray(table_response_hz, dtype=float)
     if delays.ndim != 1 or tables.ndim != 1 or delays.size == 0 or tables.size == 0:
         raise ParameterError("the grid needs at least one delay and one table frequency")
+    nd, nt, nc = delays.size, tables.size, len(compensators)
+    if len(rows) != nd * nt * nc:
+        raise ParameterError(f"{len(rows)} rows for a grid of {nd} x {nt} x {nc} points")
+    for row in rows:
+        if row["status"] != "ok":
+            raise ParameterError(row["message"])
     model, lin = model_function(base, pade_order)
     if transform is not None:
         bare_model = model
@@ -223,43 +244,28 @@ def sweep_margins(
             return bare_model(transform(p))
 
     sampled_lin = SampledLoopLinearizer(lin) if base.sample_rate_hz is not None else None
-    notes: set[str] = set()
     growth = growth_of(model)
-    nd, nt = delays.size, tables.size
+    notes: set[str] = set()
     verification = None
-    bar = None
-    if progress:
-        from tqdm import tqdm
-
-        # on stderr, cleared when done: the console opens with the verdict
-        bar = tqdm(
-            total=len(compensators) * (nd * nt),
-            desc="margins",
-            unit="pt",
-            leave=False,
-            file=sys.stderr,
-        )
     out: dict[str, CompensatorSweep] = {}
-    for comp in compensators:
+    for c, comp in enumerate(compensators):
         cbase = base.with_(compensator=comp)
         arrays = {name: np.full((nd, nt), np.nan) for name in GRID_FIELDS}
         stable = np.zeros((nd, nt), dtype=bool)
         for i, T in enumerate(delays):
             for j, f in enumerate(tables):
+                row = rows[(i * nt + j) * nc + c]
+                if (row["sensor_delay_s"], row["table_response_hz"], row["compensator"]) != (
+                    float(T),
+                    float(f),
+                    comp,
+                ):
+                    raise ParameterError(f"row {row['run']} is not grid point ({i}, {j}, {comp})")
+                for name in GRID_FIELDS:
+                    arrays[name][i, j] = row[name]
+                stable[i, j] = bool(row["stable"])
                 p = cbase.with_(sensor_delay_s=float(T), table_response_hz=float(f))
-                lm = model(p)
-                notes.update(lm.notes)
-                m = loop_margins(lm, pm_method="fast")
-                arrays["predicted_cor"][i, j] = m.predicted_cor
-                arrays["phase_margin_deg"][i, j] = m.phase_margin_deg
-                arrays["damping_ratio"][i, j] = m.damping_ratio
-                arrays["effective_delay_s"][i, j] = m.effective_delay_s
-                arrays["energy_growth_per_contact"][i, j] = m.energy_growth_per_contact
-                arrays["growth_rate_per_s"][i, j] = m.growth_rate_per_s
-                arrays["crossover_rad_per_s"][i, j] = m.crossover_rad_per_s
-                stable[i, j] = m.stable
-            if bar is not None:
-                bar.update(nt)
+                notes.update(linearization_notes(p if transform is None else transform(p)))
         if verify:
             for i, j in {(0, 0), (nd // 2, nt // 2)}:
                 p = cbase.with_(sensor_delay_s=float(delays[i]), table_response_hz=float(tables[j]))
@@ -279,8 +285,6 @@ def sweep_margins(
         out[comp] = CompensatorSweep(
             comp, **arrays, stable=stable, critical_delay_s=crit_d, critical_table_hz=crit_f
         )
-    if bar is not None:
-        bar.close()
     return SweepResult(
         base=base,
         sensor_delay_s=delays,
@@ -288,7 +292,7 @@ def sweep_margins(
         pade_order=None if base.sample_rate_hz is not None else lin.pade_order,
         compensators=out,
         verification_error=verification,
-        wall_time_s=time.perf_counter() - t0,
+        wall_time_s=wall_time_s + time.perf_counter() - t0,
         notes=sorted(notes),
         transform=transform,
     )

@@ -247,7 +247,6 @@ def _base_params(args: argparse.Namespace, model=None):
 def run(args: argparse.Namespace) -> int:
     from hybridtable._files import staged_folder
     from hybridtable.analysis.robustness import grid_cor_limits
-    from hybridtable.analysis.sweep import sweep_margins
     from hybridtable.analysis.validation import validate_sweep
     from hybridtable.commands._common import check_outputs, write_json
     from hybridtable.commands._model_options import load_model_arg, load_plugins
@@ -266,6 +265,7 @@ def run(args: argparse.Namespace) -> int:
         table1_point,
         write_report,
     )
+    from hybridtable.sweeps.margins_grid import sweep_margins
     from hybridtable.systems.sensor import delay_samples
 
     load_plugins(args)
@@ -313,6 +313,7 @@ def run(args: argparse.Namespace) -> int:
         comps,
         pade_order=args.pade_order,
         progress=progress,
+        model=model,
         transform=transform,
     )
     sweep_wall = time.perf_counter() - t0

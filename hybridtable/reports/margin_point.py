@@ -131,7 +131,7 @@ def point_margins(
     """The figures of :class:`PointMargins` at ``(sensor_delay_s,
     table_response_hz)``, the rest from ``base`` (sampled when it has a sample
     rate; ``transform``: a model's physics, as in
-    :func:`~hybridtable.analysis.sweep.sweep_margins`). The searches run up to
+    :func:`~hybridtable.sweeps.margins_grid.sweep_margins`). The searches run up to
     a quarter contact period."""
     bare, _ = model_function(base, pade_order, linearizer)
     model = bare if transform is None else (lambda p: bare(transform(p)))

@@ -59,6 +59,14 @@ _ALL = (
     Metric("damping_ratio", "1", MARGINS, "damping ratio of the contact pole"),
     Metric("growth_rate_per_s", "1/s", MARGINS, "largest real part of the loop's poles"),
     Metric(
+        "energy_growth_per_contact",
+        "1",
+        MARGINS,
+        "energy ratio over half a period of the contact pole (CoR^2 - 1)",
+    ),
+    Metric("effective_delay_s", "s", MARGINS, "delay the phase margin amounts to"),
+    Metric("crossover_rad_per_s", "rad/s", MARGINS, "gain crossover frequency"),
+    Metric(
         "critical_sensor_delay_s",
         "s",
         MARGINS,

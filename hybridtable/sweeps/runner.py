@@ -125,11 +125,18 @@ def _margins(spec: SweepSpec, params) -> dict[str, Any]:
             return _LINEAR[key](transform(p))
 
         linear = linear_model
-    out: dict[str, Any] = {}
     m = loop_margins(linear(params), pm_method="fast")
-    for name in ("stable", "predicted_cor", "phase_margin_deg", "damping_ratio"):
-        out[name] = bool(m.stable) if name == "stable" else float(getattr(m, name))
-    out["growth_rate_per_s"] = float(m.growth_rate_per_s)
+    out: dict[str, Any] = {"stable": bool(m.stable)}
+    for name in (
+        "predicted_cor",
+        "phase_margin_deg",
+        "damping_ratio",
+        "growth_rate_per_s",
+        "energy_growth_per_contact",
+        "effective_delay_s",
+        "crossover_rad_per_s",
+    ):
+        out[name] = float(getattr(m, name))
     if "critical_sensor_delay_s" in spec.metrics:
         max_delay = max(0.25 / params.contact_frequency_hz, params.sensor_delay_s)
         out["critical_sensor_delay_s"] = float(

@@ -10,7 +10,6 @@ import pytest
 
 from hybridtable.analysis.blockwise import ContactLoopLinearizer
 from hybridtable.analysis.margins import loop_margins
-from hybridtable.analysis.sweep import sweep_margins
 from hybridtable.analysis.validation import (
     linear_contact_cor,
     onset_state,
@@ -20,6 +19,7 @@ from hybridtable.analysis.validation import (
 from hybridtable.errors import ParameterError
 from hybridtable.loop.simulation import simulate
 from hybridtable.studies.paper import paper_params
+from hybridtable.sweeps.margins_grid import sweep_margins
 from tests.analysis.support import damped
 
 
