@@ -114,6 +114,11 @@ class _Key:
 
 
 def _parse(raw: Mapping[str, Any], source: str, folder: Path) -> SweepSpec:
+    if not raw:
+        raise ParameterError(
+            "the spec is empty (a wrong file, or one saved half way?); a spec of one run of "
+            'the paper\'s Table 1 point is name = "..."'
+        )
     unknown = [k for k in raw if k not in _TOP_KEYS]
     if unknown:
         raise ParameterError(
@@ -196,6 +201,7 @@ def _parse(raw: Mapping[str, Any], source: str, folder: Path) -> SweepSpec:
                 else:
                     for x in dist.extremes():
                         check_value(k, x)
+                    _check_tails(k, dist)
             draws.append((k, dist))
 
     for a, b in CONFLICTS:
@@ -222,7 +228,9 @@ def _parse(raw: Mapping[str, Any], source: str, folder: Path) -> SweepSpec:
     )
     if spec.n_runs > MAX_RUNS:
         raise ParameterError(
-            f"{spec.n_runs} runs is more than one spec may hold ({MAX_RUNS}); split the campaign"
+            f"points x monte_carlo.samples x grid cells = {len(spec.points)} x {spec.samples} x "
+            f"{spec.cells} = {spec.n_runs} runs, more than one spec may hold ({MAX_RUNS}); "
+            "split the campaign"
         )
     if spec.engine == "fast" and (model is not None or any(n in where for n in NOISE_INPUTS)):
         raise ParameterError(
@@ -231,6 +239,40 @@ def _parse(raw: Mapping[str, Any], source: str, folder: Path) -> SweepSpec:
     if spec.needs_margins and any(n in where for n in NOISE_INPUTS):
         raise ParameterError("margin metrics are of the linear loop: it has no noise inputs")
     return spec
+
+
+#: A normal draw may leave its input's plausible range with at most this
+#: chance; a draw that does makes its run ``invalid`` (a row, with the reason).
+_TAIL_CHANCE = 0.01
+
+
+def _check_tails(name: str, dist: Distribution) -> None:
+    """Refuse a normal that would draw outside ``name``'s plausible range more
+    than once in a hundred (a Gaussian stiffness or velocity going negative):
+    the user gives ``low`` and ``high`` (a truncated normal). The bounds given
+    are already checked to lie in the range."""
+    from hybridtable.limits import LIMITS
+
+    if dist.kind != "normal" or name not in LIMITS:
+        return
+    from scipy.special import ndtr
+
+    limit = LIMITS[name]
+    chance = 0.0
+    if dist.low is None:
+        chance += float(ndtr((limit.low - dist.mean) / dist.std))
+        if limit.smallest_nonzero is not None:  # (0, smallest) is refused too
+            chance += float(ndtr((limit.smallest_nonzero - dist.mean) / dist.std)) - float(
+                ndtr((limit.low - dist.mean) / dist.std)
+            )
+    if dist.high is None:
+        chance += float(ndtr((dist.mean - limit.high) / dist.std))
+    if chance > _TAIL_CHANCE:
+        raise ParameterError(
+            f"a normal with mean {dist.mean:g} and std {dist.std:g} draws outside the plausible "
+            f"range of {name} ({limit.words()}) with chance {chance:.2g}: give low and high "
+            "(a truncated normal)"
+        )
 
 
 def _table(value: Any, key: str) -> Mapping[str, Any]:
