@@ -44,6 +44,8 @@ __all__ = [
     "ModelCompensatorResult",
     "model_physics",
     "model_loop_params",
+    "physics_loop_params",
+    "simulate_physics",
     "model_transform",
     "simulate_model",
     "rig_points",
@@ -66,23 +68,27 @@ def model_physics(model, keep_compensator: bool = True):
     return physics
 
 
-def model_loop_params(model, params, physics=None, rig_computer: bool = True):
-    """``params`` as the model's rig runs them: the physics' parameter
-    changes and rig-computer changes, and (``rig_computer``) the spacecraft
-    mass the model's computer integrates with (``params``' mass times the
-    mass ratio, as :meth:`~hybridtable.diagnosis.model_file.RigModel.linear_params`
-    has it)."""
-    physics = physics or model_physics(model)
+def physics_loop_params(params, physics, mass_ratio: float = 1.0):
+    """``params`` as a rig with ``physics`` runs them: the physics' parameter
+    changes and rig-computer changes, and the spacecraft mass the rig
+    computer integrates with (``params``' mass times ``mass_ratio``)."""
     # RigPhysics.apply pins the compensator's beliefs through
     # HybridLoopParams.compensator_params(), which knows the paper's four
     # kinds only: apply it to a paper kind and put the loop's back.
     q = physics.apply(params.with_(compensator="none"))
     if "compensator" not in physics.computer:
         q = q.with_(compensator=params.compensator)
-    ratio = model.spec().mass_ratio
-    if rig_computer and ratio != 1.0:
-        q = q.with_(spacecraft_mass_kg=params.spacecraft_mass_kg * ratio)
+    if mass_ratio != 1.0:
+        q = q.with_(spacecraft_mass_kg=params.spacecraft_mass_kg * mass_ratio)
     return q
+
+
+def model_loop_params(model, params, physics=None, rig_computer: bool = True):
+    """``params`` as the model's rig runs them (:func:`physics_loop_params`
+    with the model's physics and, when ``rig_computer``, its mass ratio, as
+    :meth:`~hybridtable.diagnosis.model_file.RigModel.linear_params` has it)."""
+    physics = physics or model_physics(model)
+    return physics_loop_params(params, physics, model.spec().mass_ratio if rig_computer else 1.0)
 
 
 def _whole_ticks(delay_s: float, h: float) -> float:
@@ -106,13 +112,12 @@ def model_transform(model):
     return transform
 
 
-def simulate_model(model, params, physics=None, rig_computer: bool = True, **kwargs):
-    """The nonlinear loop of ``params`` (a
-    :class:`~hybridtable.loop.params.HybridLoopParams`, nominal physics) with
-    the model's physics, run through one contact by
-    :func:`~hybridtable.loop.simulation.run_loop` (``kwargs``); ``physics``
-    replaces the model's (:func:`model_physics`); ``rig_computer=False``
-    leaves the spacecraft mass as ``params`` has it (a reference).
+def simulate_physics(params, physics, mass_ratio: float = 1.0, **kwargs):
+    """The nonlinear loop of ``params`` with ``physics`` (a
+    :class:`~hybridtable.measurement.rig.RigPhysics`: its table, contact and
+    sensor systems, its parameter and rig-computer changes) and the rig
+    computer's ``mass_ratio``, run through one contact by
+    :func:`~hybridtable.loop.simulation.run_loop` (``kwargs``).
 
     Raises
     ------
@@ -124,8 +129,7 @@ def simulate_model(model, params, physics=None, rig_computer: bool = True, **kwa
     from hybridtable.loop.builder import add_hybrid_loop
     from hybridtable.loop.simulation import run_loop
 
-    physics = physics or model_physics(model)
-    q = model_loop_params(model, params, physics, rig_computer)
+    q = physics_loop_params(params, physics, mass_ratio)
     builder = DiagramBuilder()
     loop = add_hybrid_loop(
         builder,
@@ -136,6 +140,23 @@ def simulate_model(model, params, physics=None, rig_computer: bool = True, **kwa
     )
     loop.diagram = builder.Build()
     return run_loop(loop, **kwargs)
+
+
+def simulate_model(model, params, physics=None, rig_computer: bool = True, **kwargs):
+    """The nonlinear loop of ``params`` (a
+    :class:`~hybridtable.loop.params.HybridLoopParams`, nominal physics) with
+    the model's physics (:func:`simulate_physics`); ``physics`` replaces the
+    model's (:func:`model_physics`); ``rig_computer=False`` leaves the
+    spacecraft mass as ``params`` has it (a reference).
+
+    Raises
+    ------
+    SimulationError
+        If the loop diverges or never separates.
+    """
+    physics = physics or model_physics(model)
+    ratio = model.spec().mass_ratio if rig_computer else 1.0
+    return simulate_physics(params, physics, ratio, **kwargs)
 
 
 def rig_points(model) -> list:

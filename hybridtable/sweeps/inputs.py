@@ -10,7 +10,13 @@ A run of a campaign is a set of named inputs (:data:`INPUTS`): the fields of
   one (a stiffness mismatch);
 - ``force_noise_n``, ``position_noise_m``: white noise (standard deviations) on
   the force and table position the rig computer reads, a new sample every
-  computer period, seeded by the run's own seed.
+  computer period, seeded by the run's own seed;
+- ``table_backend``: ``second_order`` (the loop's table) or ``stewart`` (the
+  3-3 Stewart platform in a MultibodyPlant, tuned to ``table_response_hz``);
+- ``EFFECT.PARAMETER``: a parameter of a registered effect (``hybridtable
+  effects`` lists them), e.g. ``coulomb_friction.friction_force_n``: the run's
+  rig has that effect (every parameter of an effect given; a sampled rig
+  computer, as the effects model the run format's).
 
 A parameter a spec does not give takes the paper's Table 1 value
 (:data:`DEFAULTS`) or the loop's own default. :func:`loop_params` turns the
@@ -34,6 +40,9 @@ __all__ = [
     "DEFAULTS",
     "CONFLICTS",
     "NOISE_INPUTS",
+    "TABLE_BACKENDS",
+    "input_of",
+    "effect_values",
     "check_value",
     "loop_params",
     "noise_params",
@@ -110,7 +119,40 @@ INPUTS: dict[str, Input] = {
     ),
     "force_noise_n": Input("force_noise_n", "number", "N", "force reading noise (std)"),
     "position_noise_m": Input("position_noise_m", "number", "m", "position reading noise (std)"),
+    "table_backend": Input("table_backend", "text", "", "second_order or stewart"),
 }
+
+#: The table back-ends a run can have.
+TABLE_BACKENDS: tuple[str, ...] = ("second_order", "stewart")
+
+
+def input_of(name: str) -> Input | None:
+    """The :class:`Input` called ``name``: one of :data:`INPUTS`, or
+    ``EFFECT.PARAMETER`` of a registered effect; None if there is none."""
+    if name in INPUTS:
+        return INPUTS[name]
+    effect_name, dot, parameter = name.partition(".")
+    if not dot:
+        return None
+    from hybridtable.diagnosis.registry import effect_names, get_effect
+
+    if effect_name not in effect_names():
+        return None
+    for p in get_effect(effect_name).parameters:
+        if p.name == parameter:
+            return Input(name, "number", p.unit, p.description)
+    return None
+
+
+def effect_values(values: dict[str, Any]) -> dict[str, dict[str, float]]:
+    """The effects a run's inputs give: ``{effect: {parameter: value}}``."""
+    out: dict[str, dict[str, float]] = {}
+    for name, value in values.items():
+        effect, dot, parameter = name.partition(".")
+        if dot:
+            out.setdefault(effect, {})[parameter] = float(value)
+    return out
+
 
 #: The noise inputs (they need the Drake diagram and the run's seed).
 NOISE_INPUTS: tuple[str, ...] = ("force_noise_n", "position_noise_m")
@@ -145,7 +187,9 @@ def check_value(name: str, value: Any) -> Any:
     ParameterError
         One line naming ``name``.
     """
-    spec = INPUTS[name]
+    spec = input_of(name)
+    if spec is None:
+        raise ParameterError(f"unknown parameter {name!r}")
     if spec.kind == "bool":
         if not isinstance(value, bool):
             raise ParameterError(f"{name} must be true or false (got {value!r})")
@@ -162,6 +206,10 @@ def check_value(name: str, value: Any) -> Any:
     if name in LIMITS:
         return check_plausible(name, value)
     value = float(value)
+    if "." in name:  # an effect's parameter: its bounds depend on the rig, checked per run
+        if not math.isfinite(value):
+            raise ParameterError(f"{name} must be a finite number (got {value!r})")
+        return value
     if math.isnan(value) or value < 0.0 or math.isinf(value):
         raise ParameterError(f"{name} must be a finite number >= 0 (got {value!r})")
     return value
@@ -172,6 +220,8 @@ def _choices(name: str) -> tuple[str, ...]:
         from hybridtable.compensators.registry import compensator_names
 
         return tuple(compensator_names())
+    if name == "table_backend":
+        return TABLE_BACKENDS
     if name == "contact_gate":
         from hybridtable.compensators.paper import CONTACT_GATES
 
@@ -198,7 +248,7 @@ def loop_params(values: dict[str, Any]):
     """
     from hybridtable.loop.params import HybridLoopParams
 
-    v = dict(values)
+    v = {k: x for k, x in values.items() if "." not in k and k != "table_backend"}
     for name in NOISE_INPUTS:
         v.pop(name, None)
     for name, default in DEFAULTS.items():

@@ -15,7 +15,7 @@ import time
 from typing import Any
 
 from hybridtable.errors import DivergenceError, ParameterError, SimulationError
-from hybridtable.sweeps.inputs import NOISE_INPUTS, loop_params, noise_params
+from hybridtable.sweeps.inputs import NOISE_INPUTS, effect_values, loop_params, noise_params
 from hybridtable.sweeps.metrics import MARGINS, METRICS, SIMULATION
 from hybridtable.sweeps.plan import RunInputs, SweepSpec
 
@@ -66,7 +66,12 @@ def _model(spec: SweepSpec):
 def _engine(spec: SweepSpec, params, values: dict[str, Any]) -> str:
     """``diagram`` or ``fast`` for this run; raises ParameterError when the
     spec demands the fast engine and it does not apply."""
-    needs_diagram = spec.model is not None or any(values.get(n, 0.0) for n in NOISE_INPUTS)
+    needs_diagram = (
+        spec.model is not None
+        or any(values.get(n, 0.0) for n in NOISE_INPUTS)
+        or values.get("table_backend", "second_order") != "second_order"
+        or bool(effect_values(values))
+    )
     if spec.engine == "diagram" or needs_diagram:
         return "diagram"
     from hybridtable.loop.fast import fast_unsupported
@@ -85,7 +90,14 @@ def _simulate(spec: SweepSpec, params, values: dict[str, Any], seed: int, engine
         from hybridtable.loop.fast import simulate_fast
 
         return simulate_fast(params)
+    if values.get("table_backend") == "stewart":
+        from hybridtable.stewart.run import simulate_stewart
+
+        return simulate_stewart(params, chirp=False).result.metrics
     model = _model(spec)
+    added = effect_values(values)
+    if added:
+        return _simulate_effects(model, params, added).metrics
     if model is not None:
         from hybridtable.studies.model_compensators import simulate_model
 
@@ -104,6 +116,36 @@ def _simulate(spec: SweepSpec, params, values: dict[str, Any], seed: int, engine
         inner = make_compensator(params.with_(passivity=False), period)
         compensator = with_measurement_noise(inner, noise, period)
     return run_loop(build_hybrid_loop(params, compensator=compensator)).metrics
+
+
+def _simulate_effects(model, params, added: dict[str, dict[str, float]]):
+    """The run with the effects ``added`` (on top of the model's, if any):
+    each effect's values checked against its bounds at this rig's scale."""
+    from dataclasses import replace
+
+    from hybridtable.diagnosis.effects import RigScale
+    from hybridtable.diagnosis.registry import build_spec, get_effect
+    from hybridtable.studies.model_compensators import simulate_physics
+
+    if params.sample_rate_hz is None:
+        raise ParameterError(
+            "effects act on a sampled rig computer (the run format's): give sample_rate_hz"
+        )
+    scale = (
+        model.scale if model is not None else RigScale.from_params(params, params.sample_period_s)
+    )
+    effects = [(e.effect, dict(e.values)) for e in model.effects] if model is not None else []
+    for name, given in added.items():
+        effect = get_effect(name)
+        for e, _ in effects:
+            if effect.conflicts_with(e):
+                raise ParameterError(f"{name} and {e.name} change the same part of the rig")
+        effects.append((effect, effect.check_values(given, scale)))
+    model_spec = build_spec(effects, scale)
+    physics = model_spec.physics(name="+".join(e.name for e, _ in effects))
+    if model is not None and model.computer_for(None):
+        physics = replace(physics, computer=model.computer_for(None))
+    return simulate_physics(params, physics, model_spec.mass_ratio)
 
 
 def _margins(spec: SweepSpec, params) -> dict[str, Any]:

@@ -43,7 +43,7 @@ import numpy as np
 
 from hybridtable.errors import ParameterError, SpecError
 from hybridtable.sweeps.distributions import Distribution, parse_distribution
-from hybridtable.sweeps.inputs import CONFLICTS, INPUTS, NOISE_INPUTS, check_value
+from hybridtable.sweeps.inputs import CONFLICTS, INPUTS, NOISE_INPUTS, check_value, input_of
 from hybridtable.sweeps.metrics import DEFAULT_METRICS, METRICS
 from hybridtable.sweeps.plan import ENGINES, MAX_RUNS, SPEC_FORMAT, SweepSpec
 
@@ -147,7 +147,7 @@ def _parse(raw: Mapping[str, Any], source: str, folder: Path) -> SweepSpec:
     where: dict[str, str] = {}
 
     def claim(name: str, key: str) -> None:
-        if name not in INPUTS:
+        if input_of(name) is None:
             close = [n for n in INPUTS if name.split("_")[0] in n][:3]
             hint = f"; did you mean {' or '.join(close)}?" if close else ""
             raise ParameterError(f"{key}: unknown parameter {name!r}{hint} (see docs/sweeps.md)")
@@ -190,9 +190,10 @@ def _parse(raw: Mapping[str, Any], source: str, folder: Path) -> SweepSpec:
             claim(k, key)
             with _Key(key):
                 dist = parse_distribution(v)
-                if INPUTS[k].kind != "number" and dist.kind != "choice":
-                    raise ParameterError(f"{k} is {INPUTS[k].kind}: only choice can draw it")
-                if INPUTS[k].kind == "number" and dist.kind == "choice":
+                kind = input_of(k).kind
+                if kind != "number" and dist.kind != "choice":
+                    raise ParameterError(f"{k} is {kind}: only choice can draw it")
+                if kind == "number" and dist.kind == "choice":
                     dist = Distribution(
                         "choice",
                         values=tuple(check_value(k, x) for x in dist.values),
@@ -232,13 +233,66 @@ def _parse(raw: Mapping[str, Any], source: str, folder: Path) -> SweepSpec:
             f"{spec.cells} = {spec.n_runs} runs, more than one spec may hold ({MAX_RUNS}); "
             "split the campaign"
         )
-    if spec.engine == "fast" and (model is not None or any(n in where for n in NOISE_INPUTS)):
+    _check_effects(where)
+    effects = any("." in n for n in where)
+    diagram_only = [n for n in NOISE_INPUTS if n in where]
+    diagram_only += ["a model file"] if model is not None else []
+    diagram_only += ["table_backend"] if "table_backend" in where else []
+    diagram_only += ["effects"] if effects else []
+    if spec.engine == "fast" and diagram_only:
         raise ParameterError(
-            'engine = "fast" cannot run a model file or measurement noise: use "auto" or "diagram"'
+            f'engine = "fast" cannot run {", ".join(diagram_only)}: use "auto" or "diagram"'
         )
-    if spec.needs_margins and any(n in where for n in NOISE_INPUTS):
-        raise ParameterError("margin metrics are of the linear loop: it has no noise inputs")
+    stewart_with = [x for x in diagram_only if x != "table_backend"]
+    if "stewart" in _values_of(spec, "table_backend") and stewart_with:
+        raise ParameterError(
+            f"the stewart table runs the nominal contact and sensor: not with "
+            f"{', '.join(stewart_with)} (sweep those on the second_order table)"
+        )
+    linear_less = [n for n in (*NOISE_INPUTS, "table_backend") if n in where]
+    linear_less += (
+        ["effects (a model file carries its effects into the margins)"] if effects else []
+    )
+    if spec.needs_margins and linear_less:
+        raise ParameterError(
+            f"margin metrics are of the linear loop; it has no {', '.join(linear_less)}"
+        )
     return spec
+
+
+def _values_of(spec: SweepSpec, name: str) -> set[Any]:
+    """Every value ``name`` can take in ``spec``'s runs."""
+    out = {v for k, v in spec.base if k == name}
+    out |= {v for k, axis in spec.grid if k == name for v in axis}
+    out |= {v for p in spec.points for k, v in p if k == name}
+    out |= {v for k, d in spec.draws if k == name for v in d.extremes()}
+    return out
+
+
+def _check_effects(where: dict[str, str]) -> None:
+    """Every parameter of an effect given, and no two effects changing the
+    same part of the rig."""
+    from hybridtable.diagnosis.registry import get_effect
+
+    given: dict[str, set[str]] = {}
+    for name in where:
+        effect, dot, parameter = name.partition(".")
+        if dot:
+            given.setdefault(effect, set()).add(parameter)
+    effects = [get_effect(n) for n in given]
+    for e in effects:
+        missing = [p for p in e.parameter_names if p not in given[e.name]]
+        if missing:
+            raise ParameterError(
+                f"{e.name}: give {', '.join(f'{e.name}.{p}' for p in missing)} too "
+                "(nothing to fit an effect to in a sweep)"
+            )
+    for i, a in enumerate(effects):
+        for b in effects[:i]:
+            if a.conflicts_with(b):
+                raise ParameterError(
+                    f"{a.name} and {b.name} change the same part of the rig: give one"
+                )
 
 
 #: A normal draw may leave its input's plausible range with at most this
@@ -331,7 +385,7 @@ def _range(name: str, value: Mapping[str, Any], key: str) -> list[float]:
         if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
             raise ParameterError(f"{key}.{k}: must be a finite number (got {v!r})")
         ends.append(float(v))
-    if INPUTS[name].kind != "number":
+    if input_of(name).kind != "number":
         raise ParameterError(f"{key}: {name} is not a number; list its values")
     if scale == "log":
         if min(ends) <= 0.0:
