@@ -127,7 +127,7 @@ def run(args: argparse.Namespace) -> int:
         rate = new / result.wall_time_s if result.wall_time_s > 0 else 0.0
         print(
             f"{new} runs in {result.wall_time_s:.1f} s "
-            f"({rate:.1f} runs/s on {result.workers} workers)"
+            f"({rate:.1f} runs/s on {result.workers} worker{'s' if result.workers != 1 else ''})"
             + (f"; {result.resumed} were already in the file" if result.resumed else "")
         )
     if args.json:

@@ -91,6 +91,16 @@ def _margins(out: Path) -> None:
     assert main([*argv, "--no-progress", "--report", str(out)]) == 0
 
 
+def _sweep(out: Path) -> None:
+    spec = out.parent / "spec.toml"
+    spec.write_text(
+        'compensators = ["none", "SDMDC"]\n[grid]\nsensor_delay_s = [0.002, 0.008]\n'
+        "table_response_hz = [20.0, 60.0]\n"
+    )
+    argv = ["sweep", str(spec), "--out", str(out.parent / "runs.parquet"), "--workers", "1"]
+    assert main([*argv, "--no-progress", "--report", str(out)]) == 0
+
+
 WRITERS = {
     "simulate-plot": _simulate_plot,
     "reproduce": _reproduce,
@@ -99,6 +109,7 @@ WRITERS = {
     "compare": _compare,
     "diagnose": _diagnose,
     "margins": _margins,
+    "sweep": _sweep,
 }
 
 
