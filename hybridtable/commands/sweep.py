@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 
 __all__ = ["register", "run"]
@@ -78,9 +79,58 @@ def _check_outputs(args: argparse.Namespace, spec) -> None:
         )
 
 
+def _json_document(args, spec, summary, result, figures) -> dict:
+    """The ``--json`` document, every null or infinity with a note saying why."""
+    from hybridtable.commands._common import note_unset
+    from hybridtable.reports.sweep_summary import verdict
+
+    doc_spec = note_unset(
+        spec.to_json(),
+        {
+            "model": "model null: no model file; the runs have the nominal physics",
+            "model_path": "model_path null: no model file",
+        },
+    )
+    for comp, entry in summary["compensators"].items():
+        for name, stats in entry.items():
+            if isinstance(stats, dict) and set(stats) == {"min", "median", "max"}:
+                note_unset(
+                    stats,
+                    {
+                        "min": f"null: no run of {comp} gave a finite {name}",
+                        "max": f"inf: {name} is infinite in a run of {comp}"
+                        + (" (stable at every delay searched)" if "delay" in name else ""),
+                    },
+                )
+    for row in summary["worst"]:
+        unset = [
+            m
+            for m in spec.metrics
+            if row[m] is None or (isinstance(row[m], float) and not math.isfinite(row[m]))
+        ]
+        if unset:
+            row["note"] = f"{', '.join(unset)} null: the run {row['status']} ({row['message']})"
+    return {
+        "verdict": verdict(spec.name, summary),
+        "spec": doc_spec,
+        "out": str(args.out),
+        "complete": result.complete,
+        "interrupted": result.interrupted,
+        "resumed": result.resumed,
+        "workers": result.workers,
+        "scheduler": result.scheduler,
+        "dashboard": result.dashboard,
+        "wall_time_s": result.wall_time_s,
+        "compute_time_s": result.compute_time_s,
+        "retried_runs": result.retried,
+        "figures": figures,
+        **summary,
+    }
+
+
 def run(args: argparse.Namespace) -> int:
     from hybridtable.commands._common import write_json
-    from hybridtable.reports.sweep_summary import format_summary, summarize, verdict
+    from hybridtable.reports.sweep_summary import format_summary, summarize
     from hybridtable.sweeps.engine import run_campaign
     from hybridtable.sweeps.spec import load_spec
     from hybridtable.sweeps.store import read_results
@@ -131,24 +181,7 @@ def run(args: argparse.Namespace) -> int:
             + (f"; {result.resumed} were already in the file" if result.resumed else "")
         )
     if args.json:
-        write_json(
-            args.json,
-            {
-                "verdict": verdict(spec.name, summary),
-                "spec": spec.to_json(),
-                "out": str(args.out),
-                "complete": result.complete,
-                "interrupted": result.interrupted,
-                "resumed": result.resumed,
-                "workers": result.workers,
-                "scheduler": result.scheduler,
-                "dashboard": result.dashboard,
-                "wall_time_s": result.wall_time_s,
-                "retried_runs": result.retried,
-                "figures": figures,
-                **summary,
-            },
-        )
+        write_json(args.json, _json_document(args, spec, summary, result, figures))
     if result.interrupted:
         print(
             f"hybridtable sweep: interrupted: {result.written} of {spec.n_runs} runs are in "
