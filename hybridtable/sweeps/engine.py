@@ -147,6 +147,7 @@ def _client(scheduler: str | None, workers: int | None):
             threads_per_worker=1,
             processes=True,
             silence_logs=logging.ERROR,
+            preload=["hybridtable.sweeps.worker_setup"],
         )
     return Client(cluster), cluster
 
@@ -275,6 +276,10 @@ def _run(client, spec, path, todo, rows, result, progress) -> None:
         result.interrupted = True
         for f in futures:
             f.cancel()
+    except BaseException:  # the workers cannot run the campaign: free the cluster
+        for f in futures:
+            f.cancel()
+        raise
     finally:
         bar.close()
         result.compute_time_s = time.perf_counter() - t0
