@@ -1,11 +1,14 @@
 """``hybridtable compensators``: every compensator over the paper's Table 2 grid,
-under stiffness mismatch, sensor noise and a damped contact; with ``--model``,
-every compensator on the rig a model file describes
+under stiffness mismatch, sensor noise and a damped contact, as two campaigns
+of :mod:`hybridtable.sweeps` (the references, the cases) on one Dask client;
+with ``--model``, every compensator on the rig a model file describes
 (:mod:`hybridtable.studies.model_compensators`)."""
 
 from __future__ import annotations
 
 import argparse
+import sys
+import time
 
 __all__ = ["register", "run"]
 
@@ -101,10 +104,25 @@ def register(sub) -> None:
         help=f"noise seed, {SEED_RANGE[0]} to {SEED_RANGE[1]} (default 0)",
     )
     p.add_argument(
+        "--workers",
         "--jobs",
+        dest="workers",
+        metavar="N",
         type=integer_type(1, 256),
         default=None,
-        help="worker processes, 1 to 256 (default: CPUs, at most 4)",
+        help="local Dask workers (processes), 1 to 256 (default: CPUs, at most 4; 1 runs here, "
+        "without a cluster); with --scheduler: wait until N workers have joined",
+    )
+    p.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="a running Dask scheduler, e.g. tcp://10.0.0.5:8786 (default: a local cluster)",
+    )
+    p.add_argument(
+        "--out",
+        metavar="FILE.parquet",
+        help="write every case's row as hybridtable sweep writes its runs (inputs, metrics, "
+        "status, engine)",
     )
     p.add_argument("--tables", metavar="FILE", help="the paper's tables.json")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -117,8 +135,8 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def default_jobs() -> int:
-    """Worker processes of the sweep: the CPUs available, at most 4."""
+def default_workers() -> int:
+    """Local Dask workers of the sweep: the CPUs available, at most 4."""
     import os
 
     try:
@@ -144,7 +162,7 @@ def _names(text: str | None, flag: str) -> tuple[str, ...]:
 def run(args: argparse.Namespace) -> int:
 
     from hybridtable._files import staged_folder
-    from hybridtable.commands._common import check_outputs, write_json
+    from hybridtable.commands._common import check_outputs, check_suffix, write_json
     from hybridtable.commands._model_options import load_model_arg, load_plugins
     from hybridtable.errors import CommandError
 
@@ -159,13 +177,19 @@ def run(args: argparse.Namespace) -> int:
     from hybridtable.studies.compensator_sweep import (
         SCENARIOS,
         SweepSettings,
-        run_sweep,
         sweep_points,
+        sweep_result,
+        sweep_runs,
     )
     from hybridtable.studies.paper import load_tables
 
     tables = None if args.tables is None else load_tables(args.tables)
-    check_outputs(args, files={"--json": args.json}, folders={"--report": args.report})
+    check_suffix("--out", args.out, [".parquet"])
+    check_outputs(
+        args,
+        files={"--json": args.json, "--out": args.out},
+        folders={"--report": args.report},
+    )
     settings = SweepSettings(
         compensators=_names(args.compensators, "--compensators"),
         prior_ratios=args.prior_ratios,
@@ -181,19 +205,104 @@ def run(args: argparse.Namespace) -> int:
         points = sweep_points(tables, quick=args.quick)
     except (KeyError, TypeError, ValueError) as err:
         raise CommandError(f"malformed tables file: {err}") from None
-    jobs = args.jobs if args.jobs is not None else default_jobs()
-    result = run_sweep(settings, points, progress=not args.no_progress, jobs=jobs)
+    references, cases = sweep_runs(settings, points)
+    source = args.tables or "the paper's Table 2"
+    specs = [
+        _spec("compensators (references)", references, settings.seed, source),
+        _spec("compensators", cases, settings.seed, source),
+    ]
+    t0 = time.perf_counter()
+    ref_rows, case_rows = _campaigns(args, specs)
+    result = sweep_result(
+        settings,
+        points,
+        references,
+        cases,
+        ref_rows,
+        case_rows,
+        wall_time_s=time.perf_counter() - t0,
+    )
     if args.report:
         with staged_folder(args.report) as stage:
             write_report(result, stage.path)
         result.figures = [str(stage.final(f)) for f in result.figures]
     if args.json != "-":
         print(format_summary(result))
+        if args.out:
+            print(f"wrote {args.out}")
         for f in result.figures:
             print(f"wrote {f}")
     if args.json:
         write_json(args.json, result.to_json())
     return 0
+
+
+def _spec(name: str, runs: list[dict], seed: int, source: str):
+    """The :class:`~hybridtable.sweeps.plan.SweepSpec` of ``runs`` (their
+    inputs as explicit points; the fast engine where it applies).
+
+    Raises
+    ------
+    ParameterError
+        Before any work, for inputs that make no loop (a sensor delay that is
+        not a whole number of ``--sample-rate-hz`` periods): one line, not a
+        campaign of invalid runs.
+    """
+    from hybridtable.studies.compensator_sweep import RUN_METRICS
+    from hybridtable.sweeps.inputs import loop_params
+    from hybridtable.sweeps.spec import parse_spec
+
+    points = [r["inputs"] for r in runs]
+    for inputs in points:
+        loop_params(inputs)
+    raw = {
+        "name": name,
+        "seed": seed,
+        "engine": "auto",
+        "metrics": list(RUN_METRICS),
+        "points": points,
+    }
+    return parse_spec(raw, source=source)
+
+
+def _campaigns(args: argparse.Namespace, specs: list) -> list[list[dict]]:
+    """The rows of each spec, run one after the other on one Dask client (a
+    local cluster of ``--workers``, or ``--scheduler``); one worker: here,
+    without a cluster (the same rows). The last spec's rows go to ``--out``."""
+    from hybridtable.sweeps.engine import open_client, run_campaign
+
+    progress = not args.no_progress
+    n_runs = max(spec.n_runs for spec in specs)
+    workers = args.workers
+    if args.scheduler is None:
+        workers = max(1, min(workers or default_workers(), n_runs))
+    client = cluster = None
+    if args.scheduler is not None or workers > 1:
+        client, cluster = open_client(args.scheduler, workers)
+        if progress and args.json != "-":
+            info = client.scheduler_info()
+            n = len(info.get("workers", {}))
+            print(
+                f"compensators: {sum(s.n_runs for s in specs)} runs on {n} Dask "
+                f"worker{'s' if n != 1 else ''}; dashboard {client.dashboard_link}",
+                file=sys.stderr,
+            )
+    rows = []
+    try:
+        for i, spec in enumerate(specs):
+            out = args.out if i == len(specs) - 1 else None
+            found = run_campaign(
+                spec, out, client=client, in_process=client is None, progress=progress
+            )
+            if found.interrupted:
+                raise KeyboardInterrupt
+            rows.append(found.rows)
+    finally:
+        if client is not None:
+            client.close()
+        if cluster is not None:
+            cluster.close()
+    return rows
 
 
 #: Options of the grid sweep that mean nothing on a modelled rig.
@@ -206,6 +315,8 @@ _GRID_ONLY = (
     ("force_noise_ratio", "--force-noise-ratio"),
     ("position_noise_ratio", "--position-noise-ratio"),
     ("contact_damping_ratio", "--contact-damping-ratio"),
+    ("scheduler", "--scheduler"),
+    ("out", "--out"),
 )
 
 
@@ -244,7 +355,7 @@ def _run_model(args: argparse.Namespace, model) -> int:
         model,
         compensators=_names(args.compensators, "--compensators"),
         passivity=(False,) if args.no_passivity else (False, True),
-        jobs=args.jobs or 1,
+        jobs=args.workers or 1,
         progress=not args.no_progress and args.json != "-",
     )
     rig = _rig_line(model)

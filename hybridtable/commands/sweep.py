@@ -74,7 +74,7 @@ def _check_outputs(args: argparse.Namespace, spec) -> None:
         check_outputs(
             args,
             inputs,
-            files={"--out": args.out, "--json": args.json},
+            files={"--json": args.json, "--out": args.out},
             folders={"--report": args.report},
         )
 

@@ -19,10 +19,10 @@ from hybridtable.studies.compensator_sweep import (
     ONLINE_COR_TOLERANCE,
     SCENARIOS,
     STIFFNESS_FREE,
-    SweepCase,
     SweepResult,
-    case_params,
+    case_inputs,
     checks,
+    reference_inputs,
     summarize,
 )
 
@@ -438,17 +438,17 @@ def _plot_half_stiffness(result: SweepResult, path: Path, colour: dict[str, tupl
     from hybridtable.compensators.registry import compensator_names
     from hybridtable.loop.builder import LOG_ROWS
     from hybridtable.loop.simulation import simulate
+    from hybridtable.sweeps.inputs import loop_params
 
-    row = tuple(sorted(result.points[0].items()))
-    settings = result.settings
-    ideal, _ = case_params(SweepCase(0, row, "mismatch", "ideal", 1.0, False), settings)
+    row, settings = result.points[0], result.settings
+    ideal = loop_params(reference_inputs(row, False, settings))
     t_end = simulate(ideal).time_s[-1] + 0.1
     wide = dict(color="k", lw=4.0, alpha=0.25, zorder=1)
     runs = [("ideal loop", ideal, wide)]
     styles = {"SDMDC": "-", "sdmdc-online": "--", "smith-online": "-."}
     for name, ls in styles.items():
         if name in compensator_names():
-            params, _ = case_params(SweepCase(0, row, "mismatch", name, 0.5, False), settings)
+            params = loop_params(case_inputs(row, "mismatch", name, 0.5, False, settings))
             style = dict(color=colour.get(name, "k"), ls=ls, lw=1.5, zorder=2)
             runs.append((f"{name}, k believed 50 % low", params, style))
     v_row, f_row = LOG_ROWS.index("v_des_m_per_s"), LOG_ROWS.index("f_comp_n")

@@ -14,7 +14,8 @@ __all__, __getattr__, __dir__ = lazy_exports(
         "compensator_sweep": (
             "SweepResult",
             "SweepSettings",
-            "run_sweep",
+            "sweep_runs",
+            "sweep_result",
         ),
         "paper": (
             "load_tables",

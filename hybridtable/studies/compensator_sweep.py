@@ -27,6 +27,12 @@ loop (no delay, ideal table, no compensation):
 
 Compensators that use no stiffness (``none``, ``SDC``, ``polynomial``) are run
 at ratio 1 only: their results hold for every ratio.
+
+The runs are a campaign of :mod:`hybridtable.sweeps` (the command builds its
+specs): :func:`sweep_runs` gives every run as the inputs of a sweep (plain
+dicts, by the names of :mod:`hybridtable.sweeps.inputs`) beside what the
+post-processing needs, and :func:`sweep_result` turns the rows the campaign
+returns into a :class:`SweepResult`. This module runs nothing itself.
 """
 
 from __future__ import annotations
@@ -46,13 +52,13 @@ __all__ = [
     "SCENARIOS",
     "STIFFNESS_FREE",
     "SweepSettings",
-    "SweepCase",
     "SweepResult",
+    "RUN_METRICS",
     "sweep_points",
-    "sweep_cases",
-    "case_params",
-    "run_case",
-    "run_sweep",
+    "reference_inputs",
+    "case_inputs",
+    "sweep_runs",
+    "sweep_result",
     "summarize",
     "checks",
     "ONLINE_COR_TOLERANCE",
@@ -76,7 +82,7 @@ PASSIVITY_MAX_COR = 1.005
 
 @dataclass(frozen=True)
 class SweepSettings:
-    """What :func:`run_sweep` runs.
+    """What the sweep runs (:func:`sweep_runs`).
 
     Parameters
     ----------
@@ -101,7 +107,8 @@ class SweepSettings:
     sample_rate_hz : float or None
         Sampled rig computer (None: continuous loop, as the paper).
     seed : int
-        Base seed of the noise (each grid point adds its index).
+        The campaign's seed: each run's noise seed derives from it and the
+        run's index (:mod:`hybridtable.sweeps`).
     """
 
     compensators: tuple[str, ...] = ()
@@ -153,29 +160,9 @@ class SweepSettings:
             )
 
 
-@dataclass(frozen=True)
-class SweepCase:
-    """One run of the sweep (picklable: plain values only)."""
-
-    point: int
-    row: tuple[tuple[str, float], ...]
-    scenario: str
-    compensator: str
-    prior_ratio: float
-    passivity: bool
-
-    @property
-    def row_dict(self) -> dict[str, float]:
-        return dict(self.row)
-
-    @property
-    def is_reference(self) -> bool:
-        return self.compensator == "ideal"
-
-
 @dataclass
 class SweepResult:
-    """Runs of :func:`run_sweep` (dicts, JSON-ready) and the settings."""
+    """Runs of a sweep (:func:`sweep_result`; dicts, JSON-ready) and the settings."""
 
     settings: SweepSettings
     points: list[dict[str, float]]
@@ -224,8 +211,110 @@ def sweep_points(tables: dict[str, Any] | None = None, quick: bool = False) -> l
     return points
 
 
-def sweep_cases(settings: SweepSettings, points: Sequence[dict[str, float]]) -> list[SweepCase]:
-    """Every run of the sweep, references excluded."""
+#: What every run of the campaign measures (metric names of :mod:`hybridtable.sweeps`).
+RUN_METRICS = ("cor", "peak_force_n", "v_in_m_per_s", "v_out_m_per_s", "energy_created")
+
+#: What tells the runs apart in the results, beside their sweep inputs.
+_LABELS: tuple[str, ...] = ("point", "scenario", "compensator", "prior_ratio", "passivity")
+
+
+def _point_inputs(row: dict[str, float]) -> dict[str, float]:
+    """The sweep inputs of a Table 2 row (paper units) in SI units, converted as
+    :func:`~hybridtable.studies.paper.table2_params` converts them."""
+    return {
+        "sensor_delay_s": row["sensor_delay_ms"] * 1e-3,
+        "table_response_hz": row["table_response_hz"],
+        "contact_frequency_hz": row["contact_frequency_hz"],
+        "contact_stiffness_n_per_m": row["contact_stiffness_n_per_mm"] * 1e3,
+        "initial_velocity_m_per_s": row["initial_velocity_mm_per_s"] * 1e-3,
+    }
+
+
+def _noise_levels(row: dict[str, float]) -> tuple[float, float]:
+    """Undamped peak force v0 sqrt(k m) [N] and peak deflection v0 / omega [m]
+    of a Table 2 row."""
+    from hybridtable.studies.paper import table2_params
+
+    params = table2_params(row)
+    k, m = params.contact_stiffness_n_per_m, params.spacecraft_mass_kg
+    v0 = params.initial_velocity_m_per_s
+    return v0 * math.sqrt(k * m), v0 / math.sqrt(k / m)
+
+
+def reference_inputs(row: dict[str, float], damped: bool, settings: SweepSettings) -> dict:
+    """The sweep inputs of the reference run of a grid point: the same contact
+    (damped: damping ratio ``settings.contact_damping_ratio``) through an ideal
+    loop (continuous rig computer, no delay, ideal table, no compensation)."""
+    return {
+        **_point_inputs(row),
+        "sensor_delay_s": 0.0,
+        "table_response_hz": math.inf,
+        "compensator": "none",
+        "contact_damping_ratio": settings.contact_damping_ratio if damped else 0.0,
+    }
+
+
+def case_inputs(
+    row: dict[str, float],
+    scenario: str,
+    compensator: str,
+    prior_ratio: float,
+    passivity: bool,
+    settings: SweepSettings,
+    noise_levels: tuple[float, float] | None = None,
+) -> dict:
+    """The sweep inputs of one run: a grid point (a Table 2 row, paper units),
+    its scenario, the compensator, the believed / true stiffness and the guard.
+
+    The noise scenario's deviations are in N and m (``force_noise_ratio`` of
+    the undamped peak force, ``position_noise_ratio`` of the peak deflection:
+    ``noise_levels`` [N, m], computed when not given), its force deadband
+    ``deadband_sigmas`` force deviations. Every run has the same keys
+    (``sample_rate_hz`` when the settings have one).
+    """
+    force_n = position_m = deadband_n = 0.0
+    if scenario == "noise":
+        f0, x0 = noise_levels if noise_levels is not None else _noise_levels(row)
+        force_n = settings.force_noise_ratio * f0
+        position_m = settings.position_noise_ratio * x0
+        deadband_n = settings.deadband_sigmas * force_n
+    inputs = {
+        **_point_inputs(row),
+        "compensator": compensator,
+        "compensator_stiffness_ratio": prior_ratio,
+        "compensator_damping_n_s_per_m": 0.0,
+        "contact_damping_ratio": settings.contact_damping_ratio if scenario == "damped" else 0.0,
+        "force_noise_n": force_n,
+        "position_noise_m": position_m,
+        "force_deadband_n": deadband_n,
+        "passivity": passivity,
+    }
+    if settings.sample_rate_hz is not None:
+        inputs["sample_rate_hz"] = settings.sample_rate_hz
+    return inputs
+
+
+def sweep_runs(
+    settings: SweepSettings, points: Sequence[dict[str, float]]
+) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+    """The campaign's runs: the references and the cases, in run order.
+
+    Each run is a dict of ``point``, ``scenario``, ``compensator``
+    (``"ideal"`` for a reference), ``prior_ratio``, ``passivity`` and
+    ``inputs``: its sweep inputs (:func:`reference_inputs`,
+    :func:`case_inputs`). The references (one per point, and one more with the
+    damped contact when the ``damped`` scenario runs) need a continuous loop,
+    the cases may be sampled: they are two campaigns.
+    """
+    damped = (False, True) if "damped" in settings.scenarios else (False,)
+    references = [
+        _labelled(
+            (i, "damped" if d else "mismatch", "ideal", 1.0, False),
+            reference_inputs(row, d, settings),
+        )
+        for i, row in enumerate(points)
+        for d in damped
+    ]
     ratios = {
         "mismatch": settings.prior_ratios,
         "noise": settings.noise_prior_ratios,
@@ -233,165 +322,80 @@ def sweep_cases(settings: SweepSettings, points: Sequence[dict[str, float]]) -> 
     }
     cases = []
     for i, row in enumerate(points):
-        frozen = tuple(sorted(row.items()))
+        levels = _noise_levels(row) if "noise" in settings.scenarios else None
         for scenario in settings.scenarios:
             for comp in settings.compensators:
-                rs = (1.0,) if comp in STIFFNESS_FREE else ratios[scenario]
-                for ratio in rs:
+                for ratio in (1.0,) if comp in STIFFNESS_FREE else ratios[scenario]:
                     for guard in settings.passivity:
-                        cases.append(SweepCase(i, frozen, scenario, comp, ratio, guard))
-    return cases
+                        labels = (i, scenario, comp, ratio, guard)
+                        inputs = case_inputs(row, scenario, comp, ratio, guard, settings, levels)
+                        cases.append(_labelled(labels, inputs))
+    return references, cases
 
 
-def _reference_cases(settings: SweepSettings, points) -> list[SweepCase]:
-    damped = [False, True] if "damped" in settings.scenarios else [False]
-    return [
-        SweepCase(i, tuple(sorted(row.items())), "damped" if d else "mismatch", "ideal", 1.0, False)
-        for i, row in enumerate(points)
-        for d in damped
-    ]
+def _labelled(labels: tuple, inputs: dict[str, Any]) -> dict[str, Any]:
+    return {**dict(zip(_LABELS, labels, strict=True)), "inputs": inputs}
 
 
-def _noise_levels(params) -> tuple[float, float]:
-    """Undamped peak force v0 sqrt(k m) and peak deflection v0 / omega."""
-    k, m = params.contact_stiffness_n_per_m, params.spacecraft_mass_kg
-    v0 = params.initial_velocity_m_per_s
-    return v0 * math.sqrt(k * m), v0 / math.sqrt(k / m)
-
-
-def case_params(case: SweepCase, settings: SweepSettings):
-    """The :class:`~hybridtable.loop.params.HybridLoopParams` of a case, and the
-    noise it reads (a :class:`~hybridtable.systems.noise.MeasurementNoiseParams`
-    or None)."""
-    from hybridtable.studies.paper import table2_params
-    from hybridtable.systems.noise import MeasurementNoiseParams
-
-    base = table2_params(case.row_dict, sample_rate_hz=settings.sample_rate_hz)
-    k, m = base.contact_stiffness_n_per_m, base.spacecraft_mass_kg
-    c = 2.0 * settings.contact_damping_ratio * math.sqrt(k * m)
-    damping = c if case.scenario == "damped" else 0.0
-    if case.is_reference:
-        return (
-            base.with_(
-                compensator="none",
-                sensor_delay_s=0.0,
-                table_response_hz=math.inf,
-                contact_damping_n_s_per_m=damping,
-                sample_rate_hz=None,
-            ),
-            None,
-        )
-    params = base.with_(
-        compensator=case.compensator,
-        compensator_stiffness_n_per_m=case.prior_ratio * k,
-        compensator_damping_n_s_per_m=0.0,
-        contact_damping_n_s_per_m=damping,
-        passivity=case.passivity,
-    )
-    noise = None
-    if case.scenario == "noise":
-        f0, x0 = _noise_levels(params)
-        sigma_f = settings.force_noise_ratio * f0
-        noise = MeasurementNoiseParams(
-            sigma_f, settings.position_noise_ratio * x0, settings.seed + case.point
-        )
-        params = params.with_(force_deadband_n=settings.deadband_sigmas * sigma_f)
-    return params, noise
-
-
-def run_case(case: SweepCase, settings: SweepSettings) -> dict[str, Any]:
-    """Run one case; a failed run (divergence, capture) is recorded with its
-    error and NaN metrics, never dropped."""
-    from hybridtable.compensators.registry import make_compensator
-    from hybridtable.errors import SimulationError
-    from hybridtable.loop.builder import build_hybrid_loop
-    from hybridtable.loop.simulation import run_loop
-    from hybridtable.systems.noise import with_measurement_noise
-
-    params, noise = case_params(case, settings)
-    out: dict[str, Any] = {
-        "point": case.point,
-        "scenario": case.scenario,
-        "compensator": case.compensator,
-        "prior_ratio": case.prior_ratio,
-        "passivity": case.passivity,
-        "error": None,
-    }
-    try:
-        compensator = None
-        if noise is not None:
-            period = build_hybrid_loop(params, log=False).computer_period_s
-            inner = make_compensator(params.with_(passivity=False), period)
-            compensator = with_measurement_noise(inner, noise, period)
-        result = run_loop(build_hybrid_loop(params, compensator=compensator))
-    except SimulationError as err:
-        out.update(cor=math.nan, peak_force_n=math.nan, energy_created=math.nan, error=str(err))
-        return out
-    m = result.metrics
-    v = result.v_des_m_per_s
-    ke_in = 0.5 * m.v_in_m_per_s**2
-    ke_max = float(np.max(0.5 * v**2))
-    out.update(
-        cor=m.cor,
-        peak_force_n=m.peak_force_n,
-        v_in_m_per_s=m.v_in_m_per_s,
-        v_out_m_per_s=m.v_out_m_per_s,
-        energy_created=max(0.0, ke_max - ke_in) / ke_in,
-        steps=result.steps,
-    )
+def _run_of(run: dict[str, Any], row: dict[str, Any]) -> dict[str, Any]:
+    """A run's labels, ``error`` (None when it finished) and metrics, from its
+    row of the campaign (NaN metrics when it did not finish)."""
+    out = {k: run[k] for k in _LABELS}
+    out["error"] = None if row["status"] == "ok" else (row["message"] or row["status"])
+    for name in RUN_METRICS:
+        value = row.get(name)
+        out[name] = math.nan if value is None or out["error"] else float(value)
     return out
 
 
-def _run_indexed(item):
-    index, case, settings = item
-    return index, run_case(case, settings)
-
-
-def run_sweep(
+def sweep_result(
     settings: SweepSettings,
     points: Sequence[dict[str, float]],
-    progress: bool = True,
-    jobs: int = 1,
+    references: Sequence[dict[str, Any]],
+    cases: Sequence[dict[str, Any]],
+    reference_rows: Sequence[dict[str, Any]],
+    case_rows: Sequence[dict[str, Any]],
+    wall_time_s: float = 0.0,
 ) -> SweepResult:
-    """Run the references and every case (``jobs`` worker processes)."""
-    import time
+    """The :class:`SweepResult` of the campaign's rows.
 
-    from tqdm import tqdm
+    Parameters
+    ----------
+    settings, points
+        What :func:`sweep_runs` was given.
+    references, cases
+        What it returned.
+    reference_rows, case_rows
+        The campaigns' rows (``run`` = the index in ``references`` and
+        ``cases``; ``status``, ``message`` and the :data:`RUN_METRICS`).
+    wall_time_s : float
+        The campaign's wall time [s].
 
-    t0 = time.perf_counter()
-    refs = _reference_cases(settings, points)
-    cases = sweep_cases(settings, points)
-    work = list(enumerate(refs + cases))
-    results: list[dict[str, Any] | None] = [None] * len(work)
-    bar = tqdm(total=len(work), desc="compensators", unit="run", disable=not progress)
-    items = [(i, c, settings) for i, c in work]
-    if jobs <= 1:
-        for item in items:
-            i, r = _run_indexed(item)
-            results[i] = r
-            bar.update(1)
-    else:
-        import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor
-
-        # fork where available (no main-module guard needed in scripts).
-        methods = multiprocessing.get_all_start_methods()
-        ctx = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
-        with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as pool:
-            for i, r in pool.map(_run_indexed, items, chunksize=4):
-                results[i] = r
-                bar.update(1)
-    bar.close()
-    ref_runs = results[: len(refs)]
-    runs = results[len(refs) :]
-    ref_by = {(r["point"], r["scenario"] == "damped"): r for r in ref_runs}
+    Raises
+    ------
+    ValueError
+        If a run has no row (a campaign stopped before its end).
+    """
+    refs = _matched(references, reference_rows)
+    runs = _matched(cases, case_rows)
+    ref_by = {(r["point"], r["scenario"] == "damped"): r for r in refs}
     for r in runs:
         ref = ref_by[(r["point"], r["scenario"] == "damped")]
         r["cor_reference"] = ref["cor"]
         r["cor_error"] = r["cor"] - ref["cor"]
         r["peak_force_error"] = r["peak_force_n"] / ref["peak_force_n"] - 1.0
         r["energy_drift"] = r["cor"] ** 2 - ref["cor"] ** 2
-    return SweepResult(settings, list(points), runs, ref_runs, wall_time_s=time.perf_counter() - t0)
+    return SweepResult(settings, list(points), runs, refs, wall_time_s=wall_time_s)
+
+
+def _matched(runs: Sequence[dict[str, Any]], rows: Sequence[dict[str, Any]]) -> list[dict]:
+    by_run = {int(row["run"]): row for row in rows}
+    missing = [i for i in range(len(runs)) if i not in by_run]
+    if missing:
+        raise ValueError(
+            f"{len(missing)} of {len(runs)} runs have no result (first: run {missing[0]})"
+        )
+    return [_run_of(run, by_run[i]) for i, run in enumerate(runs)]
 
 
 def _key(r: dict[str, Any]) -> str:

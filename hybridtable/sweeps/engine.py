@@ -27,6 +27,7 @@ from __future__ import annotations
 import logging
 import math
 import os
+import statistics
 import sys
 import time
 from dataclasses import dataclass, field
@@ -38,7 +39,14 @@ from hybridtable.sweeps.plan import SweepSpec
 from hybridtable.sweeps.runner import blank_row, run_many
 from hybridtable.sweeps.store import read_results, write_results
 
-__all__ = ["CampaignResult", "run_campaign", "default_workers", "task_size"]
+__all__ = [
+    "CampaignResult",
+    "run_campaign",
+    "open_client",
+    "default_workers",
+    "task_size",
+    "TASK_S",
+]
 
 #: Seconds between two writes of the file (at least; a slow write waits longer).
 CHECKPOINT_S = 2.0
@@ -104,11 +112,20 @@ def default_workers() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def task_size(n_todo: int, workers: int) -> int:
-    """Runs per task: about 16 tasks per worker, at most 32 runs each, so
-    that the progress bar moves, a lost worker costs little and the scheduler's
-    overhead (a few ms per task) stays small next to the runs."""
-    return max(1, min(32, math.ceil(n_todo / (16 * max(workers, 1)))))
+#: Seconds of runs one task aims at: the scheduler's few milliseconds per task
+#: stay small beside it, the progress bar moves, a lost worker costs little.
+TASK_S = 0.5
+
+
+def task_size(n_todo: int, workers: int, seconds_per_run: float | None = None) -> int:
+    """Runs per task: about :data:`TASK_S` of work (one run while the time of a
+    run is not known yet), and at least four tasks per worker for the runs
+    left, so that no worker waits long on the last one; at most 256."""
+    if seconds_per_run is None:
+        return 1
+    by_time = int(TASK_S / max(seconds_per_run, 1e-6))
+    by_balance = math.ceil(n_todo / (4 * max(workers, 1)))
+    return max(1, min(256, by_time, by_balance))
 
 
 def _quiet_dask() -> None:
@@ -116,7 +133,23 @@ def _quiet_dask() -> None:
         logging.getLogger(name).setLevel(logging.ERROR)
 
 
-def _client(scheduler: str | None, workers: int | None):
+def open_client(scheduler: str | None, workers: int | None):
+    """A Dask client and its local cluster (None with ``scheduler``).
+
+    Parameters
+    ----------
+    scheduler : str or None
+        Address of a running scheduler; None: start a ``LocalCluster`` of
+        ``workers`` processes (default: the cores), one thread each, whose
+        workers ignore Ctrl-C (:mod:`.worker_setup`).
+    workers : int or None
+        With ``scheduler``: wait until this many workers have joined.
+
+    Raises
+    ------
+    CommandError
+        No scheduler answers at ``scheduler``, or too few workers join in 60 s.
+    """
     from distributed import Client, LocalCluster
 
     _quiet_dask()
@@ -224,7 +257,7 @@ def run_campaign(
     own = client is None
     cluster = None
     if own:
-        client, cluster = _client(scheduler, workers)
+        client, cluster = open_client(scheduler, workers)
     try:
         info = client.scheduler_info()
         result.workers = len(info.get("workers", {}))
@@ -250,8 +283,6 @@ def _run(client, spec, path, todo, rows, result, progress) -> None:
     from tqdm import tqdm
 
     t0 = time.perf_counter()
-    size = task_size(len(todo), max(result.workers, 1))
-    chunks = [todo[start : start + size] for start in range(0, len(todo), size)]
     bar = tqdm(
         total=spec.n_runs,
         initial=len(rows),
@@ -264,7 +295,7 @@ def _run(client, spec, path, todo, rows, result, progress) -> None:
     last_write, write_cost = time.monotonic(), 0.0
     futures: dict[Any, list[int]] = {}
     try:
-        for chunk, found in _results(client, spec, chunks, futures, result):
+        for chunk, found in _results(client, spec, list(todo), futures, result):
             for row in found:
                 rows[row["run"]] = row
             bar.update(len(chunk))
@@ -287,19 +318,49 @@ def _run(client, spec, path, todo, rows, result, progress) -> None:
         _write(path, spec, rows)
 
 
-def _results(client, spec, chunks, futures, result):
-    """``(chunk, rows)`` as the tasks finish (here, in order, without a client)."""
+def _results(client, spec, todo, futures, result):
+    """``(chunk, rows)`` as the tasks finish (here, in order, without a client).
+
+    Tasks are cut as the campaign goes: one run each until the runs' time is
+    known, then :func:`task_size` of the median run time so far, two tasks
+    queued per worker. Rows do not depend on the cut."""
+    from collections import deque
+
+    pending = deque(todo)
+    workers = max(result.workers, 1)
+    seconds: list[float] = []
+
+    def take() -> list[int]:
+        # the median: a worker's first run also pays its imports
+        typical = statistics.median(seconds) if seconds else None
+        n = task_size(len(pending), workers, typical)
+        return [pending.popleft() for _ in range(min(n, len(pending)))]
+
     if client is None:
-        for chunk in chunks:
-            yield chunk, run_many(spec, chunk)
+        while pending:
+            chunk = take()
+            rows = run_many(spec, chunk)
+            seconds.extend(r["seconds"] for r in rows)
+            yield chunk, rows
         return
     from distributed import as_completed
 
-    for chunk in chunks:
-        futures[client.submit(run_many, spec, chunk, pure=False)] = chunk
-    for future in as_completed(list(futures)):
+    done = as_completed()
+    while pending and len(futures) < 2 * workers:
+        chunk = take()
+        future = client.submit(run_many, spec, chunk, pure=False)
+        futures[future] = chunk
+        done.add(future)
+    for future in done:
         chunk = futures.pop(future)
-        yield chunk, _rows_of(client, spec, future, chunk, result)
+        rows = _rows_of(client, spec, future, chunk, result)
+        seconds.extend(r["seconds"] for r in rows if math.isfinite(r["seconds"]))
+        while pending and len(futures) < 2 * workers:
+            nxt = take()
+            f = client.submit(run_many, spec, nxt, pure=False)
+            futures[f] = nxt
+            done.add(f)
+        yield chunk, rows
 
 
 def _write(path, spec, rows) -> tuple[float, int]:

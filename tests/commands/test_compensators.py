@@ -55,3 +55,60 @@ def test_compensators_command_quick(tmp_path, capsys):
     assert "--force" in capsys.readouterr().err
     assert main(["compensators", "--compensators", "nonesuch", "--no-progress"]) == 2
     assert main(["compensators", "--scenarios", "nonesuch", "--no-progress"]) == 2
+
+
+def test_compensators_runs_on_the_campaign_engine(tmp_path, capsys):
+    """The paper's four run on the fast exact path and give simulate()'s CoRs;
+    the plug-ins and the guarded runs run on the Drake diagram; --out holds one
+    row per case, as hybridtable sweep writes them."""
+    import math
+
+    import pyarrow.parquet as pq
+
+    from hybridtable.loop.simulation import simulate
+    from hybridtable.studies.paper import table1_params
+    from hybridtable.sweeps.store import read_metadata
+
+    out, parquet = tmp_path / "sweep.json", tmp_path / "cases.parquet"
+    argv = [
+        "compensators",
+        "--quick",
+        "--compensators",
+        "none,SDC,MDC,SDMDC,sdmdc-online",
+        "--scenarios",
+        "mismatch",
+        "--prior-ratios",
+        "0.5,1",
+        "--workers",
+        "2",
+        "--no-progress",
+        "--json",
+        str(out),
+        "--out",
+        str(parquet),
+    ]
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert f"wrote {parquet}" in text
+    runs = json.loads(out.read_text())["runs"]
+    table = pq.read_table(parquet).to_pylist()
+    assert len(table) == len(runs) == 2 * (2 + 3 * 2)  # guard x (none, SDC; 3 x 2 ratios)
+    assert read_metadata(parquet)["spec"]["n_runs"] == len(runs)
+    for run, row in zip(runs, table, strict=True):
+        assert (row["compensator"], row["passivity"]) == (run["compensator"], run["passivity"])
+        assert row["compensator_stiffness_ratio"] == run["prior_ratio"]
+        assert row["status"] == "ok" and row["cor"] == run["cor"]
+        paper = run["compensator"] in ("none", "SDC", "MDC", "SDMDC") and not run["passivity"]
+        assert row["engine"] == ("fast" if paper else "diagram"), row
+        if paper:
+            params = table1_params(run["compensator"])
+            k = params.contact_stiffness_n_per_m
+            params = params.with_(compensator_stiffness_n_per_m=run["prior_ratio"] * k)
+            assert math.isclose(run["cor"], simulate(params).metrics.cor, abs_tol=1e-6)
+    # The reference (continuous, no delay, ideal table) is an undamped contact: CoR 1.
+    assert abs(runs[0]["cor_reference"] - 1.0) < 1e-6
+    # --out is checked before any work: an existing file needs --force.
+    assert main(argv) == 2
+    assert "--force" in capsys.readouterr().err
+    assert main([*argv[:-2], "--out", str(tmp_path / "cases.csv")]) == 2
+    assert "parquet" in capsys.readouterr().err

@@ -20,6 +20,7 @@ INVOCATIONS = {
     "effects": ["effects"],
     "compensators": ["compensators", "--quick"],
     "margins": ["margins"],
+    "sweep": ["sweep", str(EXAMPLES.parent / "sweeps" / "table2.toml"), "--out", "unused.parquet"],
 }
 
 

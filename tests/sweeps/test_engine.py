@@ -179,6 +179,10 @@ def test_resume_refuses_another_specs_file(tmp_path, capsys):
     # without --resume or --force an existing file is never replaced
     assert main(["sweep", str(spec), "--out", str(out)]) == 2
     assert "--force" in capsys.readouterr().err
+    # the spec is an input: never written over, even with --force
+    text = spec.read_text()
+    assert main(["sweep", str(spec), "--out", str(out), "--json", str(spec), "--force"]) == 2
+    assert "input" in capsys.readouterr().err and spec.read_text() == text
 
 
 def test_the_table2_spec_gives_reproduce_s_cors_exactly(tmp_path):
