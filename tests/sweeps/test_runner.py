@@ -144,3 +144,25 @@ def test_a_model_file_reaches_every_run(tmp_path):
     # the model's contact damping takes energy out of SDMDC's bounce
     nominal = simulate(loop_params({"sample_rate_hz": 1000.0, "compensator": "SDMDC"}))
     assert rows[1]["cor"] < nominal.metrics.cor - 0.01
+
+
+def test_the_shipped_specs_hold_what_they_say():
+    from hybridtable.compensators.registry import compensator_names
+    from hybridtable.sweeps.spec import load_spec
+
+    table2 = load_spec(EXAMPLES / "sweeps" / "table2.toml")
+    assert table2.n_runs == 15 and table2.engine == "diagram"
+    mc = load_spec(EXAMPLES / "sweeps" / "monte_carlo.toml")
+    assert mc.n_runs == 5000 and mc.samples * len(compensator_names()) == 5000
+    assert set(mc.swept) == {
+        "compensator",
+        "contact_stiffness_n_per_m",
+        "sensor_delay_s",
+        "initial_velocity_m_per_s",
+    }
+    # the first draw, with every compensator: each runs, on its engine
+    rows = [run_one(mc, i) for i in range(len(compensator_names()))]
+    assert [r["status"] for r in rows] == ["ok"] * len(rows), [r["message"] for r in rows]
+    engines = {r["compensator"]: r["engine"] for r in rows}
+    assert {c for c, e in engines.items() if e == "fast"} == {"none", "SDC", "MDC", "SDMDC"}
+    assert len({r["contact_stiffness_n_per_m"] for r in rows}) == 1  # the same draw
