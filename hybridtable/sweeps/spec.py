@@ -243,6 +243,13 @@ def _parse(raw: Mapping[str, Any], source: str, folder: Path) -> SweepSpec:
         raise ParameterError(
             f'engine = "fast" cannot run {", ".join(diagram_only)}: use "auto" or "diagram"'
         )
+    noisy = [n for n in NOISE_INPUTS if n in where]
+    if noisy and (model is not None or effects):
+        raise ParameterError(
+            f"{', '.join(noisy)}: the noise inputs act on the nominal rig only, not with "
+            + ("a model file" if model is not None else "effects")
+            + " (run them as two specs)"
+        )
     stewart_with = [x for x in diagram_only if x != "table_backend"]
     if "stewart" in _values_of(spec, "table_backend") and stewart_with:
         raise ParameterError(

@@ -90,6 +90,10 @@ def test_an_effect_out_of_its_bounds_makes_its_run_invalid_not_the_campaign():
         ),
         ('engine = "fast"\n[base]\n"force_bias.bias_n" = 5.0', "fast"),
         ('metrics = ["stable"]\n[base]\n"force_bias.bias_n" = 5.0', "margin"),
+        (
+            '[base]\nsample_rate_hz = 1e3\nforce_noise_n = 1.0\n"force_bias.bias_n" = 5.0',
+            "nominal rig only",
+        ),
     ],
 )
 def test_effect_specs_that_cannot_run_are_refused(text, words):
