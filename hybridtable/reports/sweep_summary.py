@@ -92,8 +92,9 @@ def _range(stats: dict[str, Any], digits: int = 4) -> str:
 
 
 def verdict(name: str, summary: dict[str, Any]) -> str:
-    """One plain sentence: how many runs finished, the CoR they span, how many
-    diverged, and the compensator with the lowest worst-case CoR."""
+    """One plain sentence: how many runs finished, the compensators whose CoR
+    stays closest to and goes furthest from 1 (an energy-neutral bounce), and
+    how many runs diverged or failed."""
     n, written = summary["runs"], summary["written"]
     counts = summary["status"]
     ok = counts.get("ok", 0)
@@ -108,17 +109,20 @@ def verdict(name: str, summary: dict[str, Any]) -> str:
             (comp, stats), *_ = cors.items()
             head += f"; {comp} gives CoR {_range(stats)}"
         else:
-            best = min(cors, key=lambda c: (per[c]["status"].get("diverged", 0), cors[c]["max"]))
-            worst = max(cors, key=lambda c: (per[c]["status"].get("diverged", 0), cors[c]["max"]))
-            head += (
-                f"; lowest worst-case CoR: {best} ({cors[best]['max']:.4f}), highest: "
-                f"{worst} ({cors[worst]['max']:.4f}"
-                + (
-                    f", {per[worst]['status']['diverged']} diverged"
-                    if per[worst]["status"].get("diverged")
-                    else ""
+            # Distance from an energy-neutral bounce (CoR 1), the worst run of
+            # each compensator: a loop that takes energy out is no better
+            # than one that puts it in. Diverged runs count first.
+            def far(c: str) -> tuple[int, float]:
+                lo, hi = cors[c]["min"], cors[c]["max"]
+                return per[c]["status"].get("diverged", 0), max(
+                    abs(math.log(lo)) if lo > 0 else math.inf, abs(math.log(hi))
                 )
-                + ")"
+
+            near, away = min(cors, key=far), max(cors, key=far)
+            diverged = per[away]["status"].get("diverged", 0)
+            head += (
+                f"; closest to CoR 1: {near} ({_range(cors[near])}), furthest: {away} "
+                f"({_range(cors[away])}{f', {diverged} diverged' if diverged else ''})"
             )
     elif any("stable" in e for e in per.values()):
         stable = sum(e.get("stable", 0) for e in per.values())
