@@ -200,8 +200,13 @@ def _panels(d, plt):
     flat = list(axes.ravel())
     for ax in flat[n:]:
         fig.delaxes(ax)
+    from matplotlib.ticker import NullFormatter
+
     for ax, comp in zip(flat, d["comps"], strict=False):
         ax.set(xscale="log" if d["log_x"] else "linear", yscale="log" if d["log_y"] else "linear")
+        for axis, log in ((ax.xaxis, d["log_x"]), (ax.yaxis, d["log_y"])):
+            if log:  # decades only: the minor labels overlap
+                axis.set_minor_formatter(NullFormatter())
         ax.set(xlabel=axis_label(d["xname"]), ylabel=axis_label(d["yname"]))
         ax.set_title(literal(comp), fontsize=10)
     return fig, flat[:n]
@@ -258,13 +263,9 @@ def _plane_figure(path, d, stability: bool = False) -> str:
             s = np.isfinite(vals) & (not d["grid"])
             if s.any():
                 drawn = ax.scatter(x[s], y[s], c=vals[s], s=10, norm=norm, cmap=cmap)
-            f = np.isfinite(med)
-            if not d["grid"] and f.sum() >= 4 and _crosses(level, med):
-                try:
-                    ax.tricontour(px[f], py[f], med[f], levels=[level], colors="k")
-                    contour = True
-                except (ValueError, RuntimeError):  # collinear points: no triangles
-                    pass
+            # Scattered runs get no contour: through points that differ in the
+            # inputs not drawn, it traces noise (the stability figure draws
+            # the boundary with a classifier).
         if z is not None and np.isfinite(z).any():
             ex, ey = (_edges(gx, d["log_x"]), _edges(gy, d["log_y"])) if d["grid"] else (gx, gy)
             z, look = np.ma.masked_invalid(z), {"alpha": 0.6 if stability else None, "zorder": 0}
