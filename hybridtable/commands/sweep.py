@@ -40,6 +40,7 @@ def register(sub) -> None:
         "--workers",
         type=integer_type(1, 256),
         default=None,
+        metavar="N",
         help="local cluster: its worker processes, 1 to 256 (default: the cores); with "
         "--scheduler: wait until this many workers have joined",
     )
