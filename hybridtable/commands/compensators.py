@@ -136,14 +136,10 @@ def register(sub) -> None:
 
 
 def default_workers() -> int:
-    """Local Dask workers of the sweep: the CPUs available, at most 4."""
-    import os
+    """Local Dask workers of the sweep: the cores this process may use, at most 4."""
+    from hybridtable.sweeps.engine import default_workers as cores
 
-    try:
-        n = len(os.sched_getaffinity(0))
-    except AttributeError:  # pragma: no cover
-        n = os.cpu_count() or 1
-    return max(1, min(4, n))
+    return min(4, cores())
 
 
 def _names(text: str | None, flag: str) -> tuple[str, ...]:

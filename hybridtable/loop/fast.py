@@ -49,6 +49,7 @@ from hybridtable.loop.params import HybridLoopParams
 from hybridtable.loop.simulation import (
     DIVERGED_FORCE_RATIO,
     check_interval_s,
+    check_run_ended,
     default_t_max_s,
     expected_duration_s,
     settle_window_s,
@@ -121,21 +122,7 @@ class _StopRule:
 
     def verdict(self) -> None:
         """Raise the diagram's error when the run found no contact or no separation."""
-        if not self.started:
-            raise SimulationError(f"no contact within t_max = {self.t_max:.3f} s")
-        if self.separated:
-            return
-        f_act, f_mea, f_comp = self.last
-        if f_comp == 0.0 and f_act > 0.0 and f_mea <= self.deadband:
-            raise SimulationError(
-                f"the contact did not end within t_max = {self.t_max:.3f} s: the compensated "
-                f"force is 0 while the contact pushes {f_act:.3g} N (every reading at or below "
-                f"force_deadband_n = {self.deadband:g} N), so the model never slows"
-            )
-        raise SimulationError(
-            f"the contact did not end within t_max = {self.t_max:.3f} s (spacecraft captured "
-            "or loop unstable)"
-        )
+        check_run_ended(self.started, self.separated, self.t_max, self.last, self.deadband)
 
 
 def _law(params: HybridLoopParams, h: float):

@@ -15,6 +15,7 @@ from hybridtable.loop.metrics import ContactMetrics, contact_metrics
 from hybridtable.loop.params import HybridLoopParams
 
 __all__ = [
+    "check_run_ended",
     "DIVERGED_FORCE_RATIO",
     "SimulationError",
     "SimulationResult",
@@ -202,20 +203,56 @@ def run_loop(
         elif started and stop_at_separation and t - last_active > settle:
             separated = True
             break
-    if not started:
-        raise SimulationError(f"no contact within t_max = {t_max:.3f} s")
-    if stop_at_separation and not separated:
-        if f_comp == 0.0 and f_act > 0.0 and f_mea <= params.force_deadband_n:
-            raise SimulationError(
-                f"the contact did not end within t_max = {t_max:.3f} s: the compensated force "
-                f"is 0 while the contact pushes {f_act:.3g} N (every reading at or below "
-                f"force_deadband_n = {params.force_deadband_n:g} N), so the model never slows"
-            )
-        raise SimulationError(
-            f"the contact did not end within t_max = {t_max:.3f} s (spacecraft captured or "
-            "loop unstable)"
-        )
+    check_run_ended(
+        started,
+        separated or not stop_at_separation,
+        t_max,
+        (f_act, f_mea, f_comp),
+        params.force_deadband_n,
+    )
     return _collect(loop, context, simulator.get_num_steps_taken())
+
+
+def check_run_ended(
+    started: bool,
+    separated: bool,
+    t_max_s: float,
+    last_forces_n: tuple[float, float, float],
+    force_deadband_n: float,
+) -> None:
+    """Raise the error of a run that found no contact, or whose contact did
+    not end by ``t_max_s`` (the diagram's and the fast path's words).
+
+    Parameters
+    ----------
+    started, separated : bool
+        A contact happened; it ended (or the run was not to stop at it).
+    t_max_s : float
+        The run's end [s].
+    last_forces_n : tuple of float
+        ``(f_act, f_mea, f_comp)`` at the end [N].
+    force_deadband_n : float
+        The compensator's dead band [N].
+
+    Raises
+    ------
+    SimulationError
+    """
+    if not started:
+        raise SimulationError(f"no contact within t_max = {t_max_s:.3f} s")
+    if separated:
+        return
+    f_act, f_mea, f_comp = last_forces_n
+    if f_comp == 0.0 and f_act > 0.0 and f_mea <= force_deadband_n:
+        raise SimulationError(
+            f"the contact did not end within t_max = {t_max_s:.3f} s: the compensated force "
+            f"is 0 while the contact pushes {f_act:.3g} N (every reading at or below "
+            f"force_deadband_n = {force_deadband_n:g} N), so the model never slows"
+        )
+    raise SimulationError(
+        f"the contact did not end within t_max = {t_max_s:.3f} s (spacecraft captured or "
+        "loop unstable)"
+    )
 
 
 def _collect(loop: HybridLoop, context, steps: int) -> SimulationResult:
