@@ -51,6 +51,12 @@ def _start(args: list[str], log: Path) -> subprocess.Popen:
     )
 
 
+def _worker(scheduler_file: Path, name: str, log: Path) -> subprocess.Popen:
+    """A ``dask worker`` process of one single-threaded worker."""
+    args = ["worker", "--scheduler-file", str(scheduler_file), "--nworkers", "1"]
+    return _start([*args, "--nthreads", "1", "--no-dashboard", "--name", name], log)
+
+
 def _stop(proc: subprocess.Popen) -> None:
     if proc.poll() is None:
         os.killpg(proc.pid, signal.SIGTERM)
@@ -88,23 +94,7 @@ def cluster(tmp_path_factory):
         assert file.exists(), (folder / "scheduler.log").read_text()
         address = json.loads(file.read_text())["address"]
         for i in range(2):
-            procs.append(
-                _start(
-                    [
-                        "worker",
-                        "--scheduler-file",
-                        str(file),
-                        "--nworkers",
-                        "1",
-                        "--nthreads",
-                        "1",
-                        "--no-dashboard",
-                        "--name",
-                        f"w{i}",
-                    ],
-                    folder / f"worker{i}.log",
-                )
-            )
+            procs.append(_worker(file, f"w{i}", folder / f"worker{i}.log"))
         yield {"address": address, "file": file, "folder": folder}
     finally:
         for p in reversed(procs):
@@ -164,21 +154,7 @@ def test_a_lost_worker_costs_only_its_runs(cluster, tmp_path):
     spec = tmp_path / "spec.toml"
     text = SPEC.replace('name = "cluster_check"', 'name = "lost_worker"\nengine = "diagram"')
     spec.write_text(text.replace("samples = 50", "samples = 12"))
-    extra = _start(
-        [
-            "worker",
-            "--scheduler-file",
-            str(cluster["file"]),
-            "--nworkers",
-            "1",
-            "--nthreads",
-            "1",
-            "--no-dashboard",
-            "--name",
-            "doomed",
-        ],
-        tmp_path / "doomed.log",
-    )
+    extra = _worker(cluster["file"], "doomed", tmp_path / "doomed.log")
     out = tmp_path / "lost.parquet"
     client = Client(cluster["address"], timeout="30s")
     try:

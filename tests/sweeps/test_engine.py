@@ -65,6 +65,12 @@ def test_a_diverging_run_is_a_row_and_the_campaign_goes_on(tmp_path, capsys):
         assert math.isnan(rows[1]["cor"]) and 0.9 < rows[0]["cor"] < 1.1
 
 
+def _campaign(spec: Path, out: Path, workers: int, **popen) -> subprocess.Popen:
+    """``hybridtable sweep`` in a process of its own."""
+    args = ["sweep", str(spec), "--out", str(out), "--workers", str(workers), "--no-progress"]
+    return subprocess.Popen([sys.executable, "-m", "hybridtable.cli", *args], **popen)
+
+
 def _wait_for_rows(path: Path, proc: subprocess.Popen, at_least: int, timeout_s: float) -> int:
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline and proc.poll() is None:
@@ -83,19 +89,10 @@ def test_sigkill_then_resume_gives_the_file_of_an_undisturbed_campaign(tmp_path)
     spec = tmp_path / "slow.toml"
     spec.write_text(SLOW)
     out = tmp_path / "killed.parquet"
-    proc = subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "hybridtable.cli",
-            "sweep",
-            str(spec),
-            "--out",
-            str(out),
-            "--workers",
-            "1",
-            "--no-progress",
-        ],
+    proc = _campaign(
+        spec,
+        out,
+        1,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
         start_new_session=True,
@@ -130,19 +127,10 @@ def test_ctrl_c_leaves_a_valid_file_of_the_finished_runs(tmp_path):
     spec = tmp_path / "slow.toml"
     spec.write_text(SLOW.replace("num = 12", "num = 60"))
     out = tmp_path / "stopped.parquet"
-    proc = subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "hybridtable.cli",
-            "sweep",
-            str(spec),
-            "--out",
-            str(out),
-            "--workers",
-            "2",
-            "--no-progress",
-        ],
+    proc = _campaign(
+        spec,
+        out,
+        2,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
