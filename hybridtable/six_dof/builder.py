@@ -1,0 +1,212 @@
+"""The 6-DoF docking loop as a Drake diagram.
+
+::
+
+    spacecraft --commanded_state--> table back-end --contact_wrench--> F/T sensor
+        ^                              |  (table + docking contact)         |
+        |                              +--table_state--+                    |
+        +--compensated_wrench-- wrench compensator <---+---measured_wrench--+
+                                ^--commanded_state-- spacecraft
+
+Every part but the table back-end's inside runs at the rig computer's tick.
+A table back-end is any system with input ``commanded_state`` (12) and
+outputs ``table_state`` (12) and ``contact_wrench`` (6, what the F/T sensor
+reads before its delay): :class:`TableModelBackend` (the table model and
+Drake's contact of the devices) or the Stewart platform
+(:mod:`hybridtable.six_dof.stewart_backend`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from pydrake.systems.framework import Diagram, DiagramBuilder, System
+from pydrake.systems.primitives import LogVectorOutput, Multiplexer, VectorLogSink
+
+from hybridtable.six_dof.compensator import constant_stiffness
+from hybridtable.six_dof.contact import DockingContact, DockingContactSystem
+from hybridtable.six_dof.params import DockingLoopParams
+from hybridtable.six_dof.registry import make_wrench_compensator
+from hybridtable.six_dof.sensor import add_wrench_sensor
+from hybridtable.six_dof.spacecraft import BODY_STATE_SIZE, RigidSpacecraft, port_state
+from hybridtable.six_dof.table import PoseTable, add_pose_table
+from hybridtable.stewart.geometry import rotation_from_rpy
+
+__all__ = [
+    "LOG_LAYOUT",
+    "TableModelBackend",
+    "DockingLoop",
+    "add_docking_loop",
+    "build_docking_loop",
+    "initial_port_state",
+]
+
+#: Blocks of the loop's log, in order: name -> size.
+LOG_LAYOUT: dict[str, int] = {
+    "commanded_state": 12,
+    "table_state": 12,
+    "contact_wrench": 6,
+    "measured_wrench": 6,
+    "compensated_wrench": 6,
+    "body_state": BODY_STATE_SIZE,
+}
+
+
+class TableModelBackend(Diagram):
+    """The table model (:mod:`hybridtable.six_dof.table`) carrying the active
+    device against the passive one (:class:`DockingContactSystem`).
+
+    Ports
+    -----
+    Input ``commanded_state`` (12: m, rad, m/s, rad/s)
+    Output ``table_state`` (12), ``contact_wrench`` (6: N m, N)
+    """
+
+    def __init__(self, params: DockingLoopParams) -> None:
+        Diagram.__init__(self)
+        builder = DiagramBuilder()
+        self.table: PoseTable = add_pose_table(
+            builder, params.table_response_hz, params.table_damping_ratio, params.sample_period_s
+        )
+        contact = builder.AddNamedSystem("contact", DockingContactSystem(params.contact))
+        builder.Connect(self.table.system.get_output_port(), contact.get_input_port())
+        builder.ExportInput(self.table.system.get_input_port(), "commanded_state")
+        builder.ExportOutput(self.table.system.get_output_port(), "table_state")
+        builder.ExportOutput(contact.get_output_port(), "contact_wrench")
+        builder.BuildInto(self)
+
+    def set_initial_state(self, context, table_state: np.ndarray, command: np.ndarray) -> None:
+        """The table's state at t = 0 (context: this diagram's)."""
+        if not self.table.is_ideal:
+            sub = self.GetMutableSubsystemContext(self.table.system, context)
+            self.table.set_initial_state(sub, table_state, command)
+
+
+@dataclass
+class DockingLoop:
+    """Handles to what :func:`add_docking_loop` added."""
+
+    params: DockingLoopParams
+    spacecraft: RigidSpacecraft
+    backend: System
+    compensator: System
+    logger: VectorLogSink | None = None
+    diagram: Diagram | None = None
+
+    def set_initial_conditions(self, root_context) -> None:
+        """Write the approach of :attr:`params` into a root context."""
+        command, body = initial_port_state(self.params, self.spacecraft)
+        sc = self.diagram.GetMutableSubsystemContext(self.spacecraft, root_context)
+        sc.SetDiscreteState(body)
+        table_state = command.copy()
+        if self.params.table == "model" and np.isfinite(self.params.table_response_hz):
+            # Steady tracking of the approach ramp (the 1-D "tracking" start).
+            w = 2.0 * np.pi * self.params.table_response_hz
+            table_state[:6] -= 2.0 * self.params.table_damping_ratio / w * command[6:]
+        bc = self.diagram.GetMutableSubsystemContext(self.backend, root_context)
+        self.backend.set_initial_state(bc, table_state, command)
+
+
+def initial_port_state(
+    params: DockingLoopParams, spacecraft: RigidSpacecraft
+) -> tuple[np.ndarray, np.ndarray]:
+    """The port's command ``[q; qd]`` (12) and the body state (18) at t = 0:
+    the attitude off by the misalignment, the port's axis through the target's
+    centre, the first pad ``initial_gap_m`` from the plate, moving at the
+    approach speed along +z."""
+    a = params.approach
+    R0 = rotation_from_rpy(np.array([*a.misalignment_rad, 0.0]))
+    c = params.contact
+    lowest = float(np.max((c.pad_centres_m @ R0.T)[:, 2])) + c.pad_radius_m
+    port = np.array([0.0, 0.0, -a.initial_gap_m - lowest])
+    body = spacecraft.initial_state(port, R0, np.array([0.0, 0.0, a.initial_velocity_m_per_s]))
+    return port_state(params.spacecraft, body), body
+
+
+def _stiffness_model(params: DockingLoopParams):
+    if params.stiffness_model == "given":
+        return constant_stiffness(np.array(params.compensator_stiffness_matrix))
+    model = DockingContact(params.contact)  # the rig computer's own contact model
+    return model.stiffness
+
+
+def _backend(params: DockingLoopParams) -> System:
+    if params.table == "stewart":
+        from hybridtable.six_dof.stewart_backend import StewartPoseBackend
+
+        return StewartPoseBackend(params)
+    return TableModelBackend(params)
+
+
+def add_docking_loop(
+    builder: DiagramBuilder,
+    params: DockingLoopParams,
+    backend: System | None = None,
+    compensator: System | None = None,
+    log: bool = True,
+) -> DockingLoop:
+    """Add the 6-DoF docking loop to ``builder``, wire it, and return its handles.
+
+    Parameters
+    ----------
+    builder : DiagramBuilder
+    params : DockingLoopParams
+    backend : System, optional
+        A table back-end (default: from ``params.table``).
+    compensator : System, optional
+        A wrench compensator (default: the registered ``params.compensator``).
+    log : bool
+        Log every block of :data:`LOG_LAYOUT` at each tick.
+    """
+    h = params.sample_period_s
+    spacecraft = builder.AddNamedSystem("spacecraft", RigidSpacecraft(params.spacecraft, h))
+    backend = builder.AddNamedSystem("table_backend", backend or _backend(params))
+    sensor_in, sensor_out = add_wrench_sensor(
+        builder,
+        params.sensor_delay_s,
+        h,
+        params.force_noise_n,
+        params.moment_noise_n_m,
+        params.seed,
+    )
+    compensator = builder.AddNamedSystem(
+        "compensator", compensator or make_wrench_compensator(params, _stiffness_model(params))
+    )
+    command = spacecraft.GetOutputPort("commanded_state")
+    builder.Connect(command, backend.GetInputPort("commanded_state"))
+    builder.Connect(backend.GetOutputPort("contact_wrench"), sensor_in.get_input_port(0))
+    measured = sensor_out.get_output_port(0)
+    builder.Connect(measured, compensator.GetInputPort("measured_wrench"))
+    builder.Connect(backend.GetOutputPort("table_state"), compensator.GetInputPort("table_state"))
+    builder.Connect(command, compensator.GetInputPort("commanded_state"))
+    builder.Connect(
+        compensator.GetOutputPort("compensated_wrench"),
+        spacecraft.GetInputPort("compensated_wrench"),
+    )
+    loop = DockingLoop(params, spacecraft, backend, compensator)
+    if log:
+        ports = [
+            command,
+            backend.GetOutputPort("table_state"),
+            backend.GetOutputPort("contact_wrench"),
+            measured,
+            compensator.GetOutputPort("compensated_wrench"),
+            spacecraft.GetOutputPort("body_state"),
+        ]
+        mux = builder.AddNamedSystem("log_mux", Multiplexer([p.size() for p in ports]))
+        for i, port in enumerate(ports):
+            builder.Connect(port, mux.get_input_port(i))
+        sink = LogVectorOutput(mux.get_output_port(), builder, h)
+        sink.set_name("log")
+        loop.logger = sink
+    return loop
+
+
+def build_docking_loop(params: DockingLoopParams, **kwargs) -> DockingLoop:
+    """:func:`add_docking_loop` as a stand-alone diagram."""
+    builder = DiagramBuilder()
+    loop = add_docking_loop(builder, params, **kwargs)
+    loop.diagram = builder.Build()
+    loop.diagram.set_name("docking_loop")
+    return loop

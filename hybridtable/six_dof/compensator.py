@@ -1,0 +1,102 @@
+"""The paper's compensators on the wrench: SDC, MDC with a 6x6 stiffness, SDMDC.
+
+With ``w_mea`` the measured wrench ``[moment; force]`` (6, W, at the port
+origin), ``q = [p; theta]`` the device pose coordinates and ``K = -dw/dq``:
+
+- SDC: ``w_hat = w_mea + T_lead (w_mea[k] - w_mea[k-1]) / h`` (Eq. 2-3 per component);
+- MDC: ``w_c = w_mea - K (q_des - q_act) - C (qd_des - qd_act)`` (Eq. 6: the
+  paper writes it with a 6x6 stiffness matrix; on axis it is ``k_con (p_des -
+  p_act)`` on the compression force);
+- SDMDC: both.
+
+While the measured force's norm is at or below ``force_deadband_n`` the
+compensated wrench is zero (the 1-D gate on the measured force). ``K`` and
+``C`` come from a stiffness model: the contact linearized at the table's pose
+at every tick of the contact (Drake's contact,
+:meth:`~hybridtable.six_dof.contact.DockingContact.stiffness`), or a given
+matrix.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from pydrake.systems.framework import BasicVector, LeafSystem
+
+__all__ = ["StiffnessModel", "WrenchCompensator", "constant_stiffness"]
+
+#: ``stiffness(q_act, qd_act) -> (K, C)``, each 6x6.
+StiffnessModel = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
+
+
+def constant_stiffness(K: np.ndarray, C: np.ndarray | None = None) -> StiffnessModel:
+    """A stiffness model that always gives ``K`` (and ``C``, default zero)."""
+    K = np.asarray(K, dtype=float)
+    C = np.zeros((6, 6)) if C is None else np.asarray(C, dtype=float)
+    return lambda q, qd: (K, C)
+
+
+class WrenchCompensator(LeafSystem):
+    """The rig computer's wrench compensator.
+
+    Ports
+    -----
+    Input ``measured_wrench`` (6: N m, N)
+        From the F/T sensor.
+    Input ``table_state`` (12: m, rad, m/s, rad/s)
+        ``[q_act; qd_act]`` of the table (its encoders).
+    Input ``commanded_state`` (12)
+        ``[q_des; qd_des]`` of the spacecraft model's port.
+    Output ``compensated_wrench`` (6: N m, N)
+        Fed to the spacecraft model.
+
+    Parameters
+    ----------
+    period_s : float
+        The rig computer's tick h (the lead's backward difference).
+    lead_time_s : float
+        SDC lead (0: no lead).
+    stiffness : StiffnessModel or None
+        The MDC's stiffness (None: no MDC term).
+    force_deadband_n : float
+    """
+
+    def __init__(
+        self,
+        period_s: float,
+        lead_time_s: float = 0.0,
+        stiffness: StiffnessModel | None = None,
+        force_deadband_n: float = 0.0,
+    ) -> None:
+        LeafSystem.__init__(self)
+        self._h = float(period_s)
+        self._lead = float(lead_time_s)
+        self._stiffness = stiffness
+        self._deadband = float(force_deadband_n)
+        self._w = self.DeclareVectorInputPort("measured_wrench", 6)
+        self._table = self.DeclareVectorInputPort("table_state", 12)
+        self._cmd = self.DeclareVectorInputPort("commanded_state", 12)
+        self._prev = self.DeclareDiscreteState(6)
+        self.DeclarePeriodicDiscreteUpdateEvent(self._h, 0.0, self._store)
+        self.DeclareVectorOutputPort("compensated_wrench", BasicVector(6), self._calc)
+
+    def _store(self, context, discrete_state) -> None:
+        discrete_state.get_mutable_vector(0).SetFromVector(self._w.Eval(context))
+
+    def _calc(self, context, output) -> None:
+        w = np.array(self._w.Eval(context))
+        if not np.linalg.norm(w[3:]) > self._deadband:
+            output.SetFromVector(np.zeros(6))
+            return
+        out = w.copy()
+        if self._lead > 0.0:
+            out += self._lead * (w - context.get_discrete_state(0).value()) / self._h
+        if self._stiffness is not None:
+            x_act = self._table.Eval(context)
+            x_des = self._cmd.Eval(context)
+            K, C = self._stiffness(x_act[:6], x_act[6:])
+            out -= K @ (x_des[:6] - x_act[:6])
+            if np.any(C):
+                out -= C @ (x_des[6:] - x_act[6:])
+        output.SetFromVector(out)

@@ -1,0 +1,97 @@
+"""Metrics of one 6-DoF docking contact: CoR along the normal, energy, peaks."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+__all__ = ["DockingMetrics", "docking_metrics"]
+
+
+@dataclass(frozen=True)
+class DockingMetrics:
+    """Metrics of the first contact of a 6-DoF run.
+
+    Attributes
+    ----------
+    cor_normal : float
+        ``|v_out| / |v_in|`` of the docking port's velocity along the contact
+        normal (the docking axis z) [1].
+    v_in_m_per_s, v_out_m_per_s : float
+        That velocity at the last tick before the model first felt a wrench,
+        and at the end of the record.
+    energy_ratio : float
+        Kinetic energy (translation and rotation) of the spacecraft model at
+        the end over before the contact [1].
+    energy_gain_j : float
+        The same as a difference (J; > 0: the loop created energy).
+    rotational_energy_j : float
+        Rotational kinetic energy at the end (J): how much of the motion the
+        contact turned into tumbling.
+    peak_force_n, peak_moment_n_m : float
+        Largest norm of the actual contact force, and of its moment about the
+        port origin.
+    contact_duration_s : float
+        Time the devices touched (ticks with a contact force times the tick).
+    lateral_velocity_m_per_s : float
+        Norm of the port's velocity across the docking axis at the end.
+    """
+
+    cor_normal: float
+    v_in_m_per_s: float
+    v_out_m_per_s: float
+    energy_ratio: float
+    energy_gain_j: float
+    rotational_energy_j: float
+    peak_force_n: float
+    peak_moment_n_m: float
+    contact_duration_s: float
+    lateral_velocity_m_per_s: float
+
+    def to_dict(self) -> dict[str, float]:
+        return asdict(self)
+
+
+def docking_metrics(
+    time_s: np.ndarray,
+    port_velocity_m_per_s: np.ndarray,
+    kinetic_energy_j: np.ndarray,
+    rotational_energy_j: np.ndarray,
+    contact_wrench: np.ndarray,
+    compensated_wrench: np.ndarray,
+) -> DockingMetrics:
+    """Metrics of the first contact in a record (arrays over the ticks;
+    velocities (N, 3), wrenches (N, 6)).
+
+    Raises
+    ------
+    ValueError
+        If the devices never touched or the model never felt the contact.
+    """
+    t = np.asarray(time_s, dtype=float)
+    force = np.linalg.norm(contact_wrench[:, 3:], axis=1)
+    moment = np.linalg.norm(contact_wrench[:, :3], axis=1)
+    felt = np.flatnonzero(np.any(compensated_wrench != 0.0, axis=1))
+    if not (force > 0).any():
+        raise ValueError("no contact in this record: the devices never touched")
+    if felt.size == 0:
+        raise ValueError("the model never felt the contact: the compensated wrench stayed 0")
+    i_in = max(int(felt[0]) - 1, 0)
+    v_in = float(port_velocity_m_per_s[i_in, 2])
+    v_out = float(port_velocity_m_per_s[-1, 2])
+    e_in = float(kinetic_energy_j[i_in])
+    e_out = float(kinetic_energy_j[-1])
+    h = float(np.median(np.diff(t))) if t.size > 1 else 0.0
+    return DockingMetrics(
+        cor_normal=abs(v_out) / abs(v_in),
+        v_in_m_per_s=v_in,
+        v_out_m_per_s=v_out,
+        energy_ratio=e_out / e_in,
+        energy_gain_j=e_out - e_in,
+        rotational_energy_j=float(rotational_energy_j[-1]),
+        peak_force_n=float(force.max()),
+        peak_moment_n_m=float(moment.max()),
+        contact_duration_s=float(np.count_nonzero(force > 0) * h),
+        lateral_velocity_m_per_s=float(np.linalg.norm(port_velocity_m_per_s[-1, :2])),
+    )

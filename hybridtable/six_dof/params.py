@@ -1,0 +1,386 @@
+"""Parameters of the 6-DoF docking loop, SI units, validated on construction.
+
+:class:`DockingLoopParams` gathers the spacecraft's rigid body
+(:class:`RigidBodyParams`), the docking devices and their contact
+(:class:`DockingContactParams`), the approach (:class:`ApproachParams`) and
+the rig: computer rate, sensor delay and noise, table back-end, compensator.
+The frames and equations are in ``docs/six_dof.md``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from hybridtable._validation import (
+    check_choice,
+    check_finite,
+    check_nonnegative,
+    check_positive,
+    check_positive_or_inf,
+)
+from hybridtable.errors import ParameterError
+from hybridtable.limits import check_plausible
+
+__all__ = [
+    "TABLE_BACKENDS",
+    "STIFFNESS_MODELS",
+    "RigidBodyParams",
+    "DockingContactParams",
+    "ApproachParams",
+    "DockingLoopParams",
+    "inertia_matrix",
+]
+
+
+TABLE_BACKENDS: tuple[str, ...] = ("model", "stewart")
+#: How the MDC gets its 6x6 stiffness: linearized at the table's pose at every
+#: tick of the contact, or a given matrix.
+STIFFNESS_MODELS: tuple[str, ...] = ("linearized", "given")
+
+
+def inertia_matrix(name: str, value) -> np.ndarray:
+    """A physical inertia tensor (3x3, kg m^2) from 3 principal moments or a
+    3x3 matrix: symmetric, positive definite, and its principal moments obey
+    the triangle inequality (``I1 + I2 >= I3``) of any real body.
+
+    Raises
+    ------
+    ParameterError
+        Naming ``name`` and what is unphysical.
+    """
+    try:
+        a = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be 3 numbers or a 3x3 matrix (got {value!r})") from None
+    if a.shape == (3,):
+        a = np.diag(a)
+    if a.shape != (3, 3):
+        raise ParameterError(f"{name} must be 3 numbers or a 3x3 matrix (got shape {a.shape})")
+    if not np.all(np.isfinite(a)):
+        raise ParameterError(f"{name} must be finite (got {a.tolist()})")
+    scale = float(np.max(np.abs(a)))
+    if scale == 0.0 or np.max(np.abs(a - a.T)) > 1e-9 * scale:
+        raise ParameterError(f"{name} must be a symmetric, non-zero matrix (got {a.tolist()})")
+    moments = np.linalg.eigvalsh(0.5 * (a + a.T))
+    if moments[0] <= 0.0:
+        raise ParameterError(
+            f"{name} is unphysical: its principal moments {np.round(moments, 6).tolist()} kg m^2 "
+            "must all be > 0"
+        )
+    i1, i2, i3 = moments
+    if i1 + i2 < i3 * (1.0 - 1e-9):
+        raise ParameterError(
+            f"{name} is unphysical: principal moments {np.round(moments, 6).tolist()} kg m^2 "
+            "violate the triangle inequality I1 + I2 >= I3 that every real body obeys"
+        )
+    return 0.5 * (a + a.T)
+
+
+@dataclass(frozen=True)
+class RigidBodyParams:
+    """The spacecraft model as a rigid body.
+
+    Parameters
+    ----------
+    mass_kg : float
+        Mass m, > 0.
+    inertia_kg_m2 : 3 numbers or 3x3
+        Inertia tensor about the centre of mass in the body frame (3 numbers:
+        the principal moments about the body axes); symmetric, positive
+        definite, principal moments obeying the triangle inequality.
+    port_distance_m : float
+        Distance from the centre of mass to the docking port's face along the
+        body z axis (the docking axis), > 0.
+    lateral_offset_m : 2 numbers
+        ``[x, y]`` of the port's axis from the centre of mass in the body
+        frame: the contact force's line passes this far from the centre of mass.
+    """
+
+    mass_kg: float
+    inertia_kg_m2: tuple = (1000.0, 1000.0, 1000.0)
+    port_distance_m: float = 1.5
+    lateral_offset_m: tuple[float, float] = (0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        s = object.__setattr__
+        s(
+            self,
+            "mass_kg",
+            check_plausible("spacecraft_mass_kg", check_positive("mass_kg", self.mass_kg)),
+        )
+        s(
+            self,
+            "inertia_kg_m2",
+            tuple(map(tuple, inertia_matrix("inertia_kg_m2", self.inertia_kg_m2).tolist())),
+        )
+        s(self, "port_distance_m", check_positive("port_distance_m", self.port_distance_m))
+        s(self, "lateral_offset_m", _pair("lateral_offset_m", self.lateral_offset_m))
+        if math.hypot(*self.lateral_offset_m) > 10.0 * self.port_distance_m:
+            raise ParameterError(
+                f"lateral_offset_m {self.lateral_offset_m} is more than 10 port distances "
+                f"({self.port_distance_m:g} m) from the centre of mass"
+            )
+
+    @property
+    def inertia(self) -> np.ndarray:
+        """The inertia tensor (3x3, kg m^2, body frame)."""
+        return np.array(self.inertia_kg_m2)
+
+    @property
+    def port_position_m(self) -> np.ndarray:
+        """The port's origin in the body frame, ``[x_off, y_off, port_distance]`` (m)."""
+        return np.array([*self.lateral_offset_m, self.port_distance_m])
+
+
+@dataclass(frozen=True)
+class DockingContactParams:
+    """The docking devices and their compliant contact (Drake point contact).
+
+    The active device (on the table) is a ring of ``pad_count`` spherical
+    pads of radius ``pad_radius_m`` on a circle of ``ring_radius_m``, their
+    tops in the port's face plane; the passive device is a flat plate.
+
+    Parameters
+    ----------
+    contact_stiffness_n_per_m : float
+        Total normal stiffness k of the contact with every pad touching, > 0
+        (each pad ``k / pad_count``).
+    contact_dissipation_s_per_m : float
+        Hunt–Crossley dissipation d of each pad, ``f = k_i x (1 + d dx/dt)``, >= 0.
+    friction_coefficient : float
+        Coulomb friction mu of the pads on the plate, >= 0 (Drake's
+        regularized friction).
+    pad_count : int
+        Number of pads, >= 3.
+    ring_radius_m, pad_radius_m : float
+        Ring and pad radii, > 0, ``pad_radius_m < ring_radius_m``.
+    """
+
+    contact_stiffness_n_per_m: float
+    contact_dissipation_s_per_m: float = 0.0
+    friction_coefficient: float = 0.0
+    pad_count: int = 8
+    ring_radius_m: float = 0.3
+    pad_radius_m: float = 0.01
+
+    def __post_init__(self) -> None:
+        s = object.__setattr__
+        k = check_positive("contact_stiffness_n_per_m", self.contact_stiffness_n_per_m)
+        s(self, "contact_stiffness_n_per_m", check_plausible("contact_stiffness_n_per_m", k))
+        for name in ("contact_dissipation_s_per_m", "friction_coefficient"):
+            s(self, name, check_nonnegative(name, getattr(self, name)))
+        if isinstance(self.pad_count, bool) or int(self.pad_count) != self.pad_count:
+            raise ParameterError(f"pad_count must be a whole number (got {self.pad_count!r})")
+        if not 3 <= int(self.pad_count) <= 64:
+            raise ParameterError(f"pad_count must be in [3, 64] (got {self.pad_count!r})")
+        s(self, "pad_count", int(self.pad_count))
+        for name in ("ring_radius_m", "pad_radius_m"):
+            s(self, name, check_positive(name, getattr(self, name)))
+        if self.pad_radius_m >= self.ring_radius_m:
+            raise ParameterError(
+                f"pad_radius_m {self.pad_radius_m:g} must be < ring_radius_m {self.ring_radius_m:g}"
+            )
+
+    @property
+    def pad_centres_m(self) -> np.ndarray:
+        """Pad centres in the port frame, (pad_count, 3) (m)."""
+        a = 2.0 * np.pi * np.arange(self.pad_count) / self.pad_count
+        r = self.ring_radius_m
+        return np.column_stack(
+            [r * np.cos(a), r * np.sin(a), np.full(self.pad_count, -self.pad_radius_m)]
+        )
+
+
+@dataclass(frozen=True)
+class ApproachParams:
+    """How the spacecraft comes in.
+
+    Parameters
+    ----------
+    initial_velocity_m_per_s : float
+        Approach speed along the docking axis (+z), > 0.
+    initial_gap_m : float
+        Gap between the first pad to touch and the plate at t = 0, >= 0.
+    misalignment_rad : 2 numbers
+        ``[roll, pitch]`` of the spacecraft's attitude from the docking axis
+        (rad), each within +-0.5 rad.
+    """
+
+    initial_velocity_m_per_s: float = 0.1
+    initial_gap_m: float = 0.001
+    misalignment_rad: tuple[float, float] = (0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        s = object.__setattr__
+        v = check_positive("initial_velocity_m_per_s", self.initial_velocity_m_per_s)
+        s(self, "initial_velocity_m_per_s", check_plausible("initial_velocity_m_per_s", v))
+        gap = check_nonnegative("initial_gap_m", self.initial_gap_m)
+        s(self, "initial_gap_m", check_plausible("initial_gap_m", gap))
+        pair = _pair("misalignment_rad", self.misalignment_rad)
+        if max(abs(pair[0]), abs(pair[1])) > 0.5:
+            raise ParameterError(
+                f"misalignment_rad must be within +-0.5 rad (29 deg) per axis (got {pair})"
+            )
+        s(self, "misalignment_rad", pair)
+
+
+@dataclass(frozen=True)
+class DockingLoopParams:
+    """Every parameter of one 6-DoF docking run, SI units.
+
+    Parameters
+    ----------
+    spacecraft : RigidBodyParams
+    contact : DockingContactParams
+    approach : ApproachParams
+    sample_rate_hz : float
+        Rate of the rig computer (spacecraft model, compensator, sensor), > 0.
+    sensor_delay_s : float
+        Delay of the F/T sensor, a whole number of ticks, >= 0.
+    table : {"model", "stewart"}
+        ``"model"``: the table model, each pose coordinate a second-order
+        response (``table_response_hz``, ``table_damping_ratio``; inf: the
+        ideal table); ``"stewart"``: the Stewart platform's MultibodyPlant.
+    table_response_hz, table_damping_ratio : float
+        The table model's response (> 0 or inf; >= 0).
+    compensator : str
+        A registered wrench compensator (``"none"``, ``"SDC"``, ``"MDC"``,
+        ``"SDMDC"`` or a plug-in).
+    lead_time_s : float or None
+        SDC lead; None: the sensor delay.
+    stiffness_model : {"linearized", "given"}
+        The MDC's 6x6 stiffness: the Drake contact linearized at the table's
+        pose at every tick, or ``compensator_stiffness_matrix``.
+    compensator_stiffness_matrix : 6x6 or None
+        ``K`` for ``stiffness_model="given"``, rows/columns ``[x, y, z, rx,
+        ry, rz]`` with the moment rows first in the wrench: ``-dw/dq``
+        (N/m, N, N m/m, N m/rad).
+    force_deadband_n : float
+        The compensator acts while the measured force's norm exceeds it.
+    force_noise_n, moment_noise_n_m : float
+        Standard deviation of the sensor's white noise per axis, >= 0.
+    seed : int
+        Seed of the noise.
+    duration_s : float or None
+        Simulated time; None: until the contact has ended.
+    stewart : StewartParams or None
+        The platform for ``table="stewart"`` (None: its defaults).
+    """
+
+    spacecraft: RigidBodyParams
+    contact: DockingContactParams
+    approach: ApproachParams = field(default_factory=ApproachParams)
+    sample_rate_hz: float = 1000.0
+    sensor_delay_s: float = 0.0
+    table: str = "model"
+    table_response_hz: float = math.inf
+    table_damping_ratio: float = 0.8
+    compensator: str = "none"
+    lead_time_s: float | None = None
+    stiffness_model: str = "linearized"
+    compensator_stiffness_matrix: tuple | None = None
+    force_deadband_n: float = 0.0
+    force_noise_n: float = 0.0
+    moment_noise_n_m: float = 0.0
+    seed: int = 0
+    duration_s: float | None = None
+    stewart: object | None = None
+
+    def __post_init__(self) -> None:
+        from hybridtable.six_dof.registry import wrench_compensator_names
+        from hybridtable.systems.sensor import delay_samples
+
+        s = object.__setattr__
+        for name, kind in (
+            ("spacecraft", RigidBodyParams),
+            ("contact", DockingContactParams),
+            ("approach", ApproachParams),
+        ):
+            if not isinstance(getattr(self, name), kind):
+                raise ParameterError(f"{name} must be a {kind.__name__}")
+        rate = check_positive("sample_rate_hz", self.sample_rate_hz)
+        s(self, "sample_rate_hz", check_plausible("sample_rate_hz", rate))
+        delay = check_nonnegative("sensor_delay_s", self.sensor_delay_s)
+        s(self, "sensor_delay_s", check_plausible("sensor_delay_s", delay))
+        delay_samples(self.sensor_delay_s, self.sample_period_s)
+        check_choice("table", self.table, TABLE_BACKENDS)
+        f = check_positive_or_inf("table_response_hz", self.table_response_hz)
+        if math.isfinite(f):
+            check_plausible("table_response_hz", f)
+        s(self, "table_response_hz", f)
+        s(
+            self,
+            "table_damping_ratio",
+            check_nonnegative("table_damping_ratio", self.table_damping_ratio),
+        )
+        check_choice("compensator", self.compensator, wrench_compensator_names())
+        if self.lead_time_s is not None:
+            s(self, "lead_time_s", check_nonnegative("lead_time_s", self.lead_time_s))
+        check_choice("stiffness_model", self.stiffness_model, STIFFNESS_MODELS)
+        if self.compensator_stiffness_matrix is not None:
+            try:
+                K = np.array(self.compensator_stiffness_matrix, dtype=float)
+            except (TypeError, ValueError):
+                raise ParameterError("compensator_stiffness_matrix must be a 6x6 matrix") from None
+            if K.shape != (6, 6) or not np.all(np.isfinite(K)):
+                raise ParameterError(
+                    f"compensator_stiffness_matrix must be a finite 6x6 matrix (got shape {K.shape})"
+                )
+            s(self, "compensator_stiffness_matrix", tuple(map(tuple, K.tolist())))
+        if self.stiffness_model == "given" and self.compensator_stiffness_matrix is None:
+            raise ParameterError('stiffness_model "given" needs compensator_stiffness_matrix')
+        for name in ("force_deadband_n", "force_noise_n", "moment_noise_n_m"):
+            s(self, name, check_nonnegative(name, getattr(self, name)))
+        if isinstance(self.seed, bool) or int(self.seed) != self.seed or self.seed < 0:
+            raise ParameterError(f"seed must be a whole number >= 0 (got {self.seed!r})")
+        s(self, "seed", int(self.seed))
+        if self.duration_s is not None:
+            s(self, "duration_s", check_positive("duration_s", self.duration_s))
+            if self.duration_s > 600.0:
+                raise ParameterError(f"duration_s must be <= 600 s (got {self.duration_s:g})")
+        if self.table == "stewart":
+            from hybridtable.stewart.params import StewartParams
+
+            stewart = self.stewart if self.stewart is not None else StewartParams()
+            if not isinstance(stewart, StewartParams):
+                raise ParameterError("stewart must be a StewartParams")
+            s(self, "stewart", stewart)
+
+    # -- derived --------------------------------------------------------
+    @property
+    def sample_period_s(self) -> float:
+        """The rig computer's tick h = 1 / sample_rate_hz (s)."""
+        return 1.0 / self.sample_rate_hz
+
+    @property
+    def delay_ticks(self) -> int:
+        """The sensor delay in ticks."""
+        return int(round(self.sensor_delay_s * self.sample_rate_hz))
+
+    @property
+    def effective_lead_time_s(self) -> float:
+        """The SDC lead: ``lead_time_s`` or the sensor delay."""
+        return self.sensor_delay_s if self.lead_time_s is None else self.lead_time_s
+
+    @property
+    def contact_frequency_hz(self) -> float:
+        """On-axis contact frequency sqrt(k / m) / 2 pi (Hz)."""
+        k = self.contact.contact_stiffness_n_per_m
+        return math.sqrt(k / self.spacecraft.mass_kg) / (2.0 * math.pi)
+
+    def with_(self, **changes) -> DockingLoopParams:
+        """A copy with some fields changed (validated again)."""
+        return replace(self, **changes)
+
+
+def _pair(name: str, value) -> tuple[float, float]:
+    try:
+        items = [float(v) for v in value]
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be 2 numbers (got {value!r})") from None
+    if len(items) != 2:
+        raise ParameterError(f"{name} must be 2 numbers (got {value!r})")
+    return (check_finite(name, items[0]), check_finite(name, items[1]))

@@ -1,0 +1,44 @@
+"""Rotations of the 6-DoF loop: rotation vectors, their exponential and logarithm.
+
+A device pose is ``q = [p; theta]`` (m, rad): the position of the docking
+port in the target frame W and the rotation vector ``theta`` of its
+orientation, ``R = exp([theta]x)`` (Rodrigues). The table and the MDC work in
+these coordinates; rotation-vector differences are taken component-wise.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["skew", "rotation_exp", "rotation_log", "pose_coordinates"]
+
+
+def skew(w: np.ndarray) -> np.ndarray:
+    """The cross-product matrix ``[w]x`` of a 3-vector."""
+    return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
+
+
+def rotation_exp(theta: np.ndarray) -> np.ndarray:
+    """``exp([theta]x)``: the rotation by ``|theta|`` rad about ``theta``."""
+    t = math.sqrt(float(theta[0] ** 2 + theta[1] ** 2 + theta[2] ** 2))
+    K = skew(theta)
+    if t < 1e-9:
+        return np.eye(3) + K + 0.5 * (K @ K)
+    return np.eye(3) + (math.sin(t) / t) * K + ((1.0 - math.cos(t)) / (t * t)) * (K @ K)
+
+
+def rotation_log(R: np.ndarray) -> np.ndarray:
+    """The rotation vector of ``R`` (angle in [0, pi)), inverse of :func:`rotation_exp`."""
+    c = max(-1.0, min(1.0, 0.5 * (R[0, 0] + R[1, 1] + R[2, 2] - 1.0)))
+    angle = math.acos(c)
+    v = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    if angle < 1e-6:
+        return 0.5 * v
+    return angle / (2.0 * math.sin(angle)) * v
+
+
+def pose_coordinates(position_m: np.ndarray, rotation: np.ndarray) -> np.ndarray:
+    """``q = [p; theta]`` (6) of a position and a rotation matrix."""
+    return np.concatenate([np.asarray(position_m, dtype=float), rotation_log(rotation)])

@@ -1,0 +1,94 @@
+"""Registry of wrench compensators: name -> factory of a 6-DoF compensator system.
+
+A factory ``factory(params, stiffness) -> System`` gets the
+:class:`~hybridtable.six_dof.params.DockingLoopParams` and the MDC's
+stiffness model (:data:`~hybridtable.six_dof.compensator.StiffnessModel`) and
+returns a system with the ports of
+:class:`~hybridtable.six_dof.compensator.WrenchCompensator`
+(``measured_wrench``, ``table_state``, ``commanded_state`` ->
+``compensated_wrench``). The paper's four are built in; other packages add
+theirs through the entry-point group ``hybridtable.wrench_compensators``, a
+script through :func:`register_wrench_compensator`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from pydrake.systems.framework import System
+
+from hybridtable._validation import check_choice
+from hybridtable.errors import ParameterError
+from hybridtable.six_dof.compensator import StiffnessModel, WrenchCompensator
+
+__all__ = [
+    "WrenchCompensatorFactory",
+    "ENTRY_POINT_GROUP",
+    "PAPER_WRENCH_COMPENSATORS",
+    "register_wrench_compensator",
+    "wrench_compensator_names",
+    "make_wrench_compensator",
+]
+
+WrenchCompensatorFactory = Callable[[Any, StiffnessModel], System]
+ENTRY_POINT_GROUP = "hybridtable.wrench_compensators"
+PAPER_WRENCH_COMPENSATORS: tuple[str, ...] = ("none", "SDC", "MDC", "SDMDC")
+
+
+def _paper(params: Any, stiffness: StiffnessModel) -> System:
+    kind = params.compensator
+    return WrenchCompensator(
+        params.sample_period_s,
+        lead_time_s=params.effective_lead_time_s if kind in ("SDC", "SDMDC") else 0.0,
+        stiffness=stiffness if kind in ("MDC", "SDMDC") else None,
+        force_deadband_n=params.force_deadband_n,
+    )
+
+
+_REGISTRY: dict[str, WrenchCompensatorFactory] = {
+    name: _paper for name in PAPER_WRENCH_COMPENSATORS
+}
+_entry_points_loaded = False
+
+
+def _load_entry_points() -> None:
+    global _entry_points_loaded
+    if _entry_points_loaded:
+        return
+    _entry_points_loaded = True
+    from importlib.metadata import entry_points
+
+    for ep in entry_points(group=ENTRY_POINT_GROUP):
+        if ep.name in _REGISTRY:
+            raise ParameterError(
+                f"wrench compensator {ep.name!r} of entry point {ep.value} is already registered"
+            )
+        _REGISTRY[ep.name] = ep.load()
+
+
+def register_wrench_compensator(
+    name: str, factory: WrenchCompensatorFactory, replace: bool = False
+) -> None:
+    """Make ``name`` a choice of ``DockingLoopParams.compensator``.
+
+    Raises
+    ------
+    ValueError
+        If ``name`` is taken (unless ``replace``) or is one of the paper's.
+    """
+    if name in PAPER_WRENCH_COMPENSATORS or (name in _REGISTRY and not replace):
+        raise ValueError(f"wrench compensator {name!r} is already registered")
+    _REGISTRY[name] = factory
+
+
+def wrench_compensator_names() -> tuple[str, ...]:
+    """Names of the registered wrench compensators (the paper's first)."""
+    _load_entry_points()
+    return tuple(_REGISTRY)
+
+
+def make_wrench_compensator(params: Any, stiffness: StiffnessModel) -> System:
+    """The compensator ``params.compensator`` built by its factory."""
+    check_choice("compensator", params.compensator, wrench_compensator_names())
+    return _REGISTRY[params.compensator](params, stiffness)

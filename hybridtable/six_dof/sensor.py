@@ -1,0 +1,66 @@
+"""The 6-axis force/torque sensor of the 6-DoF loop: a delay and white noise.
+
+The delay is the 1-D loop's sampled delay line on six channels
+(:class:`~hybridtable.systems.sensor.ForceSensorDelay`); the noise is
+deterministic per seed, channel and tick (:func:`~hybridtable.systems.noise.noise_sample`),
+so a run repeats exactly.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from pydrake.systems.framework import BasicVector, DiagramBuilder, LeafSystem, System
+
+from hybridtable.systems.noise import noise_sample
+from hybridtable.systems.sensor import ForceSensorDelay, SensorParams
+
+__all__ = ["WrenchNoise", "add_wrench_sensor"]
+
+#: Noise channels of the six wrench components (distinct from the 1-D channels).
+_CHANNELS = (601, 602, 603, 604, 605, 606)
+
+
+class WrenchNoise(LeafSystem):
+    """Adds white noise to a wrench at the rig computer's ticks.
+
+    Ports
+    -----
+    Input ``wrench`` (6: N m, N), output ``noisy_wrench`` (6: N m, N):
+    ``wrench + sigma * n[k]`` with ``k`` the tick of the current time.
+    """
+
+    def __init__(self, moment_std_n_m: float, force_std_n: float, seed: int, period_s: float):
+        LeafSystem.__init__(self)
+        self._std = np.array([moment_std_n_m] * 3 + [force_std_n] * 3)
+        self._seed = int(seed)
+        self._h = float(period_s)
+        self._in = self.DeclareVectorInputPort("wrench", 6)
+        self.DeclareVectorOutputPort("noisy_wrench", BasicVector(6), self._calc)
+
+    def _calc(self, context, output) -> None:
+        tick = int(round(context.get_time() / self._h))
+        n = np.array([noise_sample(self._seed, c, tick) for c in _CHANNELS])
+        output.SetFromVector(self._in.Eval(context) + self._std * n)
+
+
+def add_wrench_sensor(
+    builder: DiagramBuilder,
+    delay_s: float,
+    period_s: float,
+    force_noise_n: float = 0.0,
+    moment_noise_n_m: float = 0.0,
+    seed: int = 0,
+) -> tuple[System, System]:
+    """Add the sensor; returns ``(input system, output system)``: connect the
+    contact wrench to the first's input ``force`` (6) and read the measured
+    wrench from the last's output 0."""
+    delay = builder.AddNamedSystem(
+        "ft_sensor", ForceSensorDelay(SensorParams(delay_s), "sampled", period_s, size=6)
+    )
+    if force_noise_n == 0.0 and moment_noise_n_m == 0.0:
+        return delay, delay
+    noise = builder.AddNamedSystem(
+        "ft_noise", WrenchNoise(moment_noise_n_m, force_noise_n, seed, period_s)
+    )
+    builder.Connect(delay.GetOutputPort("measured_force"), noise.get_input_port())
+    return delay, noise

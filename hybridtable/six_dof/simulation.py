@@ -1,0 +1,195 @@
+"""Run the 6-DoF docking loop through one contact and collect its record."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+from pydrake.systems.analysis import Simulator
+
+from hybridtable.errors import DivergenceError, SimulationError
+from hybridtable.six_dof.builder import LOG_LAYOUT, DockingLoop, build_docking_loop
+from hybridtable.six_dof.metrics import DockingMetrics, docking_metrics
+from hybridtable.six_dof.params import DockingLoopParams
+from hybridtable.six_dof.pose import rotation_exp
+
+__all__ = ["DockingRun", "simulate6", "contact_potential_j", "expected_end_s"]
+
+#: Simulated time between checks of the record (s).
+_CHUNK_S = 0.02
+
+
+@dataclass
+class DockingRun:
+    """The record of one 6-DoF run: every block of the log at each tick.
+
+    Attributes
+    ----------
+    params : DockingLoopParams
+    time_s : ndarray (N,)
+    log : dict of ndarray (N, size)
+        ``commanded_state``, ``table_state``, ``contact_wrench``,
+        ``measured_wrench``, ``compensated_wrench``, ``body_state`` (see
+        :data:`~hybridtable.six_dof.builder.LOG_LAYOUT`).
+    metrics : DockingMetrics
+    wall_time_s : float
+    """
+
+    params: DockingLoopParams
+    time_s: np.ndarray
+    log: dict[str, np.ndarray]
+    metrics: DockingMetrics | None = None
+    wall_time_s: float = 0.0
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def port_velocity_m_per_s(self) -> np.ndarray:
+        """Velocity of the docking port (N, 3)."""
+        return self.log["commanded_state"][:, 6:9]
+
+    @property
+    def kinetic_energy_j(self) -> np.ndarray:
+        """Translational plus rotational kinetic energy of the model (N,)."""
+        return self.translational_energy_j + self.rotational_energy_j
+
+    @property
+    def translational_energy_j(self) -> np.ndarray:
+        v = self.log["body_state"][:, 3:6]
+        return 0.5 * self.params.spacecraft.mass_kg * np.einsum("ij,ij->i", v, v)
+
+    @property
+    def rotational_energy_j(self) -> np.ndarray:
+        w = self.log["body_state"][:, 15:18]
+        return 0.5 * np.einsum("ij,jk,ik->i", w, self.params.spacecraft.inertia, w)
+
+    @property
+    def total_energy_j(self) -> np.ndarray:
+        """Kinetic energy plus the contact's potential at the table's pose (N,)."""
+        return self.kinetic_energy_j + contact_potential_j(self.params, self.log["table_state"])
+
+
+def contact_potential_j(params: DockingLoopParams, table_state: np.ndarray) -> np.ndarray:
+    """Elastic energy ``sum k_i delta_i^2 / 2`` of the pads at each table pose (J)."""
+    c = params.contact
+    k_pad = c.contact_stiffness_n_per_m / c.pad_count
+    out = np.zeros(len(table_state))
+    for n, x in enumerate(table_state):
+        R = rotation_exp(x[3:6])
+        depth = x[2] + (c.pad_centres_m @ R.T)[:, 2] + c.pad_radius_m
+        depth = depth[depth > 0.0]
+        out[n] = 0.5 * k_pad * float(depth @ depth)
+    return out
+
+
+def expected_end_s(params: DockingLoopParams) -> float:
+    """A generous bound on when the first contact has ended (s): the approach
+    over twice the gap, plus ten undamped contact durations, plus 0.5 s."""
+    a = params.approach
+    half_period = 0.5 / params.contact_frequency_hz
+    return 2.0 * a.initial_gap_m / a.initial_velocity_m_per_s + 10.0 * half_period + 0.5
+
+
+def _split(data: np.ndarray) -> dict[str, np.ndarray]:
+    out, row = {}, 0
+    for name, size in LOG_LAYOUT.items():
+        out[name] = data[row : row + size].T.copy()
+        row += size
+    return out
+
+
+def simulate6(
+    params: DockingLoopParams,
+    loop: DockingLoop | None = None,
+    progress: Callable[[float, float], None] | None = None,
+    on_loop: Callable[[DockingLoop], None] | None = None,
+) -> DockingRun:
+    """Simulate the 6-DoF loop through its first contact.
+
+    Runs ``params.duration_s``, or until the contact has ended and the
+    compensated wrench has stayed zero for the sensor delay plus 20 ticks.
+
+    Parameters
+    ----------
+    params : DockingLoopParams
+    loop : DockingLoop, optional
+        A loop already built (e.g. with a Meshcat visualizer).
+    progress : callable, optional
+        ``progress(t_s, t_end_s)`` after each chunk of simulated time.
+    on_loop : callable, optional
+        Called with the loop before the simulation starts.
+
+    Raises
+    ------
+    DivergenceError
+        If the contact force grows past 100 times the undamped peak
+        ``k v0 / omega``, or a state stops being finite.
+    SimulationError
+        If the contact has not ended by :func:`expected_end_s`.
+    """
+    import time
+
+    start = time.perf_counter()
+    loop = loop or build_docking_loop(params)
+    if on_loop is not None:
+        on_loop(loop)
+    simulator = Simulator(loop.diagram)
+    context = simulator.get_mutable_context()
+    loop.set_initial_conditions(context)
+    simulator.Initialize()
+    h = params.sample_period_s
+    a = params.approach
+    omega = 2.0 * math.pi * params.contact_frequency_hz
+    force_limit = (
+        100.0 * params.contact.contact_stiffness_n_per_m * a.initial_velocity_m_per_s / omega
+    )
+    t_end = params.duration_s if params.duration_s is not None else expected_end_s(params)
+    quiet_ticks = params.delay_ticks + 20
+    log = loop.logger.FindLog(context)
+    t = 0.0
+    while t < t_end - 0.5 * h:
+        t = min(t + _CHUNK_S, t_end)
+        simulator.AdvanceTo(t)
+        data = log.data()
+        wrench = data[24:30]
+        if not np.all(np.isfinite(data[:, -quiet_ticks:])):
+            raise DivergenceError(
+                f"the 6-DoF loop diverged: a state stopped being finite at t = {t:.3f} s"
+            )
+        peak = float(np.max(np.linalg.norm(wrench[3:, -quiet_ticks:], axis=0)))
+        if peak > force_limit:
+            raise DivergenceError(
+                f"the 6-DoF loop diverged: contact force {peak:.4g} N at t = {t:.3f} s, over 100 "
+                f"times the undamped peak {force_limit / 100:.4g} N"
+            )
+        if progress is not None:
+            progress(t, t_end)
+        if params.duration_s is None:
+            force = np.linalg.norm(data[27:30], axis=0)
+            comp = np.any(data[36:42] != 0.0, axis=0)
+            touched = np.flatnonzero(force > 0)
+            if touched.size and data.shape[1] > touched[0] + quiet_ticks:
+                if not force[-quiet_ticks:].any() and not comp[-quiet_ticks:].any():
+                    break
+    else:
+        if params.duration_s is None:
+            raise SimulationError(
+                f"the 6-DoF contact did not end within {t_end:.2f} s of simulated time "
+                "(the spacecraft stayed on the target)"
+            )
+    run = DockingRun(params, np.array(log.sample_times()), _split(log.data()))
+    try:
+        run.metrics = docking_metrics(
+            run.time_s,
+            run.port_velocity_m_per_s,
+            run.kinetic_energy_j,
+            run.rotational_energy_j,
+            run.log["contact_wrench"],
+            run.log["compensated_wrench"],
+        )
+    except ValueError as err:
+        if params.duration_s is None:
+            raise SimulationError(str(err)) from None
+    run.wall_time_s = time.perf_counter() - start
+    return run

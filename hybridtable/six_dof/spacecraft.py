@@ -1,0 +1,122 @@
+"""The spacecraft model as a rigid body in 6 DoF, integrated by the rig computer.
+
+State (discrete, updated every tick h): position ``p`` and velocity ``v`` of
+the centre of mass in the target frame W, the attitude ``R`` (body to W) and
+the body-frame angular velocity ``omega_b``. At each tick the compensated
+wrench ``[moment about the port origin; force]`` (W) is applied at the port:
+
+- ``v <- v + h f / m``, ``p <- p + h v`` (semi-implicit Euler, the 1-D
+  spacecraft's step: on axis the two are the same numbers);
+- ``omega_b <- omega_b + h I^-1 (R^T tau - omega_b x I omega_b)``, with
+  ``tau`` the moment about the centre of mass, ``R <- R exp([h omega_b]x)``.
+
+Its output is the docking port's pose and twist: the table's command.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from pydrake.systems.framework import BasicVector, LeafSystem
+
+from hybridtable.six_dof.params import RigidBodyParams
+from hybridtable.six_dof.pose import rotation_exp, rotation_log
+
+__all__ = ["RigidSpacecraft", "BODY_STATE_SIZE", "port_state", "kinetic_energy_j"]
+
+#: ``[p (3), v (3), R row-major (9), omega_b (3)]``.
+BODY_STATE_SIZE = 18
+
+
+def port_state(body: RigidBodyParams, x: np.ndarray) -> np.ndarray:
+    """The port's ``[p_P; theta; v_P; omega]`` (12) of a body state ``x`` (18)."""
+    p, v = x[0:3], x[3:6]
+    R = x[6:15].reshape(3, 3)
+    omega = R @ x[15:18]
+    arm = R @ body.port_position_m
+    return np.concatenate([p + arm, rotation_log(R), v + np.cross(omega, arm), omega])
+
+
+def kinetic_energy_j(body: RigidBodyParams, x: np.ndarray) -> float:
+    """Translational plus rotational kinetic energy of a body state (J)."""
+    w = x[15:18]
+    return 0.5 * body.mass_kg * float(x[3:6] @ x[3:6]) + 0.5 * float(w @ body.inertia @ w)
+
+
+class RigidSpacecraft(LeafSystem):
+    """The spacecraft model (see the module docstring).
+
+    Ports
+    -----
+    Input ``compensated_wrench`` (6: N m, N)
+        ``[moment about the port origin; force]`` in W, applied at the port.
+    Output ``commanded_state`` (12: m, rad, m/s, rad/s)
+        The port's pose ``[p_P; theta]`` and twist ``[v_P; omega]`` in W.
+    Output ``body_state`` (18: m, m/s, 1, rad/s)
+        ``[p, v, R row-major, omega_b]`` of the centre of mass.
+
+    Parameters
+    ----------
+    params : RigidBodyParams
+    period_s : float
+        The rig computer's tick h.
+    """
+
+    def __init__(self, params: RigidBodyParams, period_s: float) -> None:
+        LeafSystem.__init__(self)
+        self.params = params
+        self._h = float(period_s)
+        self._m = params.mass_kg
+        self._I = params.inertia
+        self._I_inv = np.linalg.inv(self._I)
+        self._arm = params.port_position_m
+        self._wrench = self.DeclareVectorInputPort("compensated_wrench", 6)
+        x0 = np.zeros(BODY_STATE_SIZE)
+        x0[6:15] = np.eye(3).ravel()
+        self._x = self.DeclareDiscreteState(x0)
+        self.DeclarePeriodicDiscreteUpdateEvent(self._h, 0.0, self._update)
+        ticket = {self.xd_ticket()}
+        self.DeclareVectorOutputPort(
+            "commanded_state", BasicVector(12), self._calc_port, prerequisites_of_calc=ticket
+        )
+        self.DeclareVectorOutputPort(
+            "body_state",
+            BasicVector(BODY_STATE_SIZE),
+            lambda c, o: o.SetFromVector(c.get_discrete_state(0).value()),
+            prerequisites_of_calc=ticket,
+        )
+
+    def initial_state(
+        self, port_position_m: np.ndarray, rotation: np.ndarray, velocity_m_per_s: np.ndarray
+    ) -> np.ndarray:
+        """The body state (18) with the port at ``port_position_m`` (W), the
+        attitude ``rotation`` and the centre of mass moving at
+        ``velocity_m_per_s`` without rotating."""
+        R = np.asarray(rotation, dtype=float)
+        x = np.zeros(BODY_STATE_SIZE)
+        x[0:3] = np.asarray(port_position_m) - R @ self._arm
+        x[3:6] = velocity_m_per_s
+        x[6:15] = R.ravel()
+        return x
+
+    def _calc_port(self, context, output) -> None:
+        output.SetFromVector(port_state(self.params, context.get_discrete_state(0).value()))
+
+    def _update(self, context, discrete_state) -> None:
+        x = context.get_discrete_state(0).value()
+        w = self._wrench.Eval(context)
+        h = self._h
+        p, v = x[0:3], x[3:6]
+        R = x[6:15].reshape(3, 3)
+        wb = x[15:18]
+        f = w[3:6]
+        tau = w[0:3] + np.cross(R @ self._arm, f)  # about the centre of mass
+        v_new = v + (h / self._m) * f
+        p_new = p + h * v_new
+        Iw = self._I @ wb
+        wb_new = wb + h * (self._I_inv @ (R.T @ tau - np.cross(wb, Iw)))
+        R_new = R @ rotation_exp(h * wb_new)
+        # Keep R a rotation against round-off (polar projection).
+        u, _, vt = np.linalg.svd(R_new)
+        R_new = u @ vt
+        out = discrete_state.get_mutable_vector(0)
+        out.SetFromVector(np.concatenate([p_new, v_new, R_new.ravel(), wb_new]))
