@@ -128,6 +128,8 @@ def _stiffness_model(params: DockingLoopParams):
     if params.stiffness_model == "given":
         return constant_stiffness(np.array(params.compensator_stiffness_matrix))
     model = DockingContact(params.contact)  # the rig computer's own contact model
+    if params.stiffness_model == "nominal":
+        return constant_stiffness(*model.stiffness(params.nominal_pose()))
     return model.stiffness
 
 

@@ -20,7 +20,8 @@ class DockingMetrics:
         normal (the docking axis z) [1].
     v_in_m_per_s, v_out_m_per_s : float
         That velocity at the last tick before the model first felt a wrench,
-        and at the end of the record.
+        and just after the last wrench it felt (at separation: a turning
+        body's port keeps changing its normal velocity afterwards).
     energy_ratio : float
         Kinetic energy (translation and rotation) of the spacecraft model at
         the end over before the contact [1].
@@ -79,7 +80,10 @@ def docking_metrics(
         raise ValueError("the model never felt the contact: the compensated wrench stayed 0")
     i_in = max(int(felt[0]) - 1, 0)
     v_in = float(port_velocity_m_per_s[i_in, 2])
-    v_out = float(port_velocity_m_per_s[-1, 2])
+    # A turning body's port keeps changing its normal velocity after the
+    # contact: take it at separation, just after the last wrench the model felt.
+    i_out = min(int(felt[-1]) + 1, len(t) - 1)
+    v_out = float(port_velocity_m_per_s[i_out, 2])
     e_in = float(kinetic_energy_j[i_in])
     e_out = float(kinetic_energy_j[-1])
     h = float(np.median(np.diff(t))) if t.size > 1 else 0.0

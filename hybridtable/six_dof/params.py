@@ -37,8 +37,8 @@ __all__ = [
 
 TABLE_BACKENDS: tuple[str, ...] = ("model", "stewart")
 #: How the MDC gets its 6x6 stiffness: linearized at the table's pose at every
-#: tick of the contact, or a given matrix.
-STIFFNESS_MODELS: tuple[str, ...] = ("linearized", "given")
+#: tick of the contact, linearized once at the nominal docked pose, or given.
+STIFFNESS_MODELS: tuple[str, ...] = ("linearized", "nominal", "given")
 
 
 def inertia_matrix(name: str, value) -> np.ndarray:
@@ -370,6 +370,12 @@ class DockingLoopParams:
         """On-axis contact frequency sqrt(k / m) / 2 pi (Hz)."""
         k = self.contact.contact_stiffness_n_per_m
         return math.sqrt(k / self.spacecraft.mass_kg) / (2.0 * math.pi)
+
+    def nominal_pose(self) -> np.ndarray:
+        """The nominal docked pose ``q`` (6): aligned, on axis, every pad
+        pressed by half the undamped peak penetration ``v0 / omega`` (m)."""
+        omega = 2.0 * math.pi * self.contact_frequency_hz
+        return np.array([0.0, 0.0, 0.5 * self.approach.initial_velocity_m_per_s / omega, 0, 0, 0])
 
     def with_(self, **changes) -> DockingLoopParams:
         """A copy with some fields changed (validated again)."""

@@ -1,0 +1,220 @@
+"""A 6-DoF docking scenario file (TOML) -> :class:`DockingLoopParams`.
+
+Sections and keys (SI units; every key optional unless marked)::
+
+    title = "..."                       # free text
+    [spacecraft]   mass_kg | contact_frequency_hz (one of them, required),
+                   inertia_kg_m2 (3 numbers or 3x3), port_distance_m,
+                   lateral_offset_m = [x, y]
+    [contact]      contact_stiffness_n_per_m (required), contact_dissipation_s_per_m,
+                   friction_coefficient, pad_count, ring_radius_m, pad_radius_m
+    [approach]     initial_velocity_m_per_s, initial_gap_m, misalignment_deg = [roll, pitch]
+    [rig]          sample_rate_hz, sensor_delay_s, force_noise_n, moment_noise_n_m,
+                   seed, duration_s
+    [table]        backend = "model" | "stewart", response_hz (a number or "inf"),
+                   damping_ratio
+    [table.stewart]           StewartParams fields (not geometry or time_step_s:
+                              the plant steps at the rig's tick)
+    [table.stewart.geometry]  StewartGeometry fields
+    [compensator]  name, lead_time_s, stiffness_model = "linearized" | "nominal" |
+                   "given", stiffness_matrix (6x6), force_deadband_n
+
+Any other key, a wrong type or a value out of range raises
+:class:`~hybridtable.errors.SpecError` in one line naming the file and the key.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from collections.abc import Mapping
+from dataclasses import fields
+from pathlib import Path
+from typing import Any
+
+from hybridtable.errors import ParameterError, SpecError
+from hybridtable.six_dof.params import (
+    ApproachParams,
+    DockingContactParams,
+    DockingLoopParams,
+    RigidBodyParams,
+)
+
+__all__ = ["load_scenario", "parse_scenario", "SCENARIO_KEYS"]
+
+#: The keys of each section.
+SCENARIO_KEYS: dict[str, tuple[str, ...]] = {
+    "": ("title", "spacecraft", "contact", "approach", "rig", "table", "compensator"),
+    "spacecraft": (
+        "mass_kg",
+        "contact_frequency_hz",
+        "inertia_kg_m2",
+        "port_distance_m",
+        "lateral_offset_m",
+    ),
+    "contact": tuple(f.name for f in fields(DockingContactParams)),
+    "approach": ("initial_velocity_m_per_s", "initial_gap_m", "misalignment_deg"),
+    "rig": (
+        "sample_rate_hz",
+        "sensor_delay_s",
+        "force_noise_n",
+        "moment_noise_n_m",
+        "seed",
+        "duration_s",
+    ),
+    "table": ("backend", "response_hz", "damping_ratio", "stewart"),
+    "compensator": (
+        "name",
+        "lead_time_s",
+        "stiffness_model",
+        "stiffness_matrix",
+        "force_deadband_n",
+    ),
+}
+
+
+def load_scenario(path: str | Path, **overrides: Any) -> DockingLoopParams:
+    """Read and check a scenario file; ``overrides`` replace fields of the
+    result (e.g. ``compensator="SDC"``).
+
+    Raises
+    ------
+    SpecError
+        One line naming the file and the key.
+    """
+    from hybridtable._files import read_user_text
+
+    path = Path(path)
+    text = read_user_text(path, SpecError)
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise SpecError(f"{path}: not valid TOML ({err})") from None
+    return parse_scenario(raw, str(path), **overrides)
+
+
+def parse_scenario(raw: Mapping[str, Any], source: str = "<scenario>", **overrides: Any):
+    """:class:`DockingLoopParams` from a scenario's parsed TOML."""
+    try:
+        params = _parse(raw)
+        return params.with_(**overrides) if overrides else params
+    except SpecError as err:
+        raise SpecError(f"{source}: {err}") from None
+    except ParameterError as err:
+        raise SpecError(f"{source}: {err}") from None
+
+
+def _section(raw: Mapping[str, Any], name: str) -> dict[str, Any]:
+    value = raw.get(name, {})
+    if not isinstance(value, Mapping):
+        raise SpecError(f"[{name}] must be a table (got {value!r})")
+    allowed = SCENARIO_KEYS[name]
+    for key in value:
+        if key not in allowed:
+            raise SpecError(f"[{name}] unknown key {key!r} (known: {', '.join(allowed)})")
+    return dict(value)
+
+
+def _number(section: str, key: str, value: Any) -> Any:
+    if isinstance(value, bool) or not isinstance(value, int | float | list):
+        raise SpecError(f"[{section}] {key} must be a number (got {value!r})")
+    return value
+
+
+def _keyed(section: str, key: str, build):
+    try:
+        return build()
+    except SpecError:
+        raise
+    except ParameterError as err:
+        where = f"[{section}] {key}:" if key else f"[{section}]"
+        raise SpecError(f"{where} {err}") from None
+
+
+def _parse(raw: Mapping[str, Any]) -> DockingLoopParams:
+    for key in raw:
+        if key not in SCENARIO_KEYS[""]:
+            raise SpecError(
+                f"unknown section or key {key!r} (known: {', '.join(SCENARIO_KEYS[''])})"
+            )
+    title = raw.get("title", "")
+    if not isinstance(title, str):
+        raise SpecError(f"title must be text (got {title!r})")
+    sc = _section(raw, "spacecraft")
+    ct = _section(raw, "contact")
+    ap = _section(raw, "approach")
+    rig = _section(raw, "rig")
+    tb = _section(raw, "table")
+    cp = _section(raw, "compensator")
+    for section, values in (("spacecraft", sc), ("contact", ct), ("approach", ap), ("rig", rig)):
+        for key, value in values.items():
+            if key not in ("seed", "pad_count"):
+                _number(section, key, value)
+    if "contact_stiffness_n_per_m" not in ct:
+        raise SpecError("[contact] contact_stiffness_n_per_m is required")
+    contact = _keyed("contact", "", lambda: DockingContactParams(**ct))
+    k = contact.contact_stiffness_n_per_m
+    if ("mass_kg" in sc) == ("contact_frequency_hz" in sc):
+        raise SpecError("[spacecraft] give exactly one of mass_kg and contact_frequency_hz")
+    if "contact_frequency_hz" in sc:
+        f = sc.pop("contact_frequency_hz")
+        if isinstance(f, bool) or not isinstance(f, int | float) or not f > 0 or math.isinf(f):
+            raise SpecError(f"[spacecraft] contact_frequency_hz must be a number > 0 (got {f!r})")
+        sc["mass_kg"] = k / (2.0 * math.pi * f) ** 2
+    body = _keyed("spacecraft", "", lambda: RigidBodyParams(**sc))
+    if "misalignment_deg" in ap:
+        value = ap.pop("misalignment_deg")
+        if not isinstance(value, list) or len(value) != 2:
+            raise SpecError(f"[approach] misalignment_deg must be [roll, pitch] (got {value!r})")
+        ap["misalignment_rad"] = [
+            math.radians(_number("approach", "misalignment_deg", v)) for v in value
+        ]
+    approach = _keyed("approach", "", lambda: ApproachParams(**ap))
+    kwargs: dict[str, Any] = dict(rig)
+    if "backend" in tb:
+        kwargs["table"] = tb["backend"]
+    if "response_hz" in tb:
+        value = tb["response_hz"]
+        if value == "inf":
+            value = math.inf
+        kwargs["table_response_hz"] = _number("table", "response_hz", value)
+    if "damping_ratio" in tb:
+        kwargs["table_damping_ratio"] = _number("table", "damping_ratio", tb["damping_ratio"])
+    if "stewart" in tb:
+        if kwargs.get("table") != "stewart":
+            raise SpecError('[table.stewart] needs backend = "stewart"')
+        kwargs["stewart"] = _stewart(tb["stewart"])
+    renames = {
+        "name": "compensator",
+        "stiffness_matrix": "compensator_stiffness_matrix",
+    }
+    for key, value in cp.items():
+        kwargs[renames.get(key, key)] = value
+    return DockingLoopParams(body, contact, approach, **kwargs)
+
+
+def _stewart(value: Any):
+    from hybridtable.stewart.geometry import StewartGeometry
+    from hybridtable.stewart.params import StewartParams
+
+    if not isinstance(value, Mapping):
+        raise SpecError(f"[table.stewart] must be a table (got {value!r})")
+    allowed = tuple(f.name for f in fields(StewartParams) if f.name not in ("time_step_s",))
+    values = dict(value)
+    for key in values:
+        if key not in allowed:
+            raise SpecError(f"[table.stewart] unknown key {key!r} (known: {', '.join(allowed)})")
+    if "geometry" in values:
+        geometry = values.pop("geometry")
+        known = tuple(f.name for f in fields(StewartGeometry))
+        if not isinstance(geometry, Mapping):
+            raise SpecError("[table.stewart.geometry] must be a table")
+        for key in geometry:
+            if key not in known:
+                raise SpecError(
+                    f"[table.stewart.geometry] unknown key {key!r} (known: {', '.join(known)})"
+                )
+        values["geometry"] = _keyed(
+            "table.stewart.geometry", "", lambda: StewartGeometry(**geometry)
+        )
+    return _keyed("table.stewart", "", lambda: StewartParams(**values))
