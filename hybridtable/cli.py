@@ -24,6 +24,7 @@ from hybridtable.commands import (
     margins,
     reproduce,
     simulate,
+    simulate6,
     sweep,
 )
 from hybridtable.commands._common import add_force_argument
@@ -40,6 +41,7 @@ __all__ = [
 #: Each keeps its heavy imports inside ``run`` so that ``--help`` starts fast.
 COMMANDS = (
     simulate,
+    simulate6,
     reproduce,
     compare,
     diagnose,

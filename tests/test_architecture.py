@@ -42,6 +42,7 @@ LAYERS: dict[str, int] = {
     "analysis": 5,
     "diagnosis": 5,
     "studies": 5,
+    "six_dof": 5,
     "sweeps": 6,
     "reports": 7,
     "commands": 8,

@@ -1,0 +1,87 @@
+"""What ``simulate6`` says and draws: the verdict, the metrics' lines, the wrench plot."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+__all__ = ["docking_verdict", "format_docking", "plot_wrench"]
+
+
+def docking_verdict(compensator: str, metrics, reference) -> str:
+    """One plain sentence: the energy the contact returned against the
+    ideal rig's (no delay, ideal table) and the CoR along the normal."""
+    er, er0 = metrics.energy_ratio, reference.energy_ratio
+    excess = er - er0
+    if abs(excess) <= 0.02:
+        judgement = "matches the ideal rig"
+    elif excess > 0:
+        judgement = f"creates {100 * excess:.1f} % more energy than the ideal rig"
+    else:
+        judgement = f"removes {100 * -excess:.1f} % more energy than the ideal rig"
+    return (
+        f"{compensator}: the docking contact {judgement} (energy ratio {er:.4f} against "
+        f"{er0:.4f}); CoR along the normal {metrics.cor_normal:.4f} "
+        f"(ideal rig {reference.cor_normal:.4f})."
+    )
+
+
+def format_docking(compensator: str, metrics, reference, modes, wall_time_s: float, sim_s: float):
+    """The lines after the verdict."""
+    m = metrics
+    lines = [
+        f"{compensator}: CoR normal {m.cor_normal:.5f}  energy ratio {m.energy_ratio:.5f}  "
+        f"peak force {m.peak_force_n:.1f} N  peak moment {m.peak_moment_n_m:.1f} N m  "
+        f"contact {m.contact_duration_s:.3f} s",
+        f"after the contact: rotation {m.rotational_energy_j:.4g} J, lateral velocity "
+        f"{1000 * m.lateral_velocity_m_per_s:.3f} mm/s",
+    ]
+    if modes is not None:
+        crit = (
+            "none up to 50 ms"
+            if math.isinf(modes.critical_delay_s)
+            else f"{1000 * modes.critical_delay_s:.0f} ms"
+        )
+        slow = ", ".join(
+            f"{f:.3f} Hz ({g:+.4f}/s)"
+            for f, g in list(zip(modes.frequencies_hz, modes.growth_rates_per_s, strict=True))[:3]
+        )
+        lines.append(
+            f"linearized in contact: {'stable' if modes.stable else 'a mode grows'} "
+            f"(slowest modes {slow}); growth starts at a sensor delay of {crit}"
+        )
+    rtf = sim_s / wall_time_s if wall_time_s > 0 else math.inf
+    lines.append(f"{sim_s:.2f} s simulated in {wall_time_s:.2f} s ({rtf:.2f} x real time)")
+    return "\n".join(lines)
+
+
+def plot_wrench(run, path: str | Path) -> Path:
+    """The six components of the actual and compensated wrench over time."""
+    import matplotlib.pyplot as plt
+
+    t = run.time_s
+    w = run.log["contact_wrench"]
+    wc = run.log["compensated_wrench"]
+    fig, axes = plt.subplots(3, 2, figsize=(10, 7.5), sharex=True)
+    labels = ("x", "y", "z")
+    for i in range(3):
+        ax = axes[i, 0]
+        ax.plot(t, w[:, 3 + i], label="contact")
+        ax.plot(t, wc[:, 3 + i], "--", label="fed to the model")
+        ax.set_ylabel(f"force {labels[i]} [N]")
+        ax = axes[i, 1]
+        ax.plot(t, w[:, i], label="contact")
+        ax.plot(t, wc[:, i], "--", label="fed to the model")
+        ax.set_ylabel(f"moment {labels[i]} [N m]")
+    for ax in axes[-1]:
+        ax.set_xlabel("time [s]")
+    axes[0, 0].legend(loc="best", fontsize=8)
+    p = run.params
+    fig.suptitle(
+        f"{p.compensator}: wrench on the spacecraft at the port (target frame), "
+        f"delay {1000 * p.sensor_delay_s:g} ms"
+    )
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return Path(path)

@@ -1,0 +1,204 @@
+"""Margins of the 6-DoF loop in contact: the linearized MIMO loop at one tick.
+
+The loop is linearized about the docked pose (:meth:`DockingLoopParams.nominal_pose`,
+every pad pressed; the contact's K and C from Drake's contact) with the
+spacecraft's rigid body, the table model, the F/T delay of ``M`` ticks and
+the compensator, as the map of one rig-computer tick ``x[k+1] = A x[k]``
+(state: the body's pose and twist deviations, the table's state, the delay
+line, the compensator's stored wrench). Its eigenvalues ``lambda`` give the
+modes in contact, ``s = ln(lambda) / h``: a mode with ``Re s > 0`` grows, i.e.
+the loop pumps energy into it. Eigenvalues at 1 are the free directions the
+frictionless contact does not hold (lateral translation, spin about the
+axis), left out. The critical delay is the shortest sensor delay whose loop
+has a growing mode (with the lead kept at the scenario's value).
+
+The Stewart table is linearized as the table model at its identified
+response (``table_response_hz``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from hybridtable.six_dof.contact import DockingContact
+from hybridtable.six_dof.params import DockingLoopParams
+from hybridtable.six_dof.pose import skew
+from hybridtable.six_dof.table import table_tick_matrices
+
+__all__ = ["ContactModes", "contact_modes", "tick_matrix", "critical_delay_s"]
+
+#: Eigenvalues closer than this to 1 are free directions (not modes in contact).
+_FREE = 1e-6
+#: How many of the slowest modes are reported (the contact's; the table's and
+#: the delay line's are far faster).
+_REPORTED = 6
+#: A growth rate below this (1/s) counts as neutral (round-off of marginal modes).
+_NEUTRAL_PER_S = 1e-6
+
+
+@dataclass(frozen=True)
+class ContactModes:
+    """The modes of the linearized loop in contact.
+
+    Attributes
+    ----------
+    frequencies_hz : tuple of float
+        Damped frequency ``|Im s| / 2 pi`` of each of the six slowest modes
+        (one per complex pair), slowest first.
+    growth_rates_per_s : tuple of float
+        ``Re s`` of each (> 0: the mode grows).
+    damping_ratios : tuple of float
+        ``-Re s / |s|`` of each.
+    max_growth_rate_per_s : float
+        Over those modes (the faster ones are the table's and the delay
+        line's, which decay).
+    stable : bool
+        No mode in contact grows.
+    critical_delay_s : float
+        The shortest sensor delay at which a mode grows (``math.inf``: none
+        up to the scan's end; 0: it grows without delay).
+    spectral_radius : float
+        Largest ``|lambda|`` over the modes in contact.
+    """
+
+    frequencies_hz: tuple[float, ...]
+    growth_rates_per_s: tuple[float, ...]
+    damping_ratios: tuple[float, ...]
+    max_growth_rate_per_s: float
+    stable: bool
+    critical_delay_s: float
+    spectral_radius: float
+
+    def to_dict(self) -> dict:
+        return {
+            "frequencies_hz": list(self.frequencies_hz),
+            "growth_rates_per_s": list(self.growth_rates_per_s),
+            "damping_ratios": list(self.damping_ratios),
+            "max_growth_rate_per_s": self.max_growth_rate_per_s,
+            "stable": self.stable,
+            "critical_delay_s": self.critical_delay_s,
+            "spectral_radius": self.spectral_radius,
+        }
+
+
+def tick_matrix(
+    params: DockingLoopParams, K: np.ndarray, C: np.ndarray, delay_ticks: int | None = None
+) -> np.ndarray:
+    """``A`` of the linearized loop over one tick (see the module docstring),
+    with the contact's ``K``, ``C`` (6x6) and a delay of ``delay_ticks``
+    (default: the scenario's)."""
+    h = params.sample_period_s
+    M = params.delay_ticks if delay_ticks is None else int(delay_ticks)
+    body = params.spacecraft
+    m = body.mass_kg
+    r = body.port_position_m  # attitude deviations about the aligned pose
+    I_inv = np.linalg.inv(body.inertia)
+    ideal = math.isinf(params.table_response_hz) or params.table == "stewart"
+    if params.table == "stewart" and not math.isinf(params.table_response_hz):
+        ideal = False
+    tick = (
+        None
+        if ideal
+        else table_tick_matrices(params.table_response_hz, params.table_damping_ratio, h)
+    )
+    kind = params.compensator
+    lead = params.effective_lead_time_s if kind in ("SDC", "SDMDC") else 0.0
+    mdc = kind in ("MDC", "SDMDC")
+    n_table = 0 if tick is None else 12
+    sizes = {"body": 12, "table": n_table, "delay": 6 * M, "prev": 6}
+    n = sum(sizes.values())
+    start = {}
+    i = 0
+    for name, size in sizes.items():
+        start[name] = i
+        i += size
+    # The port's pose and twist as linear maps of the body state [p, th, v, w].
+    G = np.zeros((12, 12))
+    G[0:3, 0:3] = np.eye(3)
+    G[0:3, 3:6] = -skew(r)
+    G[3:6, 3:6] = np.eye(3)
+    G[6:9, 6:9] = np.eye(3)
+    G[6:9, 9:12] = -skew(r)
+    G[9:12, 9:12] = np.eye(3)
+
+    def step(x: np.ndarray) -> np.ndarray:
+        b = x[0:12]
+        command = G @ b
+        out = np.zeros(n)
+        if tick is None:
+            table = command
+        else:
+            Phi, Gamma = tick
+            s = x[start["table"] : start["table"] + 12].reshape(6, 2)
+            y = s @ Phi.T + np.outer(command[:6], Gamma[:, 0])
+            table = np.concatenate([y[:, 0], y[:, 1]])
+            out[start["table"] : start["table"] + 12] = y.ravel()
+        w_act = -K @ table[:6] - C @ table[6:]
+        line = x[start["delay"] : start["delay"] + 6 * M].reshape(M, 6) if M else None
+        w_mea = w_act if M == 0 else line[0]
+        if M:
+            shifted = np.vstack([line[1:], w_act[None, :]])
+            out[start["delay"] : start["delay"] + 6 * M] = shifted.ravel()
+        prev = x[start["prev"] : start["prev"] + 6]
+        w = w_mea + (lead / h) * (w_mea - prev)
+        if mdc:
+            w = w - K @ (command[:6] - table[:6]) - C @ (command[6:] - table[6:])
+        out[start["prev"] : start["prev"] + 6] = w_mea
+        f, tau = w[3:], w[:3] + np.cross(r, w[3:])
+        v = b[6:9] + h * f / m
+        om = b[9:12] + h * (I_inv @ tau)
+        out[0:3] = b[0:3] + h * v
+        out[3:6] = b[3:6] + h * om
+        out[6:9] = v
+        out[9:12] = om
+        return out
+
+    return np.column_stack([step(e) for e in np.eye(n)])
+
+
+def _modes(A: np.ndarray, h: float):
+    lam = np.linalg.eigvals(A)
+    lam = lam[np.abs(lam - 1.0) > _FREE]
+    lam = lam[np.abs(lam) > 1e-12]
+    s = np.log(lam.astype(complex)) / h
+    keep = s.imag >= 0.0
+    return lam[keep], s[keep]
+
+
+def critical_delay_s(
+    params: DockingLoopParams, K: np.ndarray, C: np.ndarray, max_delay_s: float = 0.05
+) -> float:
+    """The shortest sensor delay (a whole number of ticks, up to
+    ``max_delay_s``) at which the linearized loop has a growing mode."""
+    h = params.sample_period_s
+    for ticks in range(0, int(round(max_delay_s / h)) + 1):
+        _, s = _modes(tick_matrix(params, K, C, ticks), h)
+        if s.size and float(np.max(s.real)) > _NEUTRAL_PER_S:
+            return ticks * h
+    return math.inf
+
+
+def contact_modes(params: DockingLoopParams, max_delay_s: float = 0.05) -> ContactModes:
+    """The modes of the loop linearized in contact, and its critical delay."""
+    contact = DockingContact(params.contact)
+    K, C = contact.stiffness(params.nominal_pose())
+    h = params.sample_period_s
+    lam, s = _modes(tick_matrix(params, K, C), h)
+    # Modes of the contact, not of the table or the delay line: below the
+    # Nyquist rate and among the slowest.
+    order = np.argsort(np.abs(s))[:_REPORTED]
+    s = s[order]
+    lam = lam[order]
+    growth = s.real
+    return ContactModes(
+        frequencies_hz=tuple(float(abs(v.imag)) / (2 * math.pi) for v in s),
+        growth_rates_per_s=tuple(float(v) for v in growth),
+        damping_ratios=tuple(float(-v.real / abs(v)) if abs(v) > 0 else 0.0 for v in s),
+        max_growth_rate_per_s=float(growth.max()) if growth.size else 0.0,
+        stable=bool(not growth.size or growth.max() <= _NEUTRAL_PER_S),
+        critical_delay_s=critical_delay_s(params, K, C, max_delay_s),
+        spectral_radius=float(np.abs(lam).max()) if lam.size else 1.0,
+    )
