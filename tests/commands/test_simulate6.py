@@ -1,0 +1,117 @@
+"""``hybridtable simulate6 SCENARIO.toml``: its JSON, its verdict, its refusals."""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import pytest
+
+from hybridtable.cli import main
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "six_dof"
+
+
+def _scenario(tmp_path: Path, text: str, name: str = "s.toml") -> Path:
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+BASE = (EXAMPLES / "on_axis.toml").read_text()
+
+
+def test_on_axis_example_gives_the_1d_numbers_and_a_verdict(tmp_path, capsys):
+    out = tmp_path / "r.json"
+    plot = tmp_path / "w.png"
+    argv = ["simulate6", str(EXAMPLES / "on_axis.toml"), "--compensator", "none"]
+    assert main([*argv, "--json", str(out), "--plot", str(plot), "--no-progress"]) == 0
+    text = capsys.readouterr().out.splitlines()
+    assert text[0].startswith("none: the docking contact creates")
+    doc = json.loads(out.read_text())
+    for key in ("cor_normal", "energy_ratio", "peak_force_n", "peak_moment_n_m", "margins"):
+        assert key in doc
+    # The 1-D sampled loop at 1 kHz gives 1.15548 for this point.
+    assert doc["cor_normal"] == pytest.approx(1.15548, abs=1e-4)
+    assert doc["peak_moment_n_m"] < 1e-6  # on axis: no moment
+    assert doc["reference"]["energy_ratio"] == pytest.approx(1.0, abs=1e-6)
+    # Undamped contact, 5 ms delay, no compensation: the axial mode grows.
+    assert doc["margins"]["stable"] is False
+    assert plot.stat().st_size > 10_000
+    # Outputs are not replaced without --force.
+    assert main([*argv, "--json", str(out), "--no-progress"]) == 2
+    assert "--force" in capsys.readouterr().err
+
+
+def test_json_to_stdout_is_only_json(capsys):
+    argv = ["simulate6", str(EXAMPLES / "offset.toml"), "--json", "-", "--no-reference"]
+    assert main(argv) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["compensator"] == "SDMDC"
+    assert doc["peak_moment_n_m"] > 10.0  # off axis the force has a moment
+    assert doc["reference"] is None and "reference null" in doc["note"]
+
+
+@pytest.mark.parametrize(
+    "change,words",
+    [
+        (
+            ("inertia_kg_m2 = [1689.0, 1689.0, 1689.0]", "inertia_kg_m2 = [100.0, 100.0, 1000.0]"),
+            "triangle inequality",
+        ),
+        (
+            ("inertia_kg_m2 = [1689.0, 1689.0, 1689.0]", "inertia_kg_m2 = [1689.0, -5.0, 1689.0]"),
+            "inertia_kg_m2 is unphysical",
+        ),
+        (
+            (
+                "inertia_kg_m2 = [1689.0, 1689.0, 1689.0]",
+                "inertia_kg_m2 = [[1, 2, 0], [0, 1, 0], [0, 0, 1]]",
+            ),
+            "symmetric",
+        ),
+        (("sensor_delay_s = 0.005", "sensor_delay_s = 0.0055"), "sensor_delay_s"),
+        (("pad_count = 8", "pad_count = 2"), "pad_count"),
+        (("pad_count = 8", "pad_counts = 8"), "unknown key 'pad_counts'"),
+        (('name = "SDMDC"', 'name = "PID"'), "compensator must be one of"),
+        (("response_hz = 25.0", 'response_hz = "fast"'), "response_hz must be a number"),
+        (("misalignment_deg = [0.0, 0.0]", "misalignment_deg = [0.0, 45.0]"), "misalignment"),
+        (("[rig]", "[rig\n"), "not valid TOML"),
+        (
+            ('stiffness_model = "linearized"', 'stiffness_model = "given"'),
+            "needs compensator_stiffness_matrix",
+        ),
+    ],
+)
+def test_a_bad_scenario_gets_one_line_and_exit_2(tmp_path, capsys, change, words):
+    path = _scenario(tmp_path, BASE.replace(*change))
+    assert BASE.replace(*change) != BASE
+    out = tmp_path / "r.json"
+    assert main(["simulate6", str(path), "--json", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1, err
+    assert words in err[0] and str(path) in err[0]
+    assert not out.exists()
+
+
+def test_a_given_stiffness_matrix_is_used(tmp_path, capsys):
+    """A given 6x6 K equal to the on-axis linearization gives the nominal MDC."""
+    k = [[0.0] * 6 for _ in range(6)]
+    k[5][2] = 1e5
+    rows = ", ".join("[" + ", ".join(f"{v:g}" for v in row) + "]" for row in k)
+    text = BASE.replace(
+        'stiffness_model = "linearized"',
+        f'stiffness_model = "given"\nstiffness_matrix = [{rows}]',
+    ).replace('name = "SDMDC"', 'name = "MDC"')
+    path = _scenario(tmp_path, text)
+    assert main(["simulate6", str(path), "--json", "-", "--no-reference"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["cor_normal"] == pytest.approx(1.05022, abs=1e-4)  # the 1-D MDC
+
+
+def test_help_gives_the_plot_units(capsys):
+    with pytest.raises(SystemExit):
+        main(["simulate6", "--help"])
+    text = capsys.readouterr().out
+    assert re.search(r"--plot FILE.png .*\[N, N m\]", " ".join(text.split()))
