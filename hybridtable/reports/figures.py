@@ -13,7 +13,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 from hybridtable._files import atomic_path  # noqa: E402
 from hybridtable.loop.simulation import SimulationResult  # noqa: E402
 
-__all__ = ["plot_run", "plot_velocities", "plot_forces"]
+__all__ = ["plot_run", "plot_velocities", "plot_forces", "save_figure"]
 
 
 #: Line styles of overlaid runs, so that coinciding curves stay visible.
@@ -32,7 +32,8 @@ def _contact_window(results: Sequence[SimulationResult], margin_s: float = 0.1):
     return min(starts) - margin_s, max(ends) + margin_s
 
 
-def _save(fig, path: str | Path) -> Path:
+def save_figure(fig, path: str | Path) -> Path:
+    """Lay out ``fig``, save it to ``path`` atomically (creating the folder) and close it."""
     fig.tight_layout()
     path = Path(path)
     try:
@@ -64,7 +65,7 @@ def _overlay(
     ax.set_title(title)
     ax.legend(loc="best", fontsize=8)
     ax.grid(True, alpha=0.3)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_velocities(
@@ -109,7 +110,7 @@ def plot_forces(
     dax.set_ylabel("f_comp - f_act [N]")
     dax.set_xlabel("time [s]")
     ax.set_title(title)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_run(result: SimulationResult, path: str | Path) -> Path:
@@ -136,4 +137,4 @@ def plot_run(result: SimulationResult, path: str | Path) -> Path:
         f"{p.compensator}, T_fms {p.sensor_delay_s * 1e3:g} ms, table {p.table_response_hz:g} Hz: "
         f"CoR {m.cor:.4f}"
     )
-    return _save(fig, path)
+    return save_figure(fig, path)

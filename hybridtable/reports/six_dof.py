@@ -59,6 +59,8 @@ def plot_wrench(run, path: str | Path) -> Path:
     """The six components of the actual and compensated wrench over time."""
     import matplotlib.pyplot as plt
 
+    from hybridtable.reports.figures import save_figure
+
     t = run.time_s
     w = run.log["contact_wrench"]
     wc = run.log["compensated_wrench"]
@@ -81,7 +83,4 @@ def plot_wrench(run, path: str | Path) -> Path:
         f"{p.compensator}: wrench on the spacecraft at the port (target frame), "
         f"delay {1000 * p.sensor_delay_s:g} ms"
     )
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return Path(path)
+    return save_figure(fig, path)
