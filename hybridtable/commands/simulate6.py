@@ -149,9 +149,13 @@ def run(args: argparse.Namespace) -> int:
     if args.html:
         from hybridtable.six_dof.view import write_docking_html
 
-        out["html"] = write_docking_html(result, args.html)
+        drawn = write_docking_html(result, args.html, overwrite=bool(args.force))
+        out["html"] = drawn
         if not quiet:
-            print(f"wrote {args.html}")
+            print(
+                f"wrote {args.html} (motion magnified x{drawn['magnify']:g}, force arrow "
+                f"1 m per {drawn['force_scale_n_per_m']:g} N)"
+            )
     if args.json:
         write_json(args.json, out)
     return 0

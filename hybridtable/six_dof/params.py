@@ -251,9 +251,13 @@ class DockingLoopParams:
         ``"SDMDC"`` or a plug-in).
     lead_time_s : float or None
         SDC lead; None: the sensor delay.
-    stiffness_model : {"linearized", "given"}
-        The MDC's 6x6 stiffness: the Drake contact linearized at the table's
-        pose at every tick, or ``compensator_stiffness_matrix``.
+    stiffness_model : {"linearized", "nominal", "given"}
+        The MDC's 6x6 stiffness (and damping): Drake's contact, without
+        friction, linearized at the table's pose at every tick of the contact
+        (zero where the table has left the contact); linearized once at the
+        nominal docked pose (aligned, on axis, every pad pressed by half the
+        undamped peak penetration ``v0 / omega``: on axis the 1-D MDC's
+        constant ``k``); or ``compensator_stiffness_matrix``.
     compensator_stiffness_matrix : 6x6 or None
         ``K`` for ``stiffness_model="given"``, rows/columns ``[x, y, z, rx,
         ry, rz]`` with the moment rows first in the wrench: ``-dw/dq``

@@ -296,10 +296,12 @@ class MotionView:
         if length <= 0.0:
             return
         contact = position + rotation.matrix() @ self._tip_top
+        # The shaft runs from the contact point (0) to the cone's base; the
+        # cone's apex, at -length, is the arrow's tip.
         shaft = max(length - _HEAD_LENGTH_M, 1e-4)
         head = min(1.0, length / _HEAD_LENGTH_M)
         m.SetTransform(ARROW_PATH, RigidTransform(contact), when)
-        m.SetTransform(f"{ARROW_PATH}/shaft", RigidTransform([0.0, 0.0, -length + shaft / 2]), when)
+        m.SetTransform(f"{ARROW_PATH}/shaft", RigidTransform([0.0, 0.0, -shaft / 2]), when)
         m.SetProperty(f"{ARROW_PATH}/shaft", "scale", [1.0, 1.0, shaft], when)
         m.SetTransform(f"{ARROW_PATH}/head", RigidTransform([0.0, 0.0, -length]), when)
         m.SetProperty(f"{ARROW_PATH}/head", "scale", [head, head, head], when)
