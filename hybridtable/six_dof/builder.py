@@ -100,7 +100,7 @@ class DockingLoop:
         sc = self.diagram.GetMutableSubsystemContext(self.spacecraft, root_context)
         sc.SetDiscreteState(body)
         table_state = command.copy()
-        if self.params.table == "model" and np.isfinite(self.params.table_response_hz):
+        if np.isfinite(self.params.table_response_hz):
             # Steady tracking of the approach ramp (the 1-D "tracking" start).
             w = 2.0 * np.pi * self.params.table_response_hz
             table_state[:6] -= 2.0 * self.params.table_damping_ratio / w * command[6:]

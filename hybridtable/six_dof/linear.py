@@ -12,8 +12,8 @@ frictionless contact does not hold (lateral translation, spin about the
 axis), left out. The critical delay is the shortest sensor delay whose loop
 has a growing mode (with the lead kept at the scenario's value).
 
-The Stewart table is linearized as the table model at its identified
-response (``table_response_hz``).
+The Stewart table is linearized as the table model at its legs' reference
+response (``table_response_hz``: that model's on the Stewart table).
 """
 
 from __future__ import annotations
@@ -96,9 +96,7 @@ def tick_matrix(
     m = body.mass_kg
     r = body.port_position_m  # attitude deviations about the aligned pose
     I_inv = np.linalg.inv(body.inertia)
-    ideal = math.isinf(params.table_response_hz) or params.table == "stewart"
-    if params.table == "stewart" and not math.isinf(params.table_response_hz):
-        ideal = False
+    ideal = math.isinf(params.table_response_hz)
     tick = (
         None
         if ideal

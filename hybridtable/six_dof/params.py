@@ -245,7 +245,8 @@ class DockingLoopParams:
         response (``table_response_hz``, ``table_damping_ratio``; inf: the
         ideal table); ``"stewart"``: the Stewart platform's MultibodyPlant.
     table_response_hz, table_damping_ratio : float
-        The table model's response (> 0 or inf; >= 0).
+        The table model's response (> 0 or inf; >= 0). On the Stewart table
+        they are its legs' reference model's (left at inf: taken from it).
     compensator : str
         A registered wrench compensator (``"none"``, ``"SDC"``, ``"MDC"``,
         ``"SDMDC"`` or a plug-in).
@@ -352,6 +353,23 @@ class DockingLoopParams:
             if not isinstance(stewart, StewartParams):
                 raise ParameterError("stewart must be a StewartParams")
             s(self, "stewart", stewart)
+            # One response for one table: the legs' reference model's.
+            ref = stewart.reference_response_hz
+            ref_hz = math.inf if ref is None else ref
+            if math.isinf(self.table_response_hz):
+                s(self, "table_response_hz", ref_hz)
+                s(self, "table_damping_ratio", stewart.reference_damping_ratio)
+            elif ref is None or not (
+                math.isclose(self.table_response_hz, ref_hz, rel_tol=1e-9)
+                and math.isclose(
+                    self.table_damping_ratio, stewart.reference_damping_ratio, abs_tol=1e-12
+                )
+            ):
+                raise ParameterError(
+                    f"table_response_hz {self.table_response_hz:g} Hz / table_damping_ratio "
+                    f"{self.table_damping_ratio:g} must be the Stewart table's reference model "
+                    f"({ref_hz:g} Hz / {stewart.reference_damping_ratio:g}): give it once"
+                )
 
     # -- derived --------------------------------------------------------
     @property

@@ -180,10 +180,19 @@ def _parse(raw: Mapping[str, Any]) -> DockingLoopParams:
         kwargs["table_response_hz"] = _number("table", "response_hz", value)
     if "damping_ratio" in tb:
         kwargs["table_damping_ratio"] = _number("table", "damping_ratio", tb["damping_ratio"])
-    if "stewart" in tb:
-        if kwargs.get("table") != "stewart":
-            raise SpecError('[table.stewart] needs backend = "stewart"')
-        kwargs["stewart"] = _stewart(tb["stewart"])
+    if "stewart" in tb and kwargs.get("table") != "stewart":
+        raise SpecError('[table.stewart] needs backend = "stewart"')
+    if kwargs.get("table") == "stewart":
+        # [table] response_hz / damping_ratio are the legs' reference model.
+        stewart = dict(tb.get("stewart", {}))
+        for key, field_name in (
+            ("table_response_hz", "reference_response_hz"),
+            ("table_damping_ratio", "reference_damping_ratio"),
+        ):
+            if key in kwargs and field_name not in stewart:
+                value = kwargs[key]
+                stewart[field_name] = None if value == math.inf else value
+        kwargs["stewart"] = _stewart(stewart)
     renames = {
         "name": "compensator",
         "stiffness_matrix": "compensator_stiffness_matrix",

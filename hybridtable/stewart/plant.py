@@ -27,6 +27,7 @@ drake 1.51); the servo then is a sampled PD loop, whose response
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -187,6 +188,7 @@ def add_stewart_plant(
     params: StewartParams,
     contact_stiffness_n_per_m: float,
     contact_dissipation_s_per_m: float = 0.0,
+    register_devices: Callable[[MultibodyPlant, RigidBody, RigidBody], object] | None = None,
 ) -> StewartPlant:
     """Add the platform's MultibodyPlant and SceneGraph to ``builder``.
 
@@ -200,6 +202,14 @@ def add_stewart_plant(
     contact_dissipation_s_per_m : float
         Hunt–Crossley dissipation d of both geometries (combined: d); see
         :func:`~hybridtable.stewart.hunt_crossley.hunt_crossley_dissipation`.
+    register_devices : callable, optional
+        ``register_devices(plant, device_body, world_body)`` registers other
+        contact devices (collision and visual geometry) on the device welded
+        to the plate and on the world, in place of the spherical tip and the
+        block (e.g. the 6-DoF docking devices); the contact stiffness and
+        dissipation arguments then play no part. The passive device's face
+        belongs at ``contact_face_height_m`` (``home_height_m +
+        device_length_m``) for the devices to touch at the home pose.
     """
     k = check_positive("contact_stiffness_n_per_m", contact_stiffness_n_per_m)
     d = check_nonnegative("contact_dissipation_s_per_m", contact_dissipation_s_per_m)
@@ -264,25 +274,28 @@ def add_stewart_plant(
         )
         return props
 
-    tip = Sphere(g.device_tip_radius_m)
-    X_tip = RigidTransform(g.device_tip_center_m)
-    plant.RegisterCollisionGeometry(device, X_tip, tip, "tip", contact_props())
-    plant.RegisterVisualGeometry(device, X_tip, tip, "tip", blue)
     face_z = g.home_height_m + g.device_length_m
-    # A block large enough that its contact face stays the nearest face of
-    # the tip's centre over the whole workspace (point contact takes the
-    # nearest face): penetration = tip top - face for any reachable pose.
-    depth = 2.0 * (g.leg_max_length_m + g.device_length_m)
-    frame = Box(depth, depth, depth)
-    X_frame = RigidTransform([0.0, 0.0, face_z + depth / 2])
-    plant.RegisterCollisionGeometry(world, X_frame, frame, "passive_device", contact_props())
-    plant.RegisterVisualGeometry(
-        world,
-        RigidTransform([0.0, 0.0, face_z + 0.05]),
-        Box(0.4, 0.4, 0.1),
-        "passive_device",
-        np.array([0.8, 0.5, 0.2, 0.8]),
-    )
+    if register_devices is not None:
+        register_devices(plant, device, world)
+    else:
+        tip = Sphere(g.device_tip_radius_m)
+        X_tip = RigidTransform(g.device_tip_center_m)
+        plant.RegisterCollisionGeometry(device, X_tip, tip, "tip", contact_props())
+        plant.RegisterVisualGeometry(device, X_tip, tip, "tip", blue)
+        # A block large enough that its contact face stays the nearest face of
+        # the tip's centre over the whole workspace (point contact takes the
+        # nearest face): penetration = tip top - face for any reachable pose.
+        depth = 2.0 * (g.leg_max_length_m + g.device_length_m)
+        frame = Box(depth, depth, depth)
+        X_frame = RigidTransform([0.0, 0.0, face_z + depth / 2])
+        plant.RegisterCollisionGeometry(world, X_frame, frame, "passive_device", contact_props())
+        plant.RegisterVisualGeometry(
+            world,
+            RigidTransform([0.0, 0.0, face_z + 0.05]),
+            Box(0.4, 0.4, 0.1),
+            "passive_device",
+            np.array([0.8, 0.5, 0.2, 0.8]),
+        )
 
     # Legs: universal joint at the base, actuated prismatic joint, ball
     # constraint to the plate.

@@ -115,3 +115,25 @@ def test_help_gives_the_plot_units(capsys):
         main(["simulate6", "--help"])
     text = capsys.readouterr().out
     assert re.search(r"--plot FILE.png .*\[N, N m\]", " ".join(text.split()))
+
+
+STEWART = (EXAMPLES / "stewart.toml").read_text()
+
+
+@pytest.mark.parametrize(
+    "change,words",
+    [
+        (("misalignment_deg = [0.0, 2.0]", "misalignment_deg = [0.0, 25.0]"), "leg"),
+        (("initial_gap_m = 0.001", "initial_gap_m = 0.4"), "Stewart"),
+        (("reference_response_hz = 25.0", "reference_response_hz = 30.0"), "reference model"),
+    ],
+)
+def test_a_stewart_scenario_out_of_reach_gets_one_line_and_exit_2(tmp_path, capsys, change, words):
+    """A pose past a leg's stroke or joint limit, a start beyond the
+    workspace, two responses for one table: refused before any simulation."""
+    text = STEWART.replace(*change)
+    assert text != STEWART
+    path = _scenario(tmp_path, text)
+    assert main(["simulate6", str(path), "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and words in err[0], err

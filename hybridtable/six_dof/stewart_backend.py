@@ -1,0 +1,686 @@
+"""The Stewart platform as the table back-end of the 6-DoF docking loop.
+
+The platform of :mod:`hybridtable.stewart` (MultibodyPlant, digital leg
+servo, F/T sensor on the weld of the device to the plate) carries the
+6-DoF docking devices (:func:`~hybridtable.six_dof.contact.register_docking_devices`:
+the ring of pads on the device, the plate fixed above the platform) and
+follows the full pose the spacecraft model commands.
+
+Frames. The Stewart world has its origin at the centre of the base joint
+circle and ``z`` up, the docking axis. The target frame W of the loop has
+the same axes and its origin on the passive plate's face, at
+``home_height_m + device_length_m`` above the base: at the plate's home pose
+the port's face (the pads' tops) just touches the plate. The port frame P is
+fixed on the device, ``device_length_m`` above the plate frame along the
+plate normal, with the plate's axes. So with the port at ``q = [p; theta]``
+(W; ``R = exp([theta]x)``) the plate frame is at
+``o_W + p - R [0, 0, device_length_m]`` in the world.
+
+Each tick of the rig computer (the plant's time step):
+
+1. the full-pose inverse kinematics of the commanded port pose gives the six
+   leg lengths (:meth:`~hybridtable.stewart.geometry.StewartGeometry.inverse_kinematics`
+   checks: stroke, universal-joint limits, plate above the base) and, from the
+   leg Jacobian times the plate's twist, their rates; a pose outside the
+   workspace, or where the leg Jacobian's condition number exceeds
+   :data:`MAX_CONDITION_NUMBER`, raises :class:`~hybridtable.errors.WorkspaceError`;
+2. each leg length passes through the identified actuator response, the
+   discrete second-order reference model of
+   :func:`~hybridtable.stewart.params.reference_matrices` (exact for the
+   command held over the tick; it takes the length only, the rates set its
+   initial state);
+3. the legs' digital PD servo with the static gravity feed-forward of the 1-D
+   :class:`~hybridtable.stewart.backend.LegServo` tracks the reference
+   (without a reference model: the commanded lengths at zero rate, as there);
+4. the F/T sensor (:class:`PoseDeviceSensor`) reads the weld's reaction
+   wrench and corrects it for the device's weight and inertia by
+   Newton–Euler: the contact wrench on the device about the port origin, in
+   W; it is held one tick, as in the 1-D back-end, so the loop reads at tick
+   ``k`` the wrench of the step ending at ``t_k`` with the pose at ``t_k``.
+
+:func:`check_stewart_scenario` refuses, before any simulation, a scenario
+whose approach the platform cannot follow.
+
+Why one module: the kinematics, the three systems of the back-end and the
+scenario check all rest on the frames above (W on the plate's face, the port
+above the plate); kept together, that convention is written once.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+from pydrake.geometry import Meshcat, MeshcatVisualizer, MeshcatVisualizerParams
+from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.multibody.math import SpatialVelocity
+from pydrake.systems.framework import BasicVector, Diagram, DiagramBuilder, LeafSystem
+from pydrake.systems.primitives import LinearSystem, MatrixGain, ZeroOrderHold
+
+from hybridtable.errors import DivergenceError, ParameterError, WorkspaceError
+from hybridtable.six_dof.contact import register_docking_devices
+from hybridtable.six_dof.params import DockingLoopParams
+from hybridtable.six_dof.pose import rotation_exp, rotation_log
+from hybridtable.stewart.geometry import StewartGeometry, rotation_from_rpy, rpy_from_rotation
+from hybridtable.stewart.params import StewartParams, reference_matrices
+from hybridtable.stewart.plant import StewartPlant, add_stewart_plant
+
+__all__ = [
+    "MAX_CONDITION_NUMBER",
+    "PoseKinematics",
+    "PoseInverseKinematics",
+    "PoseLegServo",
+    "PoseDeviceSensor",
+    "StewartPoseBackend",
+    "stewart_params_for_docking",
+    "set_plate_state",
+    "check_stewart_scenario",
+]
+
+#: Largest condition number of the leg Jacobian a commanded pose may have [1]:
+#: beyond it the pose is refused as (near) a singularity of the platform.
+MAX_CONDITION_NUMBER = 1e6
+
+
+def _cross(a, b) -> np.ndarray:
+    """a x b for 3-vectors (scalar arithmetic: np.cross is slow on small arrays)."""
+    return np.array(
+        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    )
+
+
+def _cross_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise a x b of two (n, 3) arrays."""
+    out = np.empty_like(a)
+    out[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
+    out[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
+    out[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    return out
+
+
+def _quaternion_matrix(q: np.ndarray) -> np.ndarray:
+    w, x, y, z = q / math.sqrt(float(q @ q))
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def _fmt(v) -> str:
+    return "[" + ", ".join(f"{float(x):.6g}" for x in v) + "]"
+
+
+class PoseKinematics:
+    """The port's pose in W <-> the plate's pose in the Stewart world, and the
+    legs' inverse kinematics of a port pose.
+
+    Parameters
+    ----------
+    geometry : StewartGeometry
+    max_condition_number : float
+        Refuse poses whose leg Jacobian is worse conditioned than this.
+    """
+
+    def __init__(
+        self, geometry: StewartGeometry, max_condition_number: float = MAX_CONDITION_NUMBER
+    ) -> None:
+        self.geometry = geometry
+        #: The origin of W in the Stewart world (m).
+        self.world_origin_m = np.array(
+            [0.0, 0.0, geometry.home_height_m + geometry.device_length_m]
+        )
+        #: The port's origin in the plate frame (m).
+        self.port_in_plate_m = np.array([0.0, 0.0, geometry.device_length_m])
+        self.max_condition_number = float(max_condition_number)
+        self._top = geometry.top_points_m
+        self._base = geometry.base_points_m
+        self._stroke = (geometry.leg_min_length_m, geometry.leg_max_length_m)
+        self._home_directions = geometry.home_leg_directions
+        # A margin below the joint limit's cosine: closer, the geometry decides.
+        self._min_cosine = math.cos(geometry.max_joint_angle_rad) + 1e-9
+
+    # -- frames ---------------------------------------------------------
+    def plate_of_port(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The plate's position (world, m) and rotation of a port pose ``q`` (W)."""
+        R = rotation_exp(np.asarray(q[3:6], dtype=float))
+        return self.world_origin_m + np.asarray(q[:3], dtype=float) - R @ self.port_in_plate_m, R
+
+    def plate_twist_of_port(self, R: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """``[v; omega]`` of the plate origin from the port's ``qd = [v_P; omega]``."""
+        omega = np.asarray(qd[3:6], dtype=float)
+        return np.concatenate([qd[:3] - _cross(omega, R @ self.port_in_plate_m), omega])
+
+    def port_state(
+        self, position_m: np.ndarray, R: np.ndarray, v: np.ndarray, w: np.ndarray
+    ) -> np.ndarray:
+        """The port's ``[q; qd]`` (12, W) of the plate's pose and twist (world)."""
+        arm = R @ self.port_in_plate_m
+        return np.concatenate(
+            [position_m + arm - self.world_origin_m, rotation_log(R), v + _cross(w, arm), w]
+        )
+
+    # -- kinematics -----------------------------------------------------
+    def leg_vectors(self, position_m: np.ndarray, R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Leg vectors (6, 3) and the plate's arms ``R t_i`` (6, 3) (world, m)."""
+        arm = self._top @ R.T
+        return position_m + arm - self._base, arm
+
+    def leg_lengths(self, q: np.ndarray, check: bool = True) -> np.ndarray:
+        """The six leg lengths (m) with the port at ``q`` (W).
+
+        Raises
+        ------
+        WorkspaceError
+            With ``check``, if the pose leaves the workspace (a leg's stroke,
+            a universal joint's limit, the base plane) or is near a singularity.
+        """
+        return self.inverse_kinematics(q, None, check)[0]
+
+    def inverse_kinematics(
+        self, q: np.ndarray, qd: np.ndarray | None = None, check: bool = True
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Leg lengths (6, m) and rates (6, m/s) of the port's pose ``q`` and
+        twist ``qd`` (W; rates zero without ``qd``).
+
+        Raises
+        ------
+        WorkspaceError
+            With ``check`` (see :meth:`leg_lengths`), in one line naming the
+            pose and the leg.
+        """
+        q = np.asarray(q, dtype=float)
+        if q.shape != (6,):
+            raise WorkspaceError(f"a port pose is 6 numbers [x, y, z, rx, ry, rz] (got {q})")
+        if not np.all(np.isfinite(q)):
+            raise DivergenceError(
+                f"the 6-DoF loop diverged: the commanded port pose {_fmt(q)} is not finite"
+            )
+        position, R = self.plate_of_port(q)
+        legs, arm = self.leg_vectors(position, R)
+        lengths = np.sqrt(np.einsum("ij,ij->i", legs, legs))
+        u = legs / lengths[:, None]
+        J = np.empty((6, 6))
+        J[:, :3] = u
+        J[:, 3:] = _cross_rows(arm, u)
+        if check:
+            self._check(q, position, lengths, legs, u, J)
+        if qd is None:
+            return lengths, np.zeros(6)
+        return lengths, J @ self.plate_twist_of_port(R, np.asarray(qd, dtype=float))
+
+    def jacobian(self, q: np.ndarray) -> np.ndarray:
+        """The leg Jacobian (6x6) at the port pose ``q``: ``dL/dt = J [v; omega]``
+        with the plate origin's velocity and the angular velocity (world)."""
+        position, R = self.plate_of_port(np.asarray(q, dtype=float))
+        legs, arm = self.leg_vectors(position, R)
+        u = legs / np.linalg.norm(legs, axis=1, keepdims=True)
+        return np.hstack([u, _cross_rows(arm, u)])
+
+    def _where(self, q: np.ndarray, position: np.ndarray) -> str:
+        return (
+            f"port at {_fmt(q[:3])} m, rotation vector {_fmt(q[3:])} rad "
+            f"(plate at {_fmt(position)} m above the base centre)"
+        )
+
+    def _check(self, q, position, lengths, legs, u, J) -> None:
+        g = self.geometry
+        # The geometry's checks (stroke, universal-joint angle), vectorized;
+        # near a limit its own check decides (and words the leg's message).
+        inside = (
+            position[2] > 0.0
+            and lengths.min() > self._stroke[0] + 1e-12
+            and lengths.max() < self._stroke[1] - 1e-12
+            and np.einsum("ij,ij->i", u, self._home_directions).min() > self._min_cosine
+        )
+        if not inside:
+            try:
+                if position[2] <= 0.0:
+                    raise WorkspaceError(
+                        f"the plate must be above the base (z = {position[2]:g} m)"
+                    )
+                g.check_legs(lengths, legs)
+            except WorkspaceError as err:
+                raise WorkspaceError(
+                    f"the commanded {self._where(q, position)} is outside the Stewart "
+                    f"platform's workspace: {err}"
+                ) from None
+        s = np.linalg.svd(J, compute_uv=False)
+        cond = math.inf if s[-1] <= 0.0 else s[0] / s[-1]
+        if not cond <= self.max_condition_number:
+            left = np.linalg.svd(J)[0][:, -1]
+            leg = int(np.argmax(np.abs(left)))
+            raise WorkspaceError(
+                f"the commanded {self._where(q, position)} is near a singularity of the Stewart "
+                f"platform: the leg Jacobian's condition number is {cond:.3g} (limit "
+                f"{self.max_condition_number:.3g}), leg {leg} the most involved"
+            )
+
+
+class PoseInverseKinematics(LeafSystem):
+    """The full-pose inverse kinematics of the commanded port pose.
+
+    Ports
+    -----
+    Input ``commanded_state`` (12: m, rad, m/s, rad/s)
+        ``[q; qd]`` of the port in W.
+    Output ``leg_command`` (12: m, m/s)
+        The six leg lengths and their rates (leg Jacobian times the plate's twist).
+
+    Raises :class:`~hybridtable.errors.WorkspaceError` during a simulation
+    when the commanded pose leaves the workspace or nears a singularity.
+    """
+
+    def __init__(self, kinematics: PoseKinematics) -> None:
+        LeafSystem.__init__(self)
+        self.kinematics = kinematics
+        self._command = self.DeclareVectorInputPort("commanded_state", 12)
+        self.DeclareVectorOutputPort("leg_command", BasicVector(12), self._calc)
+
+    def _calc(self, context, output) -> None:
+        x = self._command.Eval(context)
+        lengths, rates = self.kinematics.inverse_kinematics(x[:6], x[6:])
+        output.SetFromVector(np.concatenate([lengths, rates]))
+
+
+class PoseLegServo(LeafSystem):
+    """The legs' digital PD servo with the static gravity feed-forward:
+    ``u_i = Kp (L_r,i - L_i) + Kd (L'_r,i - dL_i/dt) + u_g,i`` (the 1-D
+    :class:`~hybridtable.stewart.backend.LegServo` on six independent legs).
+
+    Ports
+    -----
+    Input ``leg_reference`` (12: m, m/s)
+        ``[L_r; L'_r]``: the reference model's output, or without one the
+        commanded lengths (their rates are then not used: zero, as in 1-D).
+    Input ``plant_state``
+    Output ``leg_forces`` (6, N)
+    """
+
+    def __init__(self, handles: StewartPlant, use_reference: bool) -> None:
+        LeafSystem.__init__(self)
+        self._kp, self._kd = handles.params.servo_gains()
+        self._uff = handles.gravity_feedforward_n.copy()
+        self._iq = handles.leg_position_indices
+        self._iv = handles.plant.num_positions() + handles.leg_velocity_indices
+        self._use_rates = bool(use_reference)
+        self._reference = self.DeclareVectorInputPort("leg_reference", 12)
+        self._state = self.DeclareVectorInputPort(
+            "plant_state", handles.plant.num_multibody_states()
+        )
+        self.DeclareVectorOutputPort("leg_forces", 6, self._calc)
+
+    def _calc(self, context, output) -> None:
+        r = self._reference.Eval(context)
+        x = self._state.Eval(context)
+        rates = r[6:] if self._use_rates else 0.0
+        u = self._kp * (r[:6] - x[self._iq]) + self._kd * (rates - x[self._iv]) + self._uff
+        output.SetFromVector(u)
+
+
+class PoseDeviceSensor(LeafSystem):
+    """The port's motion and the F/T sensor's wrench, in the target frame W.
+
+    The plant's reaction forces and accelerations (unsampled output ports)
+    belong to the step that starts at the current tick; :class:`StewartPoseBackend`
+    holds ``step_wrench`` one tick (as the 1-D
+    :class:`~hybridtable.stewart.backend.DeviceSensor`).
+
+    Ports
+    -----
+    Input ``plant_state``, ``generalized_acceleration``, ``reaction_forces``
+        From the plant.
+    Output ``port_state`` (12: m, rad, m/s, rad/s)
+        ``[p_P; theta; v_P; omega]`` of the device's port in W (the table's
+        actual pose and twist).
+    Output ``step_wrench`` (6: N m, N)
+        Over the coming step: the contact wrench on the device ``[moment
+        about the port origin; force]`` in W, from the weld's reaction wrench
+        corrected for the device's weight and inertia by Newton–Euler (what a
+        6-axis F/T sensor with payload compensation reports), each component
+        rounded to ``sensor_resolution_n`` (N, and N m) so the round-off of
+        the correction reads as an exact zero with the devices apart.
+    Output ``weld_wrench`` (6: N m, N)
+        The weld's raw reaction wrench on the device ``[torque about the
+        plate origin; force]`` in W, over the coming step.
+    """
+
+    def __init__(self, handles: StewartPlant, kinematics: PoseKinematics) -> None:
+        LeafSystem.__init__(self)
+        plant = handles.plant
+        self._k = kinematics
+        self._nq = plant.num_positions()
+        self._iq = handles.plate_position_start
+        self._iv = handles.plate_velocity_start
+        device = handles.device
+        self._mass = handles.geometry.device_mass_kg
+        self._com = np.array(device.default_com())
+        M_com = device.default_spatial_inertia().Shift(self._com)
+        self._inertia = M_com.CalcRotationalInertia().CopyToFullMatrix3()
+        self._gravity = np.array([0.0, 0.0, -handles.params.gravity_m_per_s2])
+        self._weld = int(handles.sensor_weld.index())
+        self._resolution = handles.params.sensor_resolution_n
+        self._state = self.DeclareVectorInputPort("plant_state", plant.num_multibody_states())
+        self._accel = self.DeclareVectorInputPort(
+            "generalized_acceleration", plant.num_velocities()
+        )
+        self._reaction = self.DeclareAbstractInputPort(
+            "reaction_forces", plant.get_reaction_forces_output_port().Allocate()
+        )
+        self.DeclareVectorOutputPort(
+            "port_state",
+            BasicVector(12),
+            self._calc_port_state,
+            prerequisites_of_calc={self._state.ticket()},
+        )
+        self.DeclareVectorOutputPort("step_wrench", BasicVector(6), self._calc_step_wrench)
+        self.DeclareVectorOutputPort("weld_wrench", BasicVector(6), self._calc_weld_wrench)
+
+    def _pose_twist(self, x):
+        q = x[self._iq : self._iq + 7]
+        v = x[self._nq + self._iv : self._nq + self._iv + 6]
+        return _quaternion_matrix(q[:4]), q[4:], v[:3], v[3:]
+
+    def _calc_port_state(self, context, output) -> None:
+        R, p, w, v = self._pose_twist(self._state.Eval(context))
+        output.SetFromVector(self._k.port_state(p, R, v, w))
+
+    def contact_wrench(self, context) -> np.ndarray:
+        """The payload-compensated wrench (6, W, unrounded) over the coming step."""
+        R, _, w, _ = self._pose_twist(self._state.Eval(context))
+        a = self._accel.Eval(context)[self._iv : self._iv + 6]
+        dw, dv = a[:3], a[3:]
+        F = self._reaction.Eval(context)[self._weld]
+        f_weld = R @ F.translational()
+        t_weld = R @ F.rotational()  # about the device (= plate) origin
+        r = R @ self._com
+        a_com = dv + _cross(dw, r) + _cross(w, _cross(w, r))
+        # Newton: m a_com = f_weld + f_contact + m g.
+        f = self._mass * (a_com - self._gravity) - f_weld
+        # Euler about the centre of mass: I dw + w x I w = t_weld,com + t_contact,com.
+        I_w = R @ self._inertia @ R.T
+        t_com = I_w @ dw + _cross(w, I_w @ w) - (t_weld - _cross(r, f_weld))
+        # About the port origin.
+        t_port = t_com + _cross(r - R @ self._k.port_in_plate_m, f)
+        return np.concatenate([t_port, f])
+
+    def _calc_step_wrench(self, context, output) -> None:
+        res = self._resolution
+        output.SetFromVector(res * np.round(self.contact_wrench(context) / res))
+
+    def _calc_weld_wrench(self, context, output) -> None:
+        R = self._pose_twist(self._state.Eval(context))[0]
+        F = self._reaction.Eval(context)[self._weld]
+        output.SetFromVector(np.concatenate([R @ F.rotational(), R @ F.translational()]))
+
+
+def stewart_params_for_docking(params: DockingLoopParams) -> StewartParams:
+    """The platform of ``params`` (``params.stewart``, default
+    ``StewartParams()``) with its time step set to the rig computer's tick,
+    so the plant, its servo and the loop share one period.
+
+    Raises
+    ------
+    ParameterError
+        If the platform cannot run at that tick (e.g. a reference model above
+        the Nyquist rate).
+    """
+    stewart = params.stewart if isinstance(params.stewart, StewartParams) else StewartParams()
+    h = params.sample_period_s
+    if stewart.time_step_s != h:
+        try:
+            stewart = replace(stewart, time_step_s=h)
+        except ParameterError as err:
+            raise ParameterError(
+                f"the Stewart platform cannot run at sample_rate_hz {params.sample_rate_hz:g}: "
+                f"{err}"
+            ) from None
+    return stewart
+
+
+def set_plate_state(
+    handles: StewartPlant,
+    plant_context,
+    position_m: np.ndarray,
+    rotation: np.ndarray,
+    velocity_m_per_s: np.ndarray,
+    angular_velocity_rad_per_s: np.ndarray,
+) -> None:
+    """Put the plate at ``position_m`` (world, m) with ``rotation`` (3x3),
+    moving with the origin's velocity and the angular velocity (world): plate
+    pose and twist, leg lengths and rates, universal-joint angles and rates,
+    all consistent with the ball constraints (the full-pose generalization of
+    :meth:`~hybridtable.stewart.plant.StewartPlant.set_axis_state`).
+
+    Raises
+    ------
+    WorkspaceError
+        If the pose leaves the workspace.
+    """
+    g = handles.geometry
+    p = np.asarray(position_m, dtype=float)
+    R = np.asarray(rotation, dtype=float)
+    v = np.asarray(velocity_m_per_s, dtype=float)
+    w = np.asarray(angular_velocity_rad_per_s, dtype=float)
+    pose = np.concatenate([p, rpy_from_rotation(R)])
+    g.inverse_kinematics(pose)  # raises outside the workspace
+    lengths, angles = handles._leg_coordinates_at(pose)
+    rates = g.leg_jacobian(pose) @ np.concatenate([v, w])
+    eps = 1e-6
+
+    def moved(sign: float) -> np.ndarray:
+        Rs = rotation_exp(sign * eps * w) @ R
+        return np.concatenate([p + sign * eps * v, rpy_from_rotation(Rs)])
+
+    angle_rates = (
+        handles._leg_coordinates_at(moved(1.0))[1] - handles._leg_coordinates_at(moved(-1.0))[1]
+    ) / (2.0 * eps)
+    plant = handles.plant
+    plant.SetFreeBodyPose(plant_context, handles.plate, RigidTransform(RotationMatrix(R), p))
+    plant.SetFreeBodySpatialVelocity(plant_context, handles.plate, SpatialVelocity(w, v))
+    for i in range(6):
+        handles.leg_joints[i].set_translation(plant_context, lengths[i])
+        handles.leg_joints[i].set_translation_rate(plant_context, rates[i])
+        handles.universal_joints[i].set_angles(plant_context, angles[i])
+        handles.universal_joints[i].set_angular_rates(plant_context, angle_rates[i])
+
+
+class StewartPoseBackend(Diagram):
+    """The Stewart platform as a table back-end of the 6-DoF loop.
+
+    Inside: ``commanded_state`` -> :class:`PoseInverseKinematics` ->
+    per-leg reference model (if any) -> :class:`PoseLegServo` -> plant (with
+    the docking devices) -> :class:`PoseDeviceSensor` -> one-tick hold of the
+    wrench -> ``contact_wrench``.
+
+    Ports
+    -----
+    Input ``commanded_state`` (12: m, rad, m/s, rad/s)
+        The port's commanded pose ``[p; theta]`` and twist ``[v; omega]`` in W.
+    Output ``table_state`` (12)
+        The device port's actual pose and twist in W, from the plant's state.
+    Output ``contact_wrench`` (6: N m, N)
+        The payload-compensated F/T reading ``[moment about the port origin;
+        force]`` in W, on the device (of the step ending at the current tick).
+    Output ``weld_wrench`` (6: N m, N)
+        The weld's raw reaction wrench in W (not held: over the coming step).
+    Output ``plate_pose`` (7: 1, m)
+        The plate's quaternion ``[w, x, y, z]`` and position in the world.
+
+    Parameters
+    ----------
+    params : DockingLoopParams
+        ``params.stewart`` is the platform (its time step becomes the tick),
+        ``params.contact`` the devices.
+    meshcat : Meshcat, optional
+        Visualize the platform in this Meshcat.
+    """
+
+    def __init__(self, params: DockingLoopParams, meshcat: Meshcat | None = None) -> None:
+        Diagram.__init__(self)
+        stewart = stewart_params_for_docking(params)
+        self.params = stewart
+        self.docking = params
+        g = stewart.geometry
+        kinematics = PoseKinematics(g)
+        self.kinematics = kinematics
+        X_port = RigidTransform(kinematics.port_in_plate_m)
+        X_face = RigidTransform(kinematics.world_origin_m)
+
+        def register(plant, device, world) -> None:
+            register_docking_devices(plant, device, X_port, world, X_face, params.contact)
+
+        builder = DiagramBuilder()
+        c = params.contact
+        handles = add_stewart_plant(
+            builder,
+            stewart,
+            c.contact_stiffness_n_per_m,
+            c.contact_dissipation_s_per_m,
+            register_devices=register,
+        )
+        self.handles = handles
+        plant = handles.plant
+        h = stewart.time_step_s
+        use_reference = stewart.reference_response_hz is not None
+        ik = builder.AddNamedSystem("inverse_kinematics", PoseInverseKinematics(kinematics))
+        servo = builder.AddNamedSystem("leg_servo", PoseLegServo(handles, use_reference))
+        sensor = builder.AddNamedSystem("ft_sensor", PoseDeviceSensor(handles, kinematics))
+        hold = builder.AddNamedSystem("sensor_sample", ZeroOrderHold(h, 6))
+        if use_reference:
+            A, B, C, D = reference_matrices(stewart)
+            eye = np.eye(6)
+            reference = builder.AddNamedSystem(
+                "reference_model",
+                LinearSystem(np.kron(A, eye), np.kron(B, eye), np.kron(C, eye), np.kron(D, eye), h),
+            )
+            builder.Connect(ik.get_output_port(), reference.get_input_port())
+            builder.Connect(reference.get_output_port(), servo.GetInputPort("leg_reference"))
+            self._reference = reference
+        else:
+            builder.Connect(ik.get_output_port(), servo.GetInputPort("leg_reference"))
+            self._reference = None
+        builder.Connect(plant.get_state_output_port(), servo.GetInputPort("plant_state"))
+        builder.Connect(servo.GetOutputPort("leg_forces"), plant.get_actuation_input_port())
+        builder.Connect(plant.get_state_output_port(), sensor.GetInputPort("plant_state"))
+        builder.Connect(
+            plant.get_generalized_acceleration_output_port(),
+            sensor.GetInputPort("generalized_acceleration"),
+        )
+        builder.Connect(
+            plant.get_reaction_forces_output_port(), sensor.GetInputPort("reaction_forces")
+        )
+        builder.Connect(sensor.GetOutputPort("step_wrench"), hold.get_input_port())
+        builder.ExportInput(ik.get_input_port(), "commanded_state")
+        builder.ExportOutput(sensor.GetOutputPort("port_state"), "table_state")
+        builder.ExportOutput(hold.get_output_port(), "contact_wrench")
+        builder.ExportOutput(sensor.GetOutputPort("weld_wrench"), "weld_wrench")
+        select = np.zeros((7, plant.num_multibody_states()))
+        select[:, handles.plate_position_start : handles.plate_position_start + 7] = np.eye(7)
+        pose = builder.AddNamedSystem("plate_pose", MatrixGain(select))
+        builder.Connect(plant.get_state_output_port(), pose.get_input_port())
+        builder.ExportOutput(pose.get_output_port(), "plate_pose")
+        self.visualizer = None
+        if meshcat is not None:
+            self.visualizer = MeshcatVisualizer.AddToBuilder(
+                builder,
+                handles.scene_graph,
+                meshcat,
+                MeshcatVisualizerParams(publish_period=1.0 / 64.0),
+            )
+        self._sensor = sensor
+        self._hold = hold
+        builder.BuildInto(self)
+
+    @property
+    def plant(self):
+        return self.handles.plant
+
+    def set_initial_state(self, context, table_state: np.ndarray, command: np.ndarray) -> None:
+        """Put the port at the pose and twist of ``table_state`` (12, W):
+        plate, legs and joints consistent, the reference model at those leg
+        lengths and rates, no wrench over the step before t = 0 (context:
+        this diagram's). ``command`` (12), the command held at t = 0, is not
+        needed: the servo reads it from the input port at the first tick.
+
+        Raises
+        ------
+        WorkspaceError
+            If the pose leaves the workspace or nears a singularity.
+        """
+        x = np.asarray(table_state, dtype=float)
+        lengths, rates = self.kinematics.inverse_kinematics(x[:6], x[6:])
+        position, R = self.kinematics.plate_of_port(x[:6])
+        twist = self.kinematics.plate_twist_of_port(R, x[6:])
+        plant_context = self.GetMutableSubsystemContext(self.handles.plant, context)
+        set_plate_state(self.handles, plant_context, position, R, twist[:3], twist[3:])
+        self.GetMutableSubsystemContext(self._hold, context).SetDiscreteState(np.zeros(6))
+        if self._reference is not None:
+            self.GetMutableSubsystemContext(self._reference, context).SetDiscreteState(
+                np.concatenate([lengths, rates])
+            )
+
+
+def _approach_poses(params: DockingLoopParams, count: int = 201) -> tuple[np.ndarray, np.ndarray]:
+    """Port poses (count, 6) along the approach, with the misalignment, from
+    the initial pose to ``3 v0 / omega_contact`` past the plate's face, and
+    the initial pose (6): the port's axis through the target's centre, the
+    first pad ``initial_gap_m`` from the plate (as the loop starts)."""
+    a = params.approach
+    c = params.contact
+    R0 = rotation_from_rpy(np.array([*a.misalignment_rad, 0.0]))
+    lowest = float(np.max((c.pad_centres_m @ R0.T)[:, 2])) + c.pad_radius_m
+    z0 = -a.initial_gap_m - lowest
+    omega = 2.0 * math.pi * params.contact_frequency_hz
+    z1 = 3.0 * a.initial_velocity_m_per_s / omega
+    theta = rotation_log(R0)
+    poses = np.zeros((count, 6))
+    poses[:, 2] = np.linspace(z0, z1, count)
+    poses[:, 3:] = theta
+    return poses, poses[0].copy()
+
+
+def check_stewart_scenario(params: DockingLoopParams) -> None:
+    """Refuse, before any simulation, a scenario the Stewart platform cannot run.
+
+    Checks that the platform runs at the rig's tick and that the port's
+    initial pose and every pose along the approach, with the misalignment, up
+    to ``3 v0 / omega_contact`` past the plate's face (three times the
+    undamped peak penetration: a delayed loop presses deeper) are reachable
+    and away from singularities.
+
+    Raises
+    ------
+    ParameterError
+        The platform cannot run at the tick.
+    WorkspaceError
+        One line naming the pose, the leg and the scenario's keys to change.
+    """
+    stewart = stewart_params_for_docking(params)
+    kinematics = PoseKinematics(stewart.geometry)
+    poses, initial = _approach_poses(params)
+    a = params.approach
+    tilt = ", ".join(f"{math.degrees(x):.3g}" for x in a.misalignment_rad)
+    try:
+        kinematics.leg_lengths(initial)
+    except WorkspaceError as err:
+        raise WorkspaceError(
+            f"initial_gap_m {a.initial_gap_m:g} with misalignment_deg [{tilt}] starts the "
+            f"Stewart platform out of its reach: {err}; lower [approach] initial_gap_m or "
+            "misalignment_deg"
+        ) from None
+    deepest = float(poses[-1, 2])
+    for q in poses:
+        try:
+            kinematics.leg_lengths(q)
+        except WorkspaceError as err:
+            raise WorkspaceError(
+                f"the Stewart platform cannot follow the approach (misalignment_deg [{tilt}]) "
+                f"to the deepest expected press, 3 initial_velocity_m_per_s / (2 pi contact "
+                f"frequency) = {deepest:.4f} m past the plate's face: {err}; lower [approach] "
+                "initial_velocity_m_per_s or misalignment_deg, or raise [contact] "
+                "contact_stiffness_n_per_m"
+            ) from None
