@@ -14,12 +14,12 @@ from typing import Any
 
 from pydrake.systems.framework import System
 
+from hybridtable._lazy import register_entry_points
 from hybridtable._validation import check_choice
 from hybridtable.compensators.online import make_online_sdmdc
 from hybridtable.compensators.paper import COMPENSATORS, paper_compensator
 from hybridtable.compensators.polynomial import make_polynomial
 from hybridtable.compensators.smith import make_smith, make_smith_online
-from hybridtable.errors import ParameterError
 
 __all__ = [
     "CompensatorFactory",
@@ -63,14 +63,7 @@ def _load_entry_points() -> None:
     if _entry_points_loaded:
         return
     _entry_points_loaded = True
-    from importlib.metadata import entry_points  # 25 ms: only when names are asked for
-
-    for ep in entry_points(group=ENTRY_POINT_GROUP):
-        if ep.name in _REGISTRY:
-            raise ParameterError(
-                f"compensator {ep.name!r} of entry point {ep.value} is already registered"
-            )
-        _REGISTRY[ep.name] = ep.load()
+    register_entry_points(ENTRY_POINT_GROUP, _REGISTRY, "compensator")
 
 
 def register_compensator(name: str, factory: CompensatorFactory, replace: bool = False) -> None:

@@ -18,8 +18,8 @@ from typing import Any
 
 from pydrake.systems.framework import System
 
+from hybridtable._lazy import register_entry_points
 from hybridtable._validation import check_choice
-from hybridtable.errors import ParameterError
 from hybridtable.six_dof.compensator import StiffnessModel, WrenchCompensator
 
 __all__ = [
@@ -57,14 +57,7 @@ def _load_entry_points() -> None:
     if _entry_points_loaded:
         return
     _entry_points_loaded = True
-    from importlib.metadata import entry_points
-
-    for ep in entry_points(group=ENTRY_POINT_GROUP):
-        if ep.name in _REGISTRY:
-            raise ParameterError(
-                f"wrench compensator {ep.name!r} of entry point {ep.value} is already registered"
-            )
-        _REGISTRY[ep.name] = ep.load()
+    register_entry_points(ENTRY_POINT_GROUP, _REGISTRY, "wrench compensator")
 
 
 def register_wrench_compensator(

@@ -52,16 +52,17 @@ import math
 from dataclasses import replace
 
 import numpy as np
-from pydrake.geometry import Meshcat, MeshcatVisualizer, MeshcatVisualizerParams
+from pydrake.geometry import Meshcat
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.math import SpatialVelocity
 from pydrake.systems.framework import BasicVector, Diagram, DiagramBuilder, LeafSystem
-from pydrake.systems.primitives import LinearSystem, MatrixGain, ZeroOrderHold
+from pydrake.systems.primitives import LinearSystem, ZeroOrderHold
 
 from hybridtable.errors import DivergenceError, ParameterError, WorkspaceError
 from hybridtable.six_dof.contact import register_docking_devices
 from hybridtable.six_dof.params import DockingLoopParams
 from hybridtable.six_dof.pose import rotation_exp, rotation_log
+from hybridtable.stewart.backend import export_plate_pose
 from hybridtable.stewart.geometry import StewartGeometry, rotation_from_rpy, rpy_from_rotation
 from hybridtable.stewart.params import StewartParams, reference_matrices
 from hybridtable.stewart.plant import StewartPlant, add_stewart_plant
@@ -578,19 +579,7 @@ class StewartPoseBackend(Diagram):
         builder.ExportOutput(sensor.GetOutputPort("port_state"), "table_state")
         builder.ExportOutput(hold.get_output_port(), "contact_wrench")
         builder.ExportOutput(sensor.GetOutputPort("weld_wrench"), "weld_wrench")
-        select = np.zeros((7, plant.num_multibody_states()))
-        select[:, handles.plate_position_start : handles.plate_position_start + 7] = np.eye(7)
-        pose = builder.AddNamedSystem("plate_pose", MatrixGain(select))
-        builder.Connect(plant.get_state_output_port(), pose.get_input_port())
-        builder.ExportOutput(pose.get_output_port(), "plate_pose")
-        self.visualizer = None
-        if meshcat is not None:
-            self.visualizer = MeshcatVisualizer.AddToBuilder(
-                builder,
-                handles.scene_graph,
-                meshcat,
-                MeshcatVisualizerParams(publish_period=1.0 / 64.0),
-            )
+        self.visualizer = export_plate_pose(builder, handles, meshcat)
         self._sensor = sensor
         self._hold = hold
         builder.BuildInto(self)

@@ -50,6 +50,7 @@ __all__ = [
     "add_stewart_loop",
     "build_stewart_loop",
     "stewart_params_for_loop",
+    "export_plate_pose",
     "write_meshcat_html",
 ]
 
@@ -333,19 +334,7 @@ class StewartTable(Diagram):
         builder.ExportOutput(motion.get_output_port(), "motion")
         builder.ExportOutput(mux.get_output_port(), "sensed_force")
         builder.ExportOutput(sensor.GetOutputPort("wrench"), "sensor_wrench")
-        select = np.zeros((7, plant.num_multibody_states()))
-        select[:, handles.plate_position_start : handles.plate_position_start + 7] = np.eye(7)
-        pose = builder.AddNamedSystem("plate_pose", MatrixGain(select))
-        builder.Connect(plant.get_state_output_port(), pose.get_input_port())
-        builder.ExportOutput(pose.get_output_port(), "plate_pose")
-        self.visualizer = None
-        if meshcat is not None:
-            self.visualizer = MeshcatVisualizer.AddToBuilder(
-                builder,
-                handles.scene_graph,
-                meshcat,
-                MeshcatVisualizerParams(publish_period=1.0 / 64.0),
-            )
+        self.visualizer = export_plate_pose(builder, handles, meshcat)
         self._servo = servo
         self._sensor = sensor
         self._hold = hold
@@ -402,6 +391,25 @@ class StewartContactReadout(Diagram):
         builder.ExportOutput(demux.get_output_port(0), "force")
         builder.ExportOutput(demux.get_output_port(1), "force_rate")
         builder.BuildInto(self)
+
+
+def export_plate_pose(
+    builder: DiagramBuilder, handles: StewartPlant, meshcat: Meshcat | None = None
+) -> MeshcatVisualizer | None:
+    """Export the plate's pose as ``plate_pose`` (7: quaternion ``[w, x, y,
+    z]``, position m) of the diagram ``builder`` builds, and add a Meshcat
+    visualizer of the plant when ``meshcat`` is given (returned)."""
+    plant = handles.plant
+    select = np.zeros((7, plant.num_multibody_states()))
+    select[:, handles.plate_position_start : handles.plate_position_start + 7] = np.eye(7)
+    pose = builder.AddNamedSystem("plate_pose", MatrixGain(select))
+    builder.Connect(plant.get_state_output_port(), pose.get_input_port())
+    builder.ExportOutput(pose.get_output_port(), "plate_pose")
+    if meshcat is None:
+        return None
+    return MeshcatVisualizer.AddToBuilder(
+        builder, handles.scene_graph, meshcat, MeshcatVisualizerParams(publish_period=1.0 / 64.0)
+    )
 
 
 def stewart_params_for_loop(params: HybridLoopParams, stewart: StewartParams) -> StewartParams:
