@@ -63,7 +63,12 @@ from hybridtable.six_dof.contact import register_docking_devices
 from hybridtable.six_dof.params import DockingLoopParams
 from hybridtable.six_dof.pose import rotation_exp, rotation_log
 from hybridtable.stewart.backend import export_plate_pose
-from hybridtable.stewart.geometry import StewartGeometry, rotation_from_rpy, rpy_from_rotation
+from hybridtable.stewart.geometry import (
+    StewartGeometry,
+    rotation_from_quaternion,
+    rotation_from_rpy,
+    rpy_from_rotation,
+)
 from hybridtable.stewart.params import StewartParams, reference_matrices
 from hybridtable.stewart.plant import StewartPlant, add_stewart_plant
 
@@ -98,17 +103,6 @@ def _cross_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     out[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
     out[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
     return out
-
-
-def _quaternion_matrix(q: np.ndarray) -> np.ndarray:
-    w, x, y, z = q / math.sqrt(float(q @ q))
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ]
-    )
 
 
 def _fmt(v) -> str:
@@ -383,7 +377,7 @@ class PoseDeviceSensor(LeafSystem):
     def _pose_twist(self, x):
         q = x[self._iq : self._iq + 7]
         v = x[self._nq + self._iv : self._nq + self._iv + 6]
-        return _quaternion_matrix(q[:4]), q[4:], v[:3], v[3:]
+        return rotation_from_quaternion(q[:4]), q[4:], v[:3], v[3:]
 
     def _calc_port_state(self, context, output) -> None:
         R, p, w, v = self._pose_twist(self._state.Eval(context))

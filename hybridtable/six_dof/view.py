@@ -37,6 +37,7 @@ import numpy as np
 from pydrake.geometry import Box, Cylinder, Meshcat, MeshcatCone, Rgba, Sphere
 from pydrake.math import RigidTransform, RotationMatrix
 
+from hybridtable._validation import check_positive
 from hybridtable.errors import ParameterError
 from hybridtable.six_dof.pose import rotation_exp, rotation_log
 from hybridtable.six_dof.simulation import DockingRun
@@ -142,12 +143,6 @@ def peak_displacement_m(run: DockingRun) -> float:
     return peak
 
 
-def _check_factor(name: str, value: float) -> float:
-    if not (math.isfinite(value) and value > 0.0):
-        raise ParameterError(f"{name} must be a finite number > 0 (got {value!r})")
-    return float(value)
-
-
 class DockingScene:
     """A 6-DoF run drawn in a Meshcat (see the module docstring).
 
@@ -184,8 +179,8 @@ class DockingScene:
             magnify = auto_magnify(self.peak_displacement_m, p.contact.ring_radius_m)
         if force_scale_n_per_m is None:
             force_scale_n_per_m = auto_force_scale_n_per_m(self.peak_force_n)
-        self.magnify = _check_factor("magnify", magnify)
-        self.force_scale_n_per_m = _check_factor("force_scale_n_per_m", force_scale_n_per_m)
+        self.magnify = check_positive("magnify", magnify)
+        self.force_scale_n_per_m = check_positive("force_scale_n_per_m", force_scale_n_per_m)
         self._body_ports = _body_port_poses(run)
         g = self.geometry
         self._base_origin = np.array([0.0, 0.0, -(g.home_height_m + g.device_length_m)])

@@ -38,6 +38,7 @@ from pydrake.systems.primitives import (
 from hybridtable.errors import WorkspaceError
 from hybridtable.loop.builder import HybridLoop, add_hybrid_loop
 from hybridtable.loop.params import HybridLoopParams
+from hybridtable.stewart.geometry import rotation_from_quaternion
 from hybridtable.stewart.hunt_crossley import hunt_crossley_dissipation
 from hybridtable.stewart.params import StewartParams, reference_matrices
 from hybridtable.stewart.plant import StewartPlant, add_stewart_plant
@@ -53,17 +54,6 @@ __all__ = [
     "export_plate_pose",
     "write_meshcat_html",
 ]
-
-
-def _quaternion_matrix(q: np.ndarray) -> np.ndarray:
-    w, x, y, z = q / np.linalg.norm(q)
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ]
-    )
 
 
 class LegServo(LeafSystem):
@@ -206,7 +196,7 @@ class DeviceSensor(LeafSystem):
     def _pose_twist(self, x):
         q = x[self._iq : self._iq + 7]
         v = x[self._nq + self._iv : self._nq + self._iv + 6]
-        return _quaternion_matrix(q[:4]), q[4:], v[:3], v[3:]
+        return rotation_from_quaternion(q[:4]), q[4:], v[:3], v[3:]
 
     @staticmethod
     def _z_kinematics(R, w, dw, dv, r_body) -> tuple[float, float, float]:

@@ -30,6 +30,7 @@ __all__ = [
     "StewartGeometry",
     "rotation_from_rpy",
     "rpy_from_rotation",
+    "rotation_from_quaternion",
 ]
 
 NUM_LEGS = 6
@@ -62,6 +63,20 @@ def rpy_from_rotation(R: np.ndarray) -> np.ndarray:
     roll = math.atan2(R[2, 1], R[2, 2])
     yaw = math.atan2(R[1, 0], R[0, 0])
     return np.array([roll, pitch, yaw])
+
+
+def rotation_from_quaternion(q: np.ndarray) -> np.ndarray:
+    """Rotation matrix of a quaternion ``[w, x, y, z]`` (normalized here), as a
+    MultibodyPlant's floating-body positions hold it (scalar arithmetic: this
+    runs at every tick of the Stewart back-ends)."""
+    w, x, y, z = q / np.linalg.norm(q)
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
 
 
 def _rotation_from_vector(w: np.ndarray) -> np.ndarray:
