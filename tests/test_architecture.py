@@ -43,6 +43,7 @@ LAYERS: dict[str, int] = {
     "diagnosis": 5,
     "studies": 5,
     "six_dof": 5,
+    "explain": 5,
     "sweeps": 6,
     "reports": 7,
     "commands": 8,

@@ -1,0 +1,281 @@
+"""Explain a measured CoR table: which loop is consistent with it, and what it cannot say.
+
+:func:`explain_table` fits the stated loop and models of one to three effects
+(:mod:`~hybridtable.explain.fit`), analyses what the table determines
+(:mod:`~hybridtable.explain.identify`), reads its patterns
+(:mod:`~hybridtable.explain.patterns`) and names the run that would separate
+the look-alikes (:mod:`~hybridtable.explain.separate`).
+
+The table is explained when the best model's chi2 passes at
+:data:`ALPHA` and no pattern is flagged. Nothing is missing when the stated
+loop itself passes and no model with an effect is better by BIC by more than
+:data:`~hybridtable.explain.separate.LOOKALIKE_BIC`. A table with no more rows
+than a model has parameters does not fit that model: it says which quantities
+it cannot determine.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.stats import f as f_dist
+
+from hybridtable.explain.effects import CorEffect
+from hybridtable.explain.fit import ModelFit, fit_models
+from hybridtable.explain.identify import Identifiability, identifiability
+from hybridtable.explain.patterns import WINDOW_LN, interactions, readings, trends
+from hybridtable.explain.registry import cor_effect_names, get_cor_effect
+from hybridtable.explain.separate import LOOKALIKE_BIC, lookalikes, separating_runs
+from hybridtable.explain.table import CorTable
+
+__all__ = ["ALPHA", "MODEL_ERROR_LN", "Explanation", "explain_table"]
+
+#: The chi2 test's false-alarm rate.
+ALPHA = 0.01
+#: The loop model's own error in ln CoR, added to each row's noise: the paper's
+#: simulated Table 1 differs from this loop by up to 5e-4 (its integrator and
+#: delay line are not ours).
+MODEL_ERROR_LN = 1.0e-3
+
+
+@dataclass
+class Explanation:
+    """What a CoR table says about the rig (see :func:`explain_table`)."""
+
+    table: CorTable
+    noise_source: str
+    sigma_ln: np.ndarray
+    model_error_ln: float
+    fits: list[ModelFit]
+    not_fitted: list[tuple[str, ...]]
+    identifiability: Identifiability
+    interactions: list[dict]
+    readings: list[dict]
+    trends: list[dict]
+    flat: dict | None
+    separations: list[dict]
+    explained: bool
+    nothing_missing: bool
+    verdict: str
+    unexplained: list[str] = field(default_factory=list)
+
+    @property
+    def best(self) -> ModelFit | None:
+        """The best fit, or None when no model could be fitted."""
+        return self.fits[0] if self.fits else None
+
+    def to_dict(self) -> dict:
+        """The JSON document of ``hybridtable explain``."""
+        ident = self.identifiability.to_dict()
+        return {
+            "verdict": self.verdict,
+            "explained": self.explained,
+            "nothing_missing": self.nothing_missing,
+            "source": self.table.source,
+            "rows": [
+                {
+                    "line": r.line,
+                    "compensator": r.compensator,
+                    "cor": r.cor,
+                    "cor_std": r.cor_std,
+                    "conditions": r.conditions.to_dict(),
+                }
+                for r in self.table.rows
+            ],
+            "stated": dict(self.table.stated or {}),
+            "noise": {
+                "source": self.noise_source,
+                "sigma_ln_cor": [float(x) for x in self.sigma_ln],
+                "model_error_ln_cor": self.model_error_ln,
+            },
+            "models": [f.to_dict() | {"name": f.name} for f in self.fits],
+            "lookalikes": [f.name for f in lookalikes(self.fits)],
+            "not_fitted": [
+                {"effects": list(n), "why": "as many parameters as the table has rows, or more"}
+                for n in self.not_fitted
+            ],
+            "identifiable": ident["identifiable"],
+            "unresolved": ident["unresolved"],
+            "undetermined": ident["undetermined"],
+            "sensitivity_singular_values": ident["singular_values"],
+            "quantities": ident["quantities"],
+            "interactions": self.interactions,
+            "readings": self.readings,
+            "trends": self.trends,
+            "flat": self.flat,
+            "separating_runs": self.separations,
+            "unexplained": self.unexplained,
+        }
+
+
+def _flat(table: CorTable, y: np.ndarray, sigma: np.ndarray, best: ModelFit | None) -> dict | None:
+    """A CoR constant per compensator, the empirical baseline a model must beat."""
+    comps = sorted({r.compensator for r in table.rows})
+    n, p = len(y), len(comps)
+    if n <= p:
+        return None
+    pred = np.empty(n)
+    for c in comps:
+        idx = [i for i, r in enumerate(table.rows) if r.compensator == c]
+        w = 1.0 / sigma[idx] ** 2
+        pred[idx] = float(np.sum(w * y[idx]) / np.sum(w))
+    chi2 = float(np.sum(((pred - y) / sigma) ** 2))
+    rms = float(np.sqrt(np.mean((np.exp(pred) - np.exp(y)) ** 2)))
+    out = {
+        "cor": {c: float(np.exp(pred[[r.compensator == c for r in table.rows]][0])) for c in comps},
+        "chi2": chi2,
+        "dof": n - p,
+        "rms_cor": rms,
+        "best_model_beats_it": None,
+    }
+    if best is not None and best.dof > 0:
+        extra = best.n_parameters - p
+        if extra <= 0:
+            out["best_model_beats_it"] = best.chi2 < chi2
+        else:
+            # an F test: the gain in chi2 per extra parameter against the best model's misfit
+            stat = ((chi2 - best.chi2) / extra) / max(best.chi2 / best.dof, 1.0)
+            out["f_p_value"] = float(f_dist.sf(stat, extra, best.dof))
+            out["best_model_beats_it"] = bool(out["f_p_value"] < 0.05)
+    return out
+
+
+def _value_words(fit: ModelFit) -> str:
+    parts = []
+    for k, v in fit.values.items():
+        s = fit.std.get(k, math.inf)
+        unit = k.rsplit("_", 1)[-1] if k.endswith(("_s", "_m")) else ""
+        if k.endswith("_s"):
+            parts.append(f"{k} = {1e3 * v:.3g} +/- {1e3 * s:.2g} ms")
+        else:
+            parts.append(f"{k} = {v:.4g} +/- {s:.2g}{(' ' + unit) if unit else ''}")
+    return ", ".join(parts)
+
+
+def explain_table(
+    table: CorTable,
+    effects: Sequence[CorEffect] | None = None,
+    max_effects: int = 3,
+    model_error_ln: float = MODEL_ERROR_LN,
+    progress: Callable[[str], None] | None = None,
+) -> Explanation:
+    """Explain a measured CoR table.
+
+    Parameters
+    ----------
+    table : CorTable
+        The measured CoRs and their stated conditions.
+    effects : sequence of CorEffect, optional
+        The library (default: every registered CoR effect).
+    max_effects : int
+        The most effects in one model (1-3).
+    model_error_ln : float
+        The loop model's own error in ln CoR, added in quadrature to each row's noise.
+    progress : callable, optional
+        Called with the name of each model as it is fitted.
+    """
+    effects = (
+        list(effects) if effects is not None else [get_cor_effect(n) for n in cor_effect_names()]
+    )
+    std, source = table.noise()
+    y = table.ln_cor
+    sigma = np.sqrt((std / np.exp(y)) ** 2 + model_error_ln**2)
+    cases = [(r.compensator, r.conditions) for r in table.rows]
+    fits, not_fitted = fit_models(effects, cases, y, sigma, max_effects, progress=progress)
+    best = fits[0] if fits else None
+    nominal = next(f for f in fits if not f.effects)
+    at = best.values if best is not None else {}
+    ident = identifiability(effects, cases, sigma, at)
+    predicted = np.log(best.predicted_cor) if best is not None else y
+    single = {f.effects[0]: np.log(f.predicted_cor) for f in fits if len(f.effects) == 1}
+    inter = interactions(cases, y, sigma, predicted, effects, single)
+    read = readings(cases, y, sigma)
+    trend = trends(cases, y, sigma, predicted, effects)
+    flat = _flat(table, y, sigma, best)
+    first = table.rows[0].conditions
+    separations = separating_runs(fits, first, float(np.median(sigma)))
+    unexplained = []
+    for item in inter:
+        if item["flagged"]:
+            unexplained.append(
+                f"the interaction I = ln none - ln SDC - ln MDC + ln SDMDC is "
+                f"{item['interaction']:+.4f} +/- {item['std']:.2g}; each single effect of the library "
+                f"fitted to the table gives at most {item['fitted_single_largest']:.2g} in size "
+                f"(at most {item['library_largest']:.2g} over the sizes that keep the CoRs within "
+                f"{WINDOW_LN:g} of the table's), the stated loop {item['stated_loop']:+.4f}, the "
+                f"best model {item['best_model']:+.4f}: "
+                f"{item['distance_sigma']:.0f} std from the nearest model"
+            )
+    for item in trend:
+        if item["flagged"]:
+            unexplained.append(item["words"])
+    testable = best is not None and best.dof > 0
+    fits_noise = testable and best.p_value >= ALPHA
+    explained = bool(fits_noise and not unexplained)
+    nothing = bool(
+        explained
+        and nominal.dof > 0
+        and nominal.p_value >= ALPHA
+        and nominal.bic - best.bic <= LOOKALIKE_BIC
+    )
+    n = len(y)
+    if len(fits) == 1 and not testable:
+        verdict = (
+            f"Cannot tell: {n} row(s) cannot test even the stated loop; the table cannot "
+            f"determine {', '.join(ident.undetermined) or 'anything more'}."
+        )
+    elif nothing:
+        verdict = (
+            f"Nothing is missing: the stated loop gives every CoR within the noise "
+            f"(chi2 {nominal.chi2:.3g} for {nominal.dof} degrees of freedom, p {nominal.p_value:.2g}; "
+            f"RMS {nominal.rms_cor:.2g} in CoR)."
+        )
+    elif explained:
+        alike = [f.name for f in lookalikes(fits)[1:]]
+        verdict = (
+            f"{best.name} explains the table: {_value_words(best)} (chi2 {best.chi2:.3g} for "
+            f"{best.dof} degrees of freedom, p {best.p_value:.2g})"
+            + (f"; as good: {', '.join(alike)}" if alike else "")
+            + "."
+        )
+    else:
+        worst = float(np.max(np.abs(best.z))) if best is not None else float("nan")
+        why = (
+            unexplained[0]
+            if unexplained
+            else (
+                f"the best of {len(fits)} models ({best.name}) leaves RMS {best.rms_cor:.2g} in CoR, "
+                f"up to {worst:.1f} noise std (chi2 {best.chi2:.3g} for {best.dof} degrees of freedom, "
+                f"p {best.p_value:.1e})"
+            )
+        )
+        if unexplained and best is not None:
+            why += f"; the best model ({best.name}) leaves RMS {best.rms_cor:.2g} in CoR"
+        verdict = f"Not explained by the loop model: {why}."
+        if best is not None and not fits_noise:
+            unexplained.insert(
+                0,
+                f"best fit {best.name}: RMS {best.rms_cor:.2g} in CoR, chi2 {best.chi2:.3g} for "
+                f"{best.dof} degrees of freedom (p {best.p_value:.1e})",
+            )
+    return Explanation(
+        table=table,
+        noise_source=source,
+        sigma_ln=sigma,
+        model_error_ln=model_error_ln,
+        fits=fits,
+        not_fitted=not_fitted,
+        identifiability=ident,
+        interactions=inter,
+        readings=read,
+        trends=trend,
+        flat=flat,
+        separations=separations,
+        explained=explained,
+        nothing_missing=nothing,
+        verdict=verdict,
+        unexplained=unexplained,
+    )

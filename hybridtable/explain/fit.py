@@ -1,0 +1,296 @@
+"""Fit models of 1-3 effects to a CoR table by least squares in ln CoR, and rank them.
+
+The residual of a row is ``(ln CoR_model - ln CoR_measured) / sigma``, with
+``sigma`` the row's noise in ln CoR (its CoR's std over its CoR) and the
+model's own error added in quadrature. A model is fitted only when it has
+fewer parameters than the table has rows (so that its fit can be tested);
+``chi2`` is tested against ``n - p`` degrees of freedom, and models are ranked
+by BIC (``chi2 + p ln n``).
+
+Which models are fitted: every single effect (from a grid of starts over its
+range); pairs and triples are screened by the loop linearized at the nominal
+point (bounded linear least squares), and the best of each size, together with
+the combinations of the best single effects, are fitted on the loop itself,
+started from their single effects' fits.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import least_squares, lsq_linear
+from scipy.stats import chi2 as chi2_dist
+
+from hybridtable.explain.effects import CorEffect
+from hybridtable.explain.model import Case, CorModel
+
+__all__ = ["ModelFit", "fit_model", "fit_models", "rank_fits"]
+
+
+@dataclass(frozen=True)
+class ModelFit:
+    """One model fitted to a table.
+
+    Parameters
+    ----------
+    effects : tuple of str
+        The effects (empty: the stated loop, nothing missing).
+    values, std : dict
+        Parameter -> fitted value and its standard error (unit of the parameter).
+    predicted_cor : ndarray
+        The model's CoR of each row.
+    z : ndarray
+        Each row's residual in noise units (model - measured).
+    chi2 : float
+        Sum of ``z**2``.
+    dof : int
+        Rows minus parameters.
+    at_bound : tuple of str
+        Parameters that ended on their plausible range's edge.
+    """
+
+    effects: tuple[str, ...]
+    values: dict[str, float]
+    std: dict[str, float]
+    predicted_cor: np.ndarray
+    measured_cor: np.ndarray
+    z: np.ndarray
+    chi2: float
+    dof: int
+    at_bound: tuple[str, ...] = ()
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def n_parameters(self) -> int:
+        """Number of fitted parameters."""
+        return len(self.values)
+
+    @property
+    def bic(self) -> float:
+        """chi2 + p ln n."""
+        n = len(self.z)
+        return self.chi2 + self.n_parameters * math.log(n)
+
+    @property
+    def aic(self) -> float:
+        """chi2 + 2 p."""
+        return self.chi2 + 2.0 * self.n_parameters
+
+    @property
+    def p_value(self) -> float:
+        """P(chi2 >= this | the model is right), with ``dof`` degrees of freedom."""
+        return float(chi2_dist.sf(self.chi2, self.dof)) if self.dof > 0 else float("nan")
+
+    @property
+    def rms_cor(self) -> float:
+        """RMS of the CoR residuals (CoR units)."""
+        return float(np.sqrt(np.mean(np.square(self.predicted_cor - self.measured_cor))))
+
+    @property
+    def name(self) -> str:
+        """The effects joined by ``+``, or ``nothing missing``."""
+        return " + ".join(self.effects) if self.effects else "nothing missing"
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary."""
+        return {
+            "effects": list(self.effects),
+            "values": self.values,
+            "std": self.std,
+            "at_bound": list(self.at_bound),
+            "predicted_cor": [float(x) for x in self.predicted_cor],
+            "residuals_cor": [float(x) for x in self.predicted_cor - self.measured_cor],
+            "residuals_sigma": [float(x) for x in self.z],
+            "chi2": self.chi2,
+            "dof": self.dof,
+            "p_value": None if self.dof == 0 else self.p_value,
+            "rms_cor": self.rms_cor,
+            "aic": self.aic,
+            "bic": self.bic,
+            **self.extra,
+        }
+
+
+def _finish(model: CorModel, cases, y, sigma, u: np.ndarray) -> ModelFit:
+    pred = model.predict(cases, u)
+    z = (pred - y) / sigma
+    values = model.values(u)
+    std: dict[str, float] = {}
+    lo, hi = model.bounds()
+    at_bound = tuple(
+        p.name
+        for p, x, a, b in zip(model.parameters, u, lo, hi, strict=True)
+        if min(x - a, b - x) < 1e-3
+    )
+    if model.parameters:
+        jac = model.jacobian(cases, u) / sigma[:, None]
+        try:
+            cov = np.linalg.inv(jac.T @ jac)
+            su = np.sqrt(np.maximum(np.diag(cov), 0.0))
+        except np.linalg.LinAlgError:
+            su = np.full(len(u), np.inf)
+        for p, x, s in zip(model.parameters, u, su, strict=True):
+            # the value's std: d value / d u times the coordinate's std
+            std[p.name] = float(abs(p.to_unit(x + 1e-6) - p.to_unit(x)) / 1e-6 * s)
+    return ModelFit(
+        effects=tuple(model.names),
+        values=values,
+        std=std,
+        predicted_cor=np.exp(pred),
+        measured_cor=np.exp(y),
+        z=z,
+        chi2=float(np.sum(z**2)),
+        dof=len(y) - len(u),
+        at_bound=at_bound,
+    )
+
+
+def fit_model(
+    effects: Sequence[CorEffect],
+    cases: Sequence[Case],
+    y: np.ndarray,
+    sigma: np.ndarray,
+    starts: Sequence[np.ndarray] = (),
+) -> ModelFit:
+    """Fit ``effects`` to ln CoR ``y`` (noise ``sigma``) of ``cases``, from ``starts``.
+
+    Every start (and ``u = 0``, and for one parameter a grid over its range) is
+    tried; the lowest chi2 wins.
+    """
+    model = CorModel(effects)
+    n_par = len(model.parameters)
+    if n_par == 0:
+        return _finish(model, cases, y, sigma, np.zeros(0))
+    lo, hi = model.bounds()
+
+    def residual(u):
+        return (model.predict(cases, u) - y) / sigma
+
+    def cost(u):
+        return float(np.sum(residual(u) ** 2))
+
+    # starts: the given ones, the null point, and the best points of a grid over the range
+    axes = [np.linspace(a, b, {1: 13, 2: 7}.get(n_par, 4)) for a, b in zip(lo, hi, strict=True)]
+    grid = [np.array(g) for g in itertools.product(*axes)]
+    grid.sort(key=cost)
+    candidates = [*[np.clip(s, lo, hi) for s in starts], grid[0]]
+    if not starts:
+        candidates.insert(0, np.zeros(n_par))
+    best = None
+    for u0 in candidates:
+        u0 = np.clip(u0, lo + 1e-9, hi - 1e-9)
+        sol = least_squares(
+            residual,
+            u0,
+            bounds=(lo, hi),
+            diff_step=1e-3,
+            xtol=1e-5,
+            ftol=1e-8,
+            max_nfev=25 * n_par,
+        )
+        if best is None or sol.cost < best.cost:
+            best = sol
+    return _finish(model, cases, y, sigma, best.x)
+
+
+def _screen(
+    effects: Sequence[CorEffect],
+    size: int,
+    jac: np.ndarray,
+    index: dict[str, list[int]],
+    y0: np.ndarray,
+    y: np.ndarray,
+    sigma: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+) -> list[tuple[float, tuple[CorEffect, ...]]]:
+    out = []
+    for combo in itertools.combinations(effects, size):
+        cols = [j for e in combo for j in index[e.name]]
+        a = jac[:, cols] / sigma[:, None]
+        b = (y - y0) / sigma
+        sol = lsq_linear(a, b, bounds=(lo[cols], hi[cols]))
+        out.append((float(np.sum((a @ sol.x - b) ** 2)), combo))
+    out.sort(key=lambda t: t[0])
+    return out
+
+
+def fit_models(
+    effects: Sequence[CorEffect],
+    cases: Sequence[Case],
+    y: np.ndarray,
+    sigma: np.ndarray,
+    max_effects: int = 3,
+    keep: int = 4,
+    progress: Callable[[str], None] | None = None,
+) -> tuple[list[ModelFit], list[tuple[str, ...]]]:
+    """Fit the stated loop, every single effect, and the promising pairs and triples.
+
+    Returns
+    -------
+    fits : list of ModelFit
+        Ranked by BIC (best first).
+    too_many : list of tuple of str
+        Effect combinations not fitted because they have at least as many
+        parameters as the table has rows.
+    """
+    n = len(y)
+    note = progress or (lambda _msg: None)
+    fits = [fit_model((), cases, y, sigma)]
+    too_many: list[tuple[str, ...]] = []
+    single: dict[str, ModelFit] = {}
+    for e in effects:
+        if len(e.parameters) >= n:
+            too_many.append((e.name,))
+            continue
+        note(e.name)
+        single[e.name] = fit_model((e,), cases, y, sigma)
+        fits.append(single[e.name])
+    everything = CorModel(effects)
+    index, j = {}, 0
+    for e in effects:
+        index[e.name] = list(range(j, j + len(e.parameters)))
+        j += len(e.parameters)
+    zero = np.zeros(len(everything.parameters))
+    jac = everything.jacobian(cases, zero)
+    y0 = everything.predict(cases, zero)
+    lo, hi = everything.bounds()
+    best_single = [f.effects[0] for f in rank_fits(list(single.values()))[:3]]
+    for size in range(2, max_effects + 1):
+        screened = _screen(effects, size, jac, index, y0, y, sigma, lo, hi)
+        chosen = [combo for _, combo in screened[:keep]]
+        chosen += [
+            tuple(e for e in effects if e.name in names)
+            for names in itertools.combinations(best_single, size)
+        ]
+        seen = set()
+        for combo in chosen:
+            names = tuple(e.name for e in combo)
+            if names in seen:
+                continue
+            seen.add(names)
+            if sum(len(e.parameters) for e in combo) >= n:
+                too_many.append(names)
+                continue
+            note(" + ".join(names))
+            starts = [
+                np.concatenate(
+                    [
+                        CorModel((e,)).coordinates(single[e.name].values)
+                        if e.name in single
+                        else np.zeros(len(e.parameters))
+                        for e in combo
+                    ]
+                )
+            ]
+            fits.append(fit_model(combo, cases, y, sigma, starts))
+    return rank_fits(fits), sorted(set(too_many))
+
+
+def rank_fits(fits: list[ModelFit]) -> list[ModelFit]:
+    """``fits`` by BIC, then by fewer effects."""
+    return sorted(fits, key=lambda f: (round(f.bic, 9), len(f.effects)))

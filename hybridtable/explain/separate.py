@@ -1,0 +1,103 @@
+"""The models that fit a CoR table equally well, and the run that would tell them apart.
+
+Look-alikes are the fitted models within :data:`LOOKALIKE_BIC` of the best
+one's BIC. For each look-alike of the best, every candidate run is predicted
+by both fits: each compensator at the table's first conditions, and each with
+the spring twice and half as stiff against the same spacecraft model (f_con
+times or over sqrt 2), and the SDC with twice the lead. The run whose two
+predictions differ by the most noise std separates them.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import replace
+
+import numpy as np
+
+from hybridtable.explain.conditions import Conditions
+from hybridtable.explain.fit import ModelFit
+from hybridtable.explain.model import Case, CorModel
+from hybridtable.explain.registry import get_cor_effect
+
+__all__ = ["LOOKALIKE_BIC", "lookalikes", "separating_runs"]
+
+#: Models whose BIC is within this of the best one's fit the table equally well.
+LOOKALIKE_BIC = 2.0
+
+
+def lookalikes(fits: Sequence[ModelFit]) -> list[ModelFit]:
+    """The fits within :data:`LOOKALIKE_BIC` of the best (the best first)."""
+    if not fits:
+        return []
+    best = fits[0].bic
+    return [f for f in fits if f.bic - best <= LOOKALIKE_BIC]
+
+
+def _candidates(first: Conditions) -> list[tuple[str, Case]]:
+    mass = first.spacecraft_mass_kg
+    out = []
+    for comp in ("none", "SDC", "MDC", "SDMDC"):
+        out.append((f"{comp} at the table's first conditions", (comp, first)))
+        for factor, word in ((2.0, "twice as stiff"), (0.5, "half as stiff")):
+            k = first.contact_stiffness_n_per_m * factor
+            f = math.sqrt(k / mass) / (2 * math.pi)
+            out.append(
+                (
+                    f"{comp} with a spring {word} ({k:.4g} N/m, same model mass: f_con {f:.3g} Hz)",
+                    (comp, replace(first, contact_stiffness_n_per_m=k, contact_frequency_hz=f)),
+                )
+            )
+    lead = 2 * first.lead_s if first.lead_s > 0 else first.sensor_delay_s or 0.001
+    out.append(
+        (f"SDC with a lead of {1e3 * lead:.3g} ms", ("SDC", replace(first, lead_time_s=lead)))
+    )
+    return out
+
+
+def _predict(fit: ModelFit, case: Case) -> float:
+    model = CorModel([get_cor_effect(n) for n in fit.effects])
+    return float(model.predict([case], model.coordinates(fit.values))[0])
+
+
+def separating_runs(fits: Sequence[ModelFit], first: Conditions, sigma_ln: float) -> list[dict]:
+    """For each look-alike of the best fit: the candidate run that separates them most.
+
+    Parameters
+    ----------
+    fits : sequence of ModelFit
+        Ranked, best first.
+    first : Conditions
+        The conditions candidate runs start from.
+    sigma_ln : float
+        The noise of one new run, in ln CoR.
+    """
+    alike = lookalikes(fits)
+    if len(alike) < 2:
+        return []
+    best = alike[0]
+    out = []
+    candidates = _candidates(first)
+    for other in alike[1:4]:
+        scored = []
+        for words, case in candidates:
+            a, b = _predict(best, case), _predict(other, case)
+            scored.append((abs(a - b) / sigma_ln, words, a, b))
+        sep, words, a, b = max(scored, key=lambda t: t[0])
+        out.append(
+            {
+                "models": [best.name, other.name],
+                "run": words,
+                "cor": [float(np.exp(a)), float(np.exp(b))],
+                "separation_sigma": float(sep),
+                "words": (
+                    f"a run of {words} separates {best.name} (CoR {np.exp(a):.4f}) from "
+                    f"{other.name} (CoR {np.exp(b):.4f}) by {sep:.1f} noise std"
+                    if sep >= 3
+                    else f"no candidate run separates {best.name} from {other.name} by 3 noise "
+                    f"std (best: {words}, {sep:.1f} std)"
+                ),
+            }
+        )
+    return out
