@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 __all__ = ["register", "run"]
@@ -86,6 +87,13 @@ def register(sub) -> None:
         metavar="NAME[,NAME...]",
         help="the candidate effects (default: all registered)",
     )
+    p.add_argument(
+        "--jobs",
+        type=integer_type(1, 64),
+        default=None,
+        metavar="N",
+        help="processes that fit models in parallel (default: the CPUs, at most 4)",
+    )
     p.add_argument("--json", metavar="FILE", help="write the results as JSON (- for stdout)")
     p.add_argument(
         "--plot",
@@ -134,6 +142,7 @@ def run(args: argparse.Namespace) -> int:
             effects=effects,
             max_effects=args.max_effects,
             model_error_ln=args.model_error,
+            jobs=args.jobs or min(os.cpu_count() or 1, 4),
             progress=(lambda name: (bar.set_postfix_str(name[:40]), bar.update())) if bar else None,
         )
     finally:

@@ -161,6 +161,7 @@ def explain_table(
     max_effects: int = 3,
     model_error_ln: float = MODEL_ERROR_LN,
     progress: Callable[[str], None] | None = None,
+    jobs: int = 1,
 ) -> Explanation:
     """Explain a measured CoR table.
 
@@ -176,6 +177,8 @@ def explain_table(
         The loop model's own error in ln CoR, added in quadrature to each row's noise.
     progress : callable, optional
         Called with the name of each model as it is fitted.
+    jobs : int
+        Processes that fit models in parallel (1: in this process).
     """
     effects = (
         list(effects) if effects is not None else [get_cor_effect(n) for n in cor_effect_names()]
@@ -184,7 +187,9 @@ def explain_table(
     y = table.ln_cor
     sigma = np.sqrt((std / np.exp(y)) ** 2 + model_error_ln**2)
     cases = [(r.compensator, r.conditions) for r in table.rows]
-    fits, not_fitted = fit_models(effects, cases, y, sigma, max_effects, progress=progress)
+    fits, not_fitted = fit_models(
+        effects, cases, y, sigma, max_effects, progress=progress, jobs=jobs
+    )
     best = fits[0] if fits else None
     nominal = next(f for f in fits if not f.effects)
     at = best.values if best is not None else {}
@@ -196,7 +201,7 @@ def explain_table(
     trend = trends(cases, y, sigma, predicted, effects)
     flat = _flat(table, y, sigma, best)
     first = table.rows[0].conditions
-    separations = separating_runs(fits, first, float(np.median(sigma)))
+    separations = []
     unexplained = []
     for item in inter:
         if item["flagged"]:
@@ -221,6 +226,8 @@ def explain_table(
         and nominal.p_value >= ALPHA
         and nominal.bic - best.bic <= LOOKALIKE_BIC
     )
+    if not nothing:
+        separations = separating_runs(fits, first, float(np.median(sigma)))
     n = len(y)
     if len(fits) == 1 and not testable:
         verdict = (

@@ -16,9 +16,12 @@ started from their single effects' fits.
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import math
+import multiprocessing
 from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -227,8 +230,11 @@ def fit_models(
     max_effects: int = 3,
     keep: int = 4,
     progress: Callable[[str], None] | None = None,
+    jobs: int = 1,
 ) -> tuple[list[ModelFit], list[tuple[str, ...]]]:
     """Fit the stated loop, every single effect, and the promising pairs and triples.
+
+    ``jobs`` > 1 fits the models in that many forked processes.
 
     Returns
     -------
@@ -240,45 +246,40 @@ def fit_models(
     """
     n = len(y)
     note = progress or (lambda _msg: None)
-    fits = [fit_model((), cases, y, sigma)]
     too_many: list[tuple[str, ...]] = []
-    single: dict[str, ModelFit] = {}
-    for e in effects:
-        if len(e.parameters) >= n:
-            too_many.append((e.name,))
-            continue
-        note(e.name)
-        single[e.name] = fit_model((e,), cases, y, sigma)
-        fits.append(single[e.name])
-    everything = CorModel(effects)
-    index, j = {}, 0
-    for e in effects:
-        index[e.name] = list(range(j, j + len(e.parameters)))
-        j += len(e.parameters)
-    zero = np.zeros(len(everything.parameters))
-    jac = everything.jacobian(cases, zero)
-    y0 = everything.predict(cases, zero)
-    lo, hi = everything.bounds()
-    best_single = [f.effects[0] for f in rank_fits(list(single.values()))[:3]]
-    for size in range(2, max_effects + 1):
-        screened = _screen(effects, size, jac, index, y0, y, sigma, lo, hi)
-        chosen = [combo for _, combo in screened[:keep]]
-        chosen += [
-            tuple(e for e in effects if e.name in names)
-            for names in itertools.combinations(best_single, size)
-        ]
-        seen = set()
-        for combo in chosen:
-            names = tuple(e.name for e in combo)
-            if names in seen:
-                continue
-            seen.add(names)
-            if sum(len(e.parameters) for e in combo) >= n:
-                too_many.append(names)
-                continue
-            note(" + ".join(names))
-            starts = [
-                np.concatenate(
+    singles = [e for e in effects if len(e.parameters) < n]
+    too_many += [(e.name,) for e in effects if len(e.parameters) >= n]
+    with _pool(jobs) as run:
+        fits = run([((), ())] + [((e,), ()) for e in singles], cases, y, sigma, note)
+        single = {f.effects[0]: f for f in fits[1:]}
+        everything = CorModel(effects)
+        index, j = {}, 0
+        for e in effects:
+            index[e.name] = list(range(j, j + len(e.parameters)))
+            j += len(e.parameters)
+        zero = np.zeros(len(everything.parameters))
+        jac = everything.jacobian(cases, zero)
+        y0 = everything.predict(cases, zero)
+        lo, hi = everything.bounds()
+        best_single = [f.effects[0] for f in rank_fits(list(single.values()))[:3]]
+        work = []
+        seen: set[tuple[str, ...]] = set()
+        for size in range(2, max_effects + 1):
+            screened = _screen(effects, size, jac, index, y0, y, sigma, lo, hi)
+            chosen = [combo for _, combo in screened[:keep]]
+            chosen += [
+                tuple(e for e in effects if e.name in names)
+                for names in itertools.combinations(best_single, size)
+            ]
+            for combo in chosen:
+                names = tuple(e.name for e in combo)
+                if names in seen:
+                    continue
+                seen.add(names)
+                if sum(len(e.parameters) for e in combo) >= n:
+                    too_many.append(names)
+                    continue
+                start = np.concatenate(
                     [
                         CorModel((e,)).coordinates(single[e.name].values)
                         if e.name in single
@@ -286,9 +287,43 @@ def fit_models(
                         for e in combo
                     ]
                 )
-            ]
-            fits.append(fit_model(combo, cases, y, sigma, starts))
+                work.append((combo, (start,)))
+        fits += run(work, cases, y, sigma, note)
     return rank_fits(fits), sorted(set(too_many))
+
+
+def _fit_job(args) -> ModelFit:
+    effects, starts, cases, y, sigma = args
+    return fit_model(effects, cases, y, sigma, starts)
+
+
+@contextlib.contextmanager
+def _pool(jobs: int):
+    """A function that fits a list of (effects, starts) jobs, in ``jobs`` processes
+    (forked, so that plug-in effects registered in this process are there too)."""
+    if jobs <= 1 or "fork" not in multiprocessing.get_all_start_methods():
+
+        def serial(work, cases, y, sigma, note):
+            out = []
+            for effects, starts in work:
+                note(" + ".join(e.name for e in effects) or "the stated loop")
+                out.append(fit_model(effects, cases, y, sigma, starts))
+            return out
+
+        yield serial
+        return
+    ctx = multiprocessing.get_context("fork")
+    with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as pool:
+
+        def parallel(work, cases, y, sigma, note):
+            futures = [pool.submit(_fit_job, (e, s, cases, y, sigma)) for e, s in work]
+            out = []
+            for (effects, _), fut in zip(work, futures, strict=True):
+                out.append(fut.result())
+                note(" + ".join(e.name for e in effects) or "the stated loop")
+            return out
+
+        yield parallel
 
 
 def rank_fits(fits: list[ModelFit]) -> list[ModelFit]:

@@ -158,11 +158,18 @@ def readings(cases: Sequence[Case], y: np.ndarray, sigma: np.ndarray) -> list[di
         stated = cond.contact_frequency_hz * cond.lead_s
         item = {"f_con_times_lead": f_lead, "stated_f_con_times_lead": stated}
         if stated > 0 and sdc_gain > 3 * s_sdc:
+            ratio = f_lead / stated
+            if abs(ratio - 1.0) <= 3 * s_sdc / sdc_gain:
+                judgement = "as stated"
+            else:
+                judgement = (
+                    f"the contact is {ratio:.2g} times faster than stated, or the lead that much "
+                    "longer"
+                )
             words.append(
                 f"The SDC's gain ln(none/SDC) = {sdc_gain:.4f} gives f_con * T_lead = {f_lead:.4g} "
-                f"(pi^2 f_con T_lead to first order); the stated {cond.contact_frequency_hz:g} Hz and "
-                f"{1e3 * cond.lead_s:g} ms give {stated:.4g}: the contact is {f_lead / stated:.2g} times "
-                "faster than stated, or the lead that much longer."
+                f"(pi^2 f_con T_lead to first order); the stated {cond.contact_frequency_hz:g} Hz "
+                f"and {1e3 * cond.lead_s:g} ms give {stated:.4g}: {judgement}."
             )
         if sdc_gain > 3 * s_sdc:
             lag = mdc_gain / sdc_gain * cond.lead_s
@@ -206,7 +213,8 @@ def trends(
     to the higher value, and the best model's. Flagged when every pair moves
     the same way, there are at least three, and the best model misses their
     sum by more than :data:`FLAG_SIGMA` std; ``library_can`` lists the effects
-    that move the pairs that way anywhere in their range.
+    that move the pairs that way at a size that keeps the CoRs within
+    :data:`WINDOW_LN` of the table's.
     """
     out = []
     for field, word in (
@@ -238,8 +246,12 @@ def trends(
         for e in effects:
             model = CorModel((e,))
             a, b = model.bounds()
-            for u in np.linspace(a, b, 7):
-                moved = model.predict(highs, u) - model.predict(lows, u)
+            for u in np.linspace(a, b, 13):
+                ph, pl = model.predict(highs, u), model.predict(lows, u)
+                both = np.concatenate([ph, pl])
+                if np.any((both < y.min() - WINDOW_LN) | (both > y.max() + WINDOW_LN)):
+                    continue  # a size far from the table's CoRs
+                moved = ph - pl
                 if np.all(sign * moved > 0) and sign * np.sum(moved) > FLAG_SIGMA * math.sqrt(
                     np.sum(s**2)
                 ):
