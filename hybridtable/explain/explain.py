@@ -147,11 +147,10 @@ def _value_words(fit: ModelFit) -> str:
     parts = []
     for k, v in fit.values.items():
         s = fit.std.get(k, math.inf)
-        unit = k.rsplit("_", 1)[-1] if k.endswith(("_s", "_m")) else ""
         if k.endswith("_s"):
             parts.append(f"{k} = {1e3 * v:.3g} +/- {1e3 * s:.2g} ms")
         else:
-            parts.append(f"{k} = {v:.4g} +/- {s:.2g}{(' ' + unit) if unit else ''}")
+            parts.append(f"{k} = {v:.4g} +/- {s:.2g}")
     return ", ".join(parts)
 
 

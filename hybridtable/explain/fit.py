@@ -22,7 +22,7 @@ import math
 import multiprocessing
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import least_squares, lsq_linear
@@ -65,7 +65,6 @@ class ModelFit:
     chi2: float
     dof: int
     at_bound: tuple[str, ...] = ()
-    extra: dict = field(default_factory=dict)
 
     @property
     def n_parameters(self) -> int:
@@ -114,7 +113,6 @@ class ModelFit:
             "rms_cor": self.rms_cor,
             "aic": self.aic,
             "bic": self.bic,
-            **self.extra,
         }
 
 
