@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 
 __all__ = ["register", "run"]
@@ -92,7 +91,7 @@ def register(sub) -> None:
         type=integer_type(1, 64),
         default=None,
         metavar="N",
-        help="processes that fit models in parallel (default: the CPUs, at most 4)",
+        help="processes that fit models in parallel (default: 1; worth it from 4 cores)",
     )
     p.add_argument("--json", metavar="FILE", help="write the results as JSON (- for stdout)")
     p.add_argument(
@@ -142,7 +141,7 @@ def run(args: argparse.Namespace) -> int:
             effects=effects,
             max_effects=args.max_effects,
             model_error_ln=args.model_error,
-            jobs=args.jobs or min(os.cpu_count() or 1, 4),
+            jobs=args.jobs or 1,
             progress=(lambda name: (bar.set_postfix_str(name[:40]), bar.update())) if bar else None,
         )
     finally:

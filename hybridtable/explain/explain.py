@@ -241,12 +241,18 @@ def explain_table(
         )
     elif explained:
         alike = [f.name for f in lookalikes(fits)[1:]]
-        verdict = (
-            f"{best.name} explains the table: {_value_words(best)} (chi2 {best.chi2:.3g} for "
-            f"{best.dof} degrees of freedom, p {best.p_value:.2g})"
-            + (f"; as good: {', '.join(alike)}" if alike else "")
-            + "."
+        fit_words = (
+            f"{_value_words(best)} (chi2 {best.chi2:.3g} for {best.dof} degrees of freedom, "
+            f"p {best.p_value:.2g})"
         )
+        if alike:
+            verdict = (
+                f"Explained, but not uniquely: {best.name} or {' or '.join(alike)} fit equally "
+                f"well (within {LOOKALIKE_BIC:g} of BIC); the table cannot tell them apart. "
+                f"Best: {best.name}, {fit_words}."
+            )
+        else:
+            verdict = f"{best.name} explains the table: {fit_words}."
     else:
         worst = float(np.max(np.abs(best.z))) if best is not None else float("nan")
         why = (

@@ -175,7 +175,15 @@ def fit_model(
         return float(np.sum(residual(u) ** 2))
 
     # starts: the given ones, the null point, and the best points of a grid over the range
-    axes = [np.linspace(a, b, {1: 13, 2: 7}.get(n_par, 4)) for a, b in zip(lo, hi, strict=True)]
+    # (a linear parameter whose null is a bound, e.g. damping >= 0, gets a geometric grid:
+    # its plausible sizes span decades)
+    points = {1: 13, 2: 7}.get(n_par, 4)
+    axes = [
+        a + (b - a) * np.concatenate([[0.0], np.geomspace(1e-3, 1.0, points - 1)])
+        if not p.log and p.null == p.lower
+        else np.linspace(a, b, points)
+        for p, a, b in zip(model.parameters, lo, hi, strict=True)
+    ]
     grid = [np.array(g) for g in itertools.product(*axes)]
     grid.sort(key=cost)
     candidates = [*[np.clip(s, lo, hi) for s in starts], grid[0]]
@@ -183,7 +191,10 @@ def fit_model(
         candidates.insert(0, np.zeros(n_par))
     best = None
     for u0 in candidates:
-        u0 = np.clip(u0, lo + 1e-9, hi - 1e-9)
+        # off the bounds by a margin: least_squares' xtol is relative to |u|, so a start
+        # 1e-9 from a bound at 0 would stop at once
+        margin = np.maximum(0.1, 1e-3 * (hi - lo))
+        u0 = np.clip(u0, lo + margin, hi - margin)
         sol = least_squares(
             residual,
             u0,

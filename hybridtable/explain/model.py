@@ -36,9 +36,11 @@ Case = tuple[str, Conditions]
 def loop_of(
     case: Case, effects: Sequence[CorEffect], values: Mapping[str, float]
 ) -> HybridLoopParams:
-    """The true loop of ``case`` under ``effects`` with parameter ``values``."""
+    """The true loop of ``case`` under ``effects`` with parameter ``values``, with a
+    continuous rig computer: an effect may move the delay between two ticks of the
+    conditions' ``sample_rate_hz``, which :func:`ln_cor` then interpolates."""
     compensator, conditions = case
-    params = conditions.loop_params(compensator)
+    params = conditions.loop_params(compensator).with_(sample_rate_hz=None)
     for effect in effects:
         params = effect.apply(conditions, params, values)
     return params
@@ -52,9 +54,10 @@ def _ln_cor_of(params: HybridLoopParams) -> float:
         return FAILED_LN_COR
 
 
-def _ln_cor_sampled(params: HybridLoopParams) -> float:
-    h = 1.0 / params.sample_rate_hz
+def _ln_cor_sampled(params: HybridLoopParams, sample_rate_hz: float) -> float:
+    h = 1.0 / sample_rate_hz
     ticks = params.sensor_delay_s / h
+    params = params.with_(sensor_delay_s=0.0, sample_rate_hz=sample_rate_hz)
     low = math.floor(ticks + 1e-9)
     frac = ticks - low
     if frac < 1e-6:
@@ -64,10 +67,12 @@ def _ln_cor_sampled(params: HybridLoopParams) -> float:
     return (1.0 - frac) * a + frac * b
 
 
-def ln_cor(params: HybridLoopParams) -> float:
-    """ln CoR of one loop (:data:`FAILED_LN_COR` if it diverges or never lets go)."""
-    if params.sample_rate_hz is not None:
-        return _ln_cor_sampled(params)
+def ln_cor(params: HybridLoopParams, sample_rate_hz: float | None = None) -> float:
+    """ln CoR of one loop (:data:`FAILED_LN_COR` if it diverges or never lets go),
+    on a rig computer at ``sample_rate_hz`` (None: ``params``' own)."""
+    rate = sample_rate_hz or params.sample_rate_hz
+    if rate is not None:
+        return _ln_cor_sampled(params.with_(sample_rate_hz=None), rate)
     return _ln_cor_of(params)
 
 
@@ -117,7 +122,9 @@ class CorModel:
     def predict(self, cases: Sequence[Case], u: Sequence[float]) -> np.ndarray:
         """ln CoR of each case at coordinates ``u``."""
         values = self.values(u)
-        return np.array([ln_cor(loop_of(c, self.effects, values)) for c in cases])
+        return np.array(
+            [ln_cor(loop_of(c, self.effects, values), c[1].sample_rate_hz) for c in cases]
+        )
 
     def jacobian(
         self,

@@ -28,11 +28,17 @@ LOOKALIKE_BIC = 2.0
 
 
 def lookalikes(fits: Sequence[ModelFit]) -> list[ModelFit]:
-    """The fits within :data:`LOOKALIKE_BIC` of the best (the best first)."""
+    """The fits within :data:`LOOKALIKE_BIC` of the best (the best first); a fit
+    that holds all of the best's effects and more is not another explanation, only
+    the best one with something added, and is left out."""
     if not fits:
         return []
-    best = fits[0].bic
-    return [f for f in fits if f.bic - best <= LOOKALIKE_BIC]
+    best = fits[0]
+    return [best] + [
+        f
+        for f in fits[1:]
+        if f.bic - best.bic <= LOOKALIKE_BIC and not set(best.effects) <= set(f.effects)
+    ]
 
 
 def _candidates(first: Conditions) -> list[tuple[str, Case]]:

@@ -9,6 +9,7 @@ file would be.
 
 from __future__ import annotations
 
+import traceback
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
@@ -69,11 +70,18 @@ def explained(tmp_path_factory) -> Callable[..., Explanation]:
             try:
                 table = generated_table(folder, name, conditions, hidden, compensators)
                 cache[name] = explain_table(table, max_effects=max_effects)
-            except Exception as err:  # kept so that each test reports it, computed once
+            except Exception as err:
+                # kept: the first test shows the whole traceback, the others one line
                 cache[name] = err
+                raise
         value = cache[name]
         if isinstance(value, Exception):
-            raise value
+            where = traceback.extract_tb(value.__traceback__)[-1]
+            pytest.fail(
+                f"explain_table on the {name!r} table raised {type(value).__name__} "
+                f"({where.filename}:{where.lineno}): {value}",
+                pytrace=False,
+            )
         return value
 
     return get

@@ -179,9 +179,7 @@ def test_a_stated_cor_std_wins_and_is_floored_at_the_rounding(tmp_path):
 def test_flags_fill_the_conditions_the_table_does_not_state(tmp_path):
     path = _write(
         tmp_path,
-        "compensator,cor,contact_frequency_hz,table_response_hz\n"
-        "none,1.19,1,\n"
-        "SDC,1.08,1,40\n",
+        "compensator,cor,contact_frequency_hz,table_response_hz\nnone,1.19,1,\nSDC,1.08,1,40\n",
     )
     table = read_cor_table(path, {"sensor_delay_s": 0.003, "table_response_hz": 30.0})
     first, second = (r.conditions for r in table.rows)
