@@ -63,9 +63,9 @@ class Explanation:
     unexplained: list[str] = field(default_factory=list)
 
     @property
-    def best(self) -> ModelFit | None:
-        """The best fit, or None when no model could be fitted."""
-        return self.fits[0] if self.fits else None
+    def best(self) -> ModelFit:
+        """The best fit (the stated loop is always among the fits)."""
+        return self.fits[0]
 
     def to_dict(self) -> dict:
         """The JSON document of ``hybridtable explain``."""
@@ -111,7 +111,7 @@ class Explanation:
         }
 
 
-def _flat(table: CorTable, y: np.ndarray, sigma: np.ndarray, best: ModelFit | None) -> dict | None:
+def _flat(table: CorTable, y: np.ndarray, sigma: np.ndarray, best: ModelFit) -> dict | None:
     """A CoR constant per compensator, the empirical baseline a model must beat."""
     comps = sorted({r.compensator for r in table.rows})
     n, p = len(y), len(comps)
@@ -129,17 +129,15 @@ def _flat(table: CorTable, y: np.ndarray, sigma: np.ndarray, best: ModelFit | No
         "chi2": chi2,
         "dof": n - p,
         "rms_cor": rms,
-        "best_model_beats_it": None,
     }
-    if best is not None and best.dof > 0:
-        extra = best.n_parameters - p
-        if extra <= 0:
-            out["best_model_beats_it"] = best.chi2 < chi2
-        else:
-            # an F test: the gain in chi2 per extra parameter against the best model's misfit
-            stat = ((chi2 - best.chi2) / extra) / max(best.chi2 / best.dof, 1.0)
-            out["f_p_value"] = float(f_dist.sf(stat, extra, best.dof))
-            out["best_model_beats_it"] = bool(out["f_p_value"] < 0.05)
+    extra = best.n_parameters - p
+    if extra <= 0:
+        out["best_model_beats_it"] = best.chi2 < chi2
+    else:
+        # an F test: the gain in chi2 per extra parameter against the best model's misfit
+        stat = ((chi2 - best.chi2) / extra) / max(best.chi2 / best.dof, 1.0)
+        out["f_p_value"] = float(f_dist.sf(stat, extra, best.dof))
+        out["best_model_beats_it"] = bool(out["f_p_value"] < 0.05)
     return out
 
 
@@ -189,11 +187,12 @@ def explain_table(
     fits, not_fitted = fit_models(
         effects, cases, y, sigma, max_effects, progress=progress, jobs=jobs
     )
-    best = fits[0] if fits else None
+    # the stated loop is always fitted (it has no parameter and n >= 1 rows), and every
+    # model fitted has fewer parameters than rows: the best exists and has dof >= 1
+    best = fits[0]
     nominal = next(f for f in fits if not f.effects)
-    at = best.values if best is not None else {}
-    ident = identifiability(effects, cases, sigma, at)
-    predicted = np.log(best.predicted_cor) if best is not None else y
+    ident = identifiability(effects, cases, sigma, best.values)
+    predicted = np.log(best.predicted_cor)
     single = {f.effects[0]: np.log(f.predicted_cor) for f in fits if len(f.effects) == 1}
     inter = interactions(cases, y, sigma, predicted, effects, single)
     read = readings(cases, y, sigma)
@@ -216,24 +215,14 @@ def explain_table(
     for item in trend:
         if item["flagged"]:
             unexplained.append(item["words"])
-    testable = best is not None and best.dof > 0
-    fits_noise = testable and best.p_value >= ALPHA
+    fits_noise = best.p_value >= ALPHA
     explained = bool(fits_noise and not unexplained)
     nothing = bool(
-        explained
-        and nominal.dof > 0
-        and nominal.p_value >= ALPHA
-        and nominal.bic - best.bic <= LOOKALIKE_BIC
+        explained and nominal.p_value >= ALPHA and nominal.bic - best.bic <= LOOKALIKE_BIC
     )
     if not nothing:
         separations = separating_runs(fits, first, float(np.median(sigma)))
-    n = len(y)
-    if len(fits) == 1 and not testable:
-        verdict = (
-            f"Cannot tell: {n} row(s) cannot test even the stated loop; the table cannot "
-            f"determine {', '.join(ident.undetermined) or 'anything more'}."
-        )
-    elif nothing:
+    if nothing:
         verdict = (
             f"Nothing is missing: the stated loop gives every CoR within the noise "
             f"(chi2 {nominal.chi2:.3g} for {nominal.dof} degrees of freedom, p {nominal.p_value:.2g}; "
@@ -254,7 +243,7 @@ def explain_table(
         else:
             verdict = f"{best.name} explains the table: {fit_words}."
     else:
-        worst = float(np.max(np.abs(best.z))) if best is not None else float("nan")
+        worst = float(np.max(np.abs(best.z)))
         why = (
             unexplained[0]
             if unexplained
@@ -264,10 +253,10 @@ def explain_table(
                 f"p {best.p_value:.1e})"
             )
         )
-        if unexplained and best is not None:
+        if unexplained:
             why += f"; the best model ({best.name}) leaves RMS {best.rms_cor:.2g} in CoR"
         verdict = f"Not explained by the loop model: {why}."
-        if best is not None and not fits_noise:
+        if not fits_noise:
             unexplained.insert(
                 0,
                 f"best fit {best.name}: RMS {best.rms_cor:.2g} in CoR, chi2 {best.chi2:.3g} for "
