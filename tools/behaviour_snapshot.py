@@ -15,7 +15,10 @@ The commands run as a user runs them (``python -m hybridtable.cli``):
 ``compare`` / ``diagnose`` on the recorded runs. Clock readings are the only fields
 left out of the diff (keys containing ``wall`` or ``real_time``; in text, only the
 reading itself is masked); every other number must be
-equal to the last bit. ``diff`` exits 1 on any difference.
+equal to the last bit (``diff --rtol 1e-9`` allows JSON numbers that moved by
+re-ordered floating operations). ``diff`` exits 1 on any difference.
+``simulate6`` on the three 6-DoF examples, ``sweep`` of the Table 2 spec,
+``explain`` on Tables 3 and 4 and ``effects`` are covered too.
 """
 
 from __future__ import annotations
@@ -58,6 +61,30 @@ def _cases(runs: str | None) -> list[tuple[str, list[str]]]:
                           "--table-response-hz", "10,25", "--no-progress"]),
         ("compensators-quick", ["compensators", "--quick", "--jobs", "1", "--no-progress",
                                 "--prior-ratios", "0.5,1"]),
+    ]  # fmt: skip
+    for name in ("on_axis", "offset", "stewart"):
+        for c in ("none", "SDMDC"):
+            cases.append(
+                (
+                    f"simulate6-{name}-{c}",
+                    [
+                        "simulate6",
+                        f"examples/six_dof/{name}.toml",
+                        "--compensator",
+                        c,
+                        "--no-progress",
+                    ],
+                )
+            )
+    cases += [
+        ("sweep-table2", ["sweep", "examples/sweeps/table2.toml", "--no-progress",
+                          "--workers", "1",
+                          "--out", "{out}/sweep-table2.parquet"]),
+        ("explain-table3", ["explain", "examples/explain/table3_experiment.csv",
+                            "--no-progress"]),
+        ("explain-table4-one", ["explain", "examples/explain/table4_experiment_sdmdc.csv",
+                                "--max-effects", "1", "--no-progress"]),
+        ("effects", ["effects"]),
     ]  # fmt: skip
     if runs:
         cases += [
@@ -105,20 +132,32 @@ def _strip(obj):
     return obj
 
 
-def _differences(a, b, path: str = "") -> list[str]:
+def _close(a, b, rtol: float) -> bool:
+    """Equal, or two numbers within ``rtol`` of each other (relative to the larger, or
+    absolute below 1)."""
+    if a == b:
+        return True
+    if rtol <= 0.0 or isinstance(a, bool) or isinstance(b, bool):
+        return False
+    if not (isinstance(a, int | float) and isinstance(b, int | float)):
+        return False
+    return abs(a - b) <= rtol * max(1.0, abs(a), abs(b))
+
+
+def _differences(a, b, path: str = "", rtol: float = 0.0) -> list[str]:
     if isinstance(a, dict) and isinstance(b, dict):
         out = [f"{path}.{k}: only in one" for k in sorted(set(a) ^ set(b))]
         for k in sorted(set(a) & set(b)):
-            out += _differences(a[k], b[k], f"{path}.{k}")
+            out += _differences(a[k], b[k], f"{path}.{k}", rtol)
         return out
     if isinstance(a, list) and isinstance(b, list):
         if len(a) != len(b):
             return [f"{path}: length {len(a)} != {len(b)}"]
         out = []
         for i, (x, y) in enumerate(zip(a, b, strict=True)):
-            out += _differences(x, y, f"{path}[{i}]")
+            out += _differences(x, y, f"{path}[{i}]", rtol)
         return out
-    return [] if a == b else [f"{path}: {a!r} != {b!r}"]
+    return [] if _close(a, b, rtol) else [f"{path}: {a!r} != {b!r}"]
 
 
 #: Clock readings in console and Markdown text: ``(0.12 s)``, ``(26 s)``,
@@ -134,7 +173,7 @@ def _text_lines(path: Path, root: Path) -> list[str]:
     return [_TIMING.sub("<clock>", ln) for ln in text.splitlines()]
 
 
-def diff(a: Path, b: Path) -> int:
+def diff(a: Path, b: Path, rtol: float = 0.0) -> int:
     names = sorted(
         str(p.relative_to(a)) for p in a.rglob("*") if p.suffix in (".json", ".md", ".stdout")
     )
@@ -147,7 +186,7 @@ def diff(a: Path, b: Path) -> int:
             continue
         if pa.suffix == ".json":
             found = _differences(
-                _strip(json.loads(pa.read_text())), _strip(json.loads(pb.read_text()))
+                _strip(json.loads(pa.read_text())), _strip(json.loads(pb.read_text())), "", rtol
             )
         else:
             la, lb = _text_lines(pa, a), _text_lines(pb, b)
@@ -170,10 +209,16 @@ def main() -> int:
     d = sub.add_parser("diff", help="compare two saved sets; exit 1 on any difference")
     d.add_argument("a", type=Path)
     d.add_argument("b", type=Path)
+    d.add_argument(
+        "--rtol",
+        type=float,
+        default=0.0,
+        help="JSON numbers within this relative tolerance count as equal (default 0: bit for bit)",
+    )
     args = parser.parse_args()
     if args.verb == "save":
         return save(args.dir, args.runs)
-    return diff(args.a, args.b)
+    return diff(args.a, args.b, args.rtol)
 
 
 if __name__ == "__main__":
