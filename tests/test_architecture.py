@@ -5,7 +5,7 @@ Every import of every module under ``hybridtable/`` is read with ``ast``
 layers of ``docs/architecture.md``::
 
     cli -> commands -> reports -> (analysis, diagnosis, studies)
-        -> (measurement, stewart) -> loop -> compensators -> systems
+        -> (measurement, stewart) -> loop -> compensators -> (systems, laws)
         -> (errors, _validation, limits, data)
 
 A module may import its own layer or any layer below, never one above, and no
@@ -34,6 +34,7 @@ LAYERS: dict[str, int] = {
     "_files": 0,
     "limits": 0,
     "data": 0,
+    "laws": 1,
     "systems": 1,
     "compensators": 2,
     "loop": 3,

@@ -15,98 +15,35 @@ the measured force and the table motion of the same instant.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
-from pydrake.autodiffutils import AutoDiffXd
-from pydrake.systems.framework import BasicVector_, Diagram, DiagramBuilder, LeafSystem_
-from pydrake.systems.scalar_conversion import TemplateSystem
+from pydrake.systems.framework import Diagram, DiagramBuilder, System
 
 from hybridtable.compensators._wiring import export_compensator_ports, sensor_like_delay
 from hybridtable.compensators.identification import ContactIdentifier, IdentifierParams
-from hybridtable.compensators.paper import CompensatorParams
+from hybridtable.compensators.paper import Compensator, CompensatorParams
 from hybridtable.errors import ParameterError
 
 __all__ = [
     "AdaptiveSDMDC",
-    "AdaptiveSDMDC_",
     "online_identifier_params",
     "make_online_sdmdc",
 ]
 
 
-@TemplateSystem.define("AdaptiveSDMDC_", T_list=[float, AutoDiffXd])
-def AdaptiveSDMDC_(T):
-    class Impl(LeafSystem_[T]):
-        """SDMDC whose stiffness and damping come from an input port.
+def AdaptiveSDMDC(
+    params: CompensatorParams, derivative_period_s: float | None = None, compiled: bool = True
+) -> System:
+    """SDMDC whose stiffness and damping come from an input port.
 
-        Ports
-        -----
-        Input ``measured_force`` (size 1, N)
-        Input ``measured_force_rate`` (size 1, N/s)
-            Read only when ``derivative_period_s`` is None.
-        Input ``table_motion`` (size 3: m, m/s, m/s^2)
-        Input ``commanded_state`` (size 2: m, m/s)
-        Input ``contact_parameters`` (size 2: N/m, N s/m)
-            ``[k, c]`` used by the MDC term.
-        Output ``compensated_force`` (size 1, N)
-
-        Gating, clamping and the lead follow
-        :class:`hybridtable.compensators.paper.Compensator` with ``kind="SDMDC"``
-        (``params.stiffness_n_per_m`` and ``damping_n_s_per_m`` are ignored).
-        """
-
-        def _construct(
-            self,
-            params: CompensatorParams,
-            derivative_period_s: float | None = None,
-            converter=None,
-        ):
-            LeafSystem_[T].__init__(self, converter)
-            self.params = params
-            self.derivative_period_s = derivative_period_s
-            self._f = self.DeclareVectorInputPort("measured_force", 1)
-            self._fdot = self.DeclareVectorInputPort("measured_force_rate", 1)
-            self._table = self.DeclareVectorInputPort("table_motion", 3)
-            self._cmd = self.DeclareVectorInputPort("commanded_state", 2)
-            self._kc = self.DeclareVectorInputPort("contact_parameters", 2)
-            if derivative_period_s is not None:
-                self._h = float(derivative_period_s)
-                self.DeclareDiscreteState(1)
-                self.DeclarePeriodicDiscreteUpdateEvent(self._h, 0.0, self._store)
-            self.DeclareVectorOutputPort("compensated_force", BasicVector_[T](1), self._calc)
-
-        def _construct_copy(self, other, converter=None):
-            Impl._construct(self, other.params, other.derivative_period_s, converter=converter)
-
-        def _store(self, context, discrete_state):
-            discrete_state.get_mutable_vector(0).SetAtIndex(0, self._f.Eval(context)[0])
-
-        def _calc(self, context, output):
-            p = self.params
-            f_mea = self._f.Eval(context)[0]
-            by_force = p.contact_gate == "measured_force"
-            if by_force and not (f_mea > p.force_deadband_n):
-                output.SetAtIndex(0, 0.0 * f_mea)
-                return
-            f = f_mea
-            if p.lead_time_s > 0.0:
-                if self.derivative_period_s is None:
-                    rate = self._fdot.Eval(context)[0]
-                else:
-                    rate = (f_mea - context.get_discrete_state(0).GetAtIndex(0)) / self._h
-                f = f + p.lead_time_s * rate
-            p_act, v_act, _ = self._table.Eval(context)
-            if by_force or p_act > 0.0:
-                p_des, v_des = self._cmd.Eval(context)
-                k, c = self._kc.Eval(context)
-                f = f + k * (p_des - p_act) + c * (v_des - v_act)
-            if p.clamp_nonnegative and f < 0.0:
-                f = 0.0 * f
-            output.SetAtIndex(0, f)
-
-    return Impl
-
-
-AdaptiveSDMDC = AdaptiveSDMDC_[None]
+    The ports of :func:`hybridtable.compensators.paper.Compensator` plus input
+    ``contact_parameters`` (size 2: N/m, N s/m), the ``[k, c]`` of the MDC
+    term; gating, clamping and the lead are the law of ``params`` with
+    ``kind="SDMDC"`` (its stiffness and damping are ignored).
+    """
+    return Compensator(
+        replace(params, kind="SDMDC"), derivative_period_s, gains_input=True, compiled=compiled
+    )
 
 
 def online_identifier_params(params, **overrides) -> IdentifierParams:
@@ -167,7 +104,9 @@ def make_online_sdmdc(
         "identifier",
         ContactIdentifier(identifier, derivative_period_s, sensor_like_delay(params, 3)),
     )
-    sdmdc = builder.AddNamedSystem("sdmdc", AdaptiveSDMDC(comp, derivative_period_s))
+    sdmdc = builder.AddNamedSystem(
+        "sdmdc", AdaptiveSDMDC(comp, derivative_period_s, params.sample_rate_hz is None)
+    )
     builder.Connect(
         ident.GetOutputPort("contact_parameters"), sdmdc.GetInputPort("contact_parameters")
     )

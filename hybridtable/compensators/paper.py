@@ -22,19 +22,21 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from pydrake.autodiffutils import AutoDiffXd
-from pydrake.systems.framework import BasicVector_, LeafSystem_, System
-from pydrake.systems.scalar_conversion import TemplateSystem
+from pydrake.systems.framework import System
 
 from hybridtable._validation import check_choice, check_nonnegative
+from hybridtable.laws.compensation import CompensationLaw, backward_difference, compensate
+from hybridtable.laws.compiled import compiled_system
 
 __all__ = [
     "COMPENSATORS",
     "CONTACT_GATES",
     "CompensatorParams",
+    "COMPENSATOR_INPUTS",
     "Compensator",
+    "compensation_law",
+    "compensator_output",
     "paper_compensator",
-    "Compensator_",
 ]
 
 
@@ -90,103 +92,123 @@ class CompensatorParams:
         return self.kind in ("MDC", "SDMDC")
 
 
-@TemplateSystem.define("Compensator_", T_list=[float, AutoDiffXd])
-def Compensator_(T):
-    class Impl(LeafSystem_[T]):
-        """The rig computer's force compensator.
-
-        Ports
-        -----
-        Input ``measured_force`` (size 1, N)
-            f_mea from the force sensor.
-        Input ``measured_force_rate`` (size 1, N/s)
-            d f_mea / dt; read only when ``derivative_period_s`` is None
-            (continuous analysis), where it comes from delaying ``[f, df/dt]``.
-        Input ``table_motion`` (size 3: m, m/s, m/s^2)
-            ``[p_act, v_act, a_act]`` of the table.
-        Input ``commanded_state`` (size 2: m, m/s)
-            ``[p_des, v_des]`` of the spacecraft model (the table's command).
-        Output ``compensated_force`` (size 1, N)
-            f_comp = f_sim, fed to the spacecraft.
-
-        With ``derivative_period_s = h`` the lead uses the backward difference
-        ``(f_mea[k] - f_mea[k-1]) / h`` of a discrete state updated every ``h``,
-        as a rig computer does. ``gated=False`` removes the contact gating and
-        the clamp (the linear compensator used by the stability analysis).
-        """
-
-        def _construct(
-            self,
-            params: CompensatorParams,
-            derivative_period_s: float | None = None,
-            gated: bool = True,
-            converter=None,
-        ):
-            LeafSystem_[T].__init__(self, converter)
-            self.params = params
-            self.derivative_period_s = derivative_period_s
-            self.gated = bool(gated)
-            self._f = self.DeclareVectorInputPort("measured_force", 1)
-            self._fdot = self.DeclareVectorInputPort("measured_force_rate", 1)
-            self._table = self.DeclareVectorInputPort("table_motion", 3)
-            self._cmd = self.DeclareVectorInputPort("commanded_state", 2)
-            # Flags of the hot path.
-            p = params
-            self._lead = p.lead_time_s if p.uses_lead else 0.0
-            self._mdc = p.uses_motion_correction
-            self._k = p.stiffness_n_per_m
-            self._c = p.damping_n_s_per_m
-            self._deadband = p.force_deadband_n
-            self._gate_by_force = self.gated and p.contact_gate == "measured_force"
-            self._gate_by_position = self.gated and p.contact_gate == "table_position"
-            self._clamp = self.gated and p.clamp_nonnegative
-            self._h = None
-            if derivative_period_s is not None:
-                self._h = float(derivative_period_s)
-                self._prev = self.DeclareDiscreteState(1)
-                self.DeclarePeriodicDiscreteUpdateEvent(self._h, 0.0, self._store)
-            self.DeclareVectorOutputPort("compensated_force", BasicVector_[T](1), self._calc_force)
-
-        def _construct_copy(self, other, converter=None):
-            Impl._construct(
-                self, other.params, other.derivative_period_s, other.gated, converter=converter
-            )
-
-        def _store(self, context, discrete_state):
-            discrete_state.get_mutable_vector(0).SetAtIndex(0, self._f.Eval(context)[0])
-
-        def _calc_force(self, context, output):
-            # Hot path (called at every integrator stage): flags precomputed.
-            f_mea = self._f.Eval(context)[0]
-            if self._gate_by_force and not (f_mea > self._deadband):
-                output.SetAtIndex(0, 0.0 * f_mea)
-                return
-            f = f_mea
-            if self._lead > 0.0:
-                if self._h is None:
-                    rate = self._fdot.Eval(context)[0]
-                else:
-                    rate = (f_mea - context.get_discrete_state(0).GetAtIndex(0)) / self._h
-                f = f + self._lead * rate
-            if self._mdc:
-                p_act, v_act, _ = self._table.Eval(context)
-                if p_act > 0.0 or not self._gate_by_position:
-                    p_des, v_des = self._cmd.Eval(context)
-                    f = f + self._k * (p_des - p_act)
-                    if self._c > 0.0:
-                        f = f + self._c * (v_des - v_act)
-            if self._clamp and f < 0.0:
-                f = 0.0 * f
-            output.SetAtIndex(0, f)
-
-    return Impl
+#: Input ports of every compensator, name -> size (units in :func:`Compensator`).
+COMPENSATOR_INPUTS: dict[str, int] = {
+    "measured_force": 1,
+    "measured_force_rate": 1,
+    "table_motion": 3,
+    "commanded_state": 2,
+}
 
 
-Compensator = Compensator_[None]
+def compensation_law(params: CompensatorParams, gated: bool = True) -> CompensationLaw:
+    """The :class:`~hybridtable.laws.compensation.CompensationLaw` of ``params``
+    (``gated=False``: no contact gate and no clamp, the linear compensator of
+    the stability analysis)."""
+    return CompensationLaw(
+        lead_time_s=params.lead_time_s if params.uses_lead else 0.0,
+        motion_correction=params.uses_motion_correction,
+        force_deadband_n=params.force_deadband_n,
+        gate=params.contact_gate if gated else "none",
+        clamp_nonnegative=gated and params.clamp_nonnegative,
+    )
+
+
+def compensator_output(
+    law: CompensationLaw,
+    signals,
+    derivative_period_s: float | None,
+    stiffness,
+    damping,
+):
+    """:func:`~hybridtable.laws.compensation.compensate` on the compensator's
+    ports (``signals``: port name -> its values; ``previous_measured_force``
+    the sample held at the last tick when ``derivative_period_s`` is set)."""
+    f_mea = signals["measured_force"][0]
+    rate = 0.0  # read only by a lead (the others may be unconnected)
+    if law.lead_time_s > 0.0 and derivative_period_s is None:
+        rate = signals["measured_force_rate"][0]
+    elif law.lead_time_s > 0.0:
+        previous = signals["previous_measured_force"][0]
+        rate = backward_difference(f_mea, previous, derivative_period_s)
+    if not law.motion_correction:
+        return compensate(law, f_mea, rate)
+    p_act, v_act, _ = signals["table_motion"]
+    p_des, v_des = signals["commanded_state"]
+    touching = p_act > 0.0
+    return compensate(
+        law, f_mea, rate, p_des - p_act, v_des - v_act, stiffness, damping, touching=touching
+    )
+
+
+def Compensator(
+    params: CompensatorParams,
+    derivative_period_s: float | None = None,
+    gated: bool = True,
+    gains_input: bool = False,
+    compiled: bool = True,
+) -> System:
+    """The rig computer's force compensator, compiled from the law.
+
+    Ports
+    -----
+    Input ``measured_force`` (size 1, N)
+        f_mea from the force sensor.
+    Input ``measured_force_rate`` (size 1, N/s)
+        d f_mea / dt; read only when ``derivative_period_s`` is None
+        (continuous analysis), where it comes from delaying ``[f, df/dt]``.
+    Input ``table_motion`` (size 3: m, m/s, m/s^2)
+        ``[p_act, v_act, a_act]`` of the table.
+    Input ``commanded_state`` (size 2: m, m/s)
+        ``[p_des, v_des]`` of the spacecraft model (the table's command).
+    Input ``contact_parameters`` (size 2: N/m, N s/m), with ``gains_input``
+        ``[k, c]`` of the MDC term (an online identifier's estimate; the
+        stiffness and damping of ``params`` are then ignored).
+    Output ``compensated_force`` (size 1, N)
+        f_comp = f_sim, fed to the spacecraft.
+
+    With ``derivative_period_s = h`` the lead uses the backward difference
+    ``(f_mea[k] - f_mea[k-1]) / h`` of the sample a ``ZeroOrderHold`` took at
+    the last tick, as a rig computer does. ``gated=False`` removes the contact
+    gating and the clamp (the linear compensator used by the stability
+    analysis: an ``AffineSystem``). The law is
+    :func:`hybridtable.laws.compensation.compensate`, evaluated in C++
+    (:func:`hybridtable.laws.compiled.compiled_system`); ``compiled=False``
+    evaluates it in a Python callback, cheaper where the diagram reads the
+    compensator only at the ticks of a sampled rig computer.
+    """
+    law = compensation_law(params, gated)
+    h = None if derivative_period_s is None else float(derivative_period_s)
+    inputs = dict(COMPENSATOR_INPUTS)
+    if gains_input:
+        inputs["contact_parameters"] = 2
+    c = params.damping_n_s_per_m
+
+    def outputs(signals):
+        if gains_input:
+            k_hat, c_hat = signals["contact_parameters"]
+            gains = (k_hat, c_hat)
+        else:
+            gains = (params.stiffness_n_per_m, c if c > 0.0 else None)
+        return {"compensated_force": [compensator_output(law, signals, h, *gains)]}
+
+    held = {} if h is None else {"previous_measured_force": ("measured_force", h)}
+    system = compiled_system("compensator", inputs, outputs, held, compiled)
+    system.params = params
+    system.derivative_period_s = h
+    system.gated = bool(gated)
+    return system
 
 
 def paper_compensator(params: Any, derivative_period_s: float | None) -> System:
     """The paper's compensator ``params.compensator_params().kind`` for a
     :class:`~hybridtable.loop.params.HybridLoopParams` (the registry's factory
-    of ``none``, ``SDC``, ``MDC`` and ``SDMDC``)."""
-    return Compensator(params.compensator_params(), derivative_period_s=derivative_period_s)
+    of ``none``, ``SDC``, ``MDC`` and ``SDMDC``): compiled in a continuous
+    loop, where every integrator stage reads it; a Python callback on a
+    sampled rig computer, which reads it once a tick (measured in
+    ``benchmarks/bench_core.py``)."""
+    return Compensator(
+        params.compensator_params(),
+        derivative_period_s=derivative_period_s,
+        compiled=params.sample_rate_hz is None,
+    )

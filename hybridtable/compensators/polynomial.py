@@ -35,6 +35,7 @@ from pydrake.systems.scalar_conversion import TemplateSystem
 from hybridtable._validation import check_choice, check_nonnegative, check_positive
 from hybridtable.compensators.paper import CONTACT_GATES
 from hybridtable.errors import ParameterError
+from hybridtable.laws.compensation import CompensationLaw, compensate
 
 __all__ = [
     "PolynomialParams",
@@ -137,6 +138,11 @@ def PolynomialExtrapolator_(T):
             self._s = params.spacing_ticks(period_s)
             self._w = params.weights(period_s)
             self._n = params.order * self._s
+            self._law = CompensationLaw(
+                force_deadband_n=params.force_deadband_n,
+                gate=params.contact_gate,
+                clamp_nonnegative=params.clamp_nonnegative,
+            )
             self._f = self.DeclareVectorInputPort("measured_force", 1)
             self.DeclareVectorInputPort("measured_force_rate", 1)
             self._table = self.DeclareVectorInputPort("table_motion", 3)
@@ -154,18 +160,13 @@ def PolynomialExtrapolator_(T):
             discrete_state.get_mutable_vector(0).SetFromVector(new)
 
         def _calc(self, context, output):
-            p = self.params
             f_mea = self._f.Eval(context)[0]
-            if p.contact_gate == "measured_force" and not (f_mea > p.force_deadband_n):
-                output.SetAtIndex(0, 0.0 * f_mea)
-                return
             past = context.get_discrete_state(0).value()
             f = self._w[0] * f_mea
-            for i in range(1, p.order + 1):
+            for i in range(1, self.params.order + 1):
                 f = f + self._w[i] * past[i * self._s - 1]
-            if p.clamp_nonnegative and f < 0.0:
-                f = 0.0 * f
-            output.SetAtIndex(0, f)
+            # The extrapolated force through the compensation law's gate and clamp.
+            output.SetAtIndex(0, compensate(self._law, f, gate_force=f_mea))
 
     return Impl
 

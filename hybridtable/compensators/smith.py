@@ -35,6 +35,7 @@ from hybridtable._validation import check_nonnegative
 from hybridtable.compensators._wiring import export_compensator_ports, sensor_like_delay
 from hybridtable.compensators.identification import ContactIdentifier, IdentifierParams
 from hybridtable.errors import ParameterError
+from hybridtable.laws.contact import spring_contact_force
 
 __all__ = [
     "SmithParams",
@@ -76,9 +77,9 @@ class SmithParams:
 
 
 def unilateral_force(k, c, p, v):
-    """``max(k p + c v, 0)`` while ``p > 0``, else 0 (any scalar type)."""
-    f = k * p + c * v
-    return f if (p > 0.0 and f > 0.0) else 0.0 * f
+    """``max(k p + c v, 0)`` while ``p > 0``, else 0 (any scalar type): the
+    contact law :func:`hybridtable.laws.contact.spring_contact_force`."""
+    return spring_contact_force(k, c, p, v)
 
 
 @TemplateSystem.define("SmithPredictor_", T_list=[float, AutoDiffXd])

@@ -8,7 +8,8 @@ Before a simulation starts, :func:`estimate_cost` predicts its integrator
 steps from the simulated duration and the step the dynamics allow, and
 :func:`check_budget` refuses a run above :data:`MAX_INTEGRATOR_STEPS` with a
 :class:`~hybridtable.errors.SimulationError` that says which, why and what to
-change. While it runs, :func:`check_steps_taken` stops a run whose real step
+change. While it runs, :func:`~hybridtable.laws.separation.check_steps_taken`
+(the separation rule's budget) stops a run whose real step
 count passes the budget anyway (dynamics the estimate cannot see, e.g. a
 plug-in effect), so nothing runs forever.
 
@@ -22,6 +23,7 @@ import math
 from dataclasses import dataclass
 
 from hybridtable.errors import SimulationError
+from hybridtable.laws.separation import MAX_INTEGRATOR_STEPS, check_steps_taken
 from hybridtable.loop.params import HybridLoopParams
 
 __all__ = [
@@ -34,10 +36,6 @@ __all__ = [
     "check_budget",
     "check_steps_taken",
 ]
-
-#: Most integrator steps one simulation may take (about one to three minutes
-#: of a Drake loop with Python systems at 1e4-4e4 steps per second).
-MAX_INTEGRATOR_STEPS = 3_000_000
 
 #: Mean step of the error-controlled integrator in a sampled loop whose table
 #: is integrated [s]: the held command jumps at every tick and the step starts
@@ -185,20 +183,3 @@ def check_budget(
             "(initial_gap_m / initial_velocity_m_per_s) or the record, or use a longer step"
         )
     return cost
-
-
-def check_steps_taken(steps: int, t_s: float, budget: float | None = None) -> None:
-    """Stop a running simulation whose integrator has taken more than ``budget``
-    steps (default :data:`MAX_INTEGRATOR_STEPS`) by simulated time ``t_s``.
-
-    Raises
-    ------
-    SimulationError
-        "too stiff to simulate", with the steps taken and the mean step.
-    """
-    budget = MAX_INTEGRATOR_STEPS if budget is None else budget
-    if steps > budget:
-        raise SimulationError(
-            f"too stiff to simulate: the integrator took {steps:.3g} steps by t = {t_s:.4g} s "
-            f"(mean step {t_s / steps:.2g} s; budget {budget:.2g} steps)"
-        )

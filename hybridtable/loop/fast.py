@@ -36,24 +36,25 @@ the first tick at or after each of its check times.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 from scipy.linalg import expm
 from scipy.optimize import brentq
 
-from hybridtable.compensators.paper import COMPENSATORS
-from hybridtable.errors import DivergenceError, ParameterError, SimulationError
-from hybridtable.loop.budget import check_budget, check_steps_taken
+from hybridtable.compensators.paper import COMPENSATORS, compensation_law
+from hybridtable.errors import ParameterError, SimulationError
+from hybridtable.laws.compensation import CompensationLaw, backward_difference, compensate
+from hybridtable.laws.contact import spring_contact_force
+from hybridtable.laws.separation import SeparationRule
+from hybridtable.laws.table import second_order_tick
+from hybridtable.loop.budget import check_budget
 from hybridtable.loop.metrics import ContactMetrics, contact_metrics
 from hybridtable.loop.params import HybridLoopParams
 from hybridtable.loop.simulation import (
-    DIVERGED_FORCE_RATIO,
-    check_interval_s,
-    check_run_ended,
     default_t_max_s,
     expected_duration_s,
-    settle_window_s,
-    undamped_peak_force_n,
+    separation_rule,
 )
 from hybridtable.systems.sensor import continuous_delay_period, delay_samples
 
@@ -81,62 +82,59 @@ def fast_unsupported(params: HybridLoopParams) -> str | None:
     return None
 
 
-class _StopRule:
-    """The stop rule of ``run_loop``, checked at the first tick at or after each check time."""
+class _StopRule(SeparationRule):
+    """The diagram's :class:`~hybridtable.laws.separation.SeparationRule`, checked
+    at the first tick at or after each of its check times."""
 
     def __init__(self, params: HybridLoopParams, period_s: float) -> None:
-        self.t_max = default_t_max_s(params)
-        self.settle = settle_window_s(params, period_s)
-        self.chunk = check_interval_s(params, period_s)
-        self.limit = DIVERGED_FORCE_RATIO * undamped_peak_force_n(params)
-        self.deadband = params.force_deadband_n
+        rule = separation_rule(params, period_s)
+        super().__init__(
+            rule.t_max, rule.settle, rule.chunk, rule.peak, rule.deadband, rule.stop_at_separation
+        )
         self.eps = 1e-6 * period_s
-        self.due = min(self.chunk, self.t_max) - self.eps
-        self.t = 0.0
-        self.started = self.separated = self.touched = False
-        self.last_active = -math.inf
-        self.last = (0.0, 0.0, 0.0)
+        self.touched = False
 
-    def check(self, ticks: int, f_act: float, f_mea: float, f_comp: float) -> bool:
-        """Evaluate the rule at the check time; True when the run ends here. The
+    @property
+    def due(self) -> float:
+        """The first tick at or after this time is the next check [s]."""
+        return self.next_check_s - self.eps
+
+    def check_tick(self, ticks: int, f_act: float, f_mea: float, f_comp: float) -> bool:
+        """The rule at the check time; True when the run ends here. The
         diagram's integrator takes at least a step per tick: the same step budget."""
-        t = self.t = min(self.t + self.chunk, self.t_max)
-        check_steps_taken(ticks, t)
-        self.due = min(t + self.chunk, self.t_max) - self.eps
-        self.last = (f_act, f_mea, f_comp)
-        if not all(math.isfinite(x) for x in self.last) or abs(f_comp) > self.limit:
-            raise DivergenceError(
-                f"simulation diverged by t = {t:.4f} s: the force passed "
-                f"{DIVERGED_FORCE_RATIO:g} times the undamped peak force v sqrt(k m) = "
-                f"{self.limit / DIVERGED_FORCE_RATIO:.3g} N (the loop is unstable for these "
-                "parameters)"
-            )
-        if f_act > 0.0 or f_mea > self.deadband or f_comp != 0.0:
-            self.started, self.last_active = True, t
-        elif not self.started and self.touched:
-            self.started, self.last_active = True, t
-        elif self.started and t - self.last_active > self.settle:
-            self.separated = True
-            return True
-        return t >= self.t_max
-
-    def verdict(self) -> None:
-        """Raise the diagram's error when the run found no contact or no separation."""
-        check_run_ended(self.started, self.separated, self.t_max, self.last, self.deadband)
+        forces = (f_act, f_mea, f_comp)
+        return self.check(
+            ticks,
+            abs(f_comp),
+            active=f_act > 0.0 or f_mea > self.deadband or f_comp != 0.0,
+            touched=self.touched,
+            finite=all(math.isfinite(x) for x in forces),
+            forces_n=forces,
+        )
 
 
-def _law(params: HybridLoopParams, h: float):
-    """The compensator's constants: lead gain ``T_lead / h``, MDC gains, flags."""
+def _law(params: HybridLoopParams) -> tuple[CompensationLaw, float, float | None]:
+    """The compensator's law and its MDC gains ``(k, c)`` (``c`` None: no rate
+    term); an ideal table has no response error, so no MDC term."""
     cp = params.compensator_params()
-    table = params.table()
-    mdc = cp.uses_motion_correction and not table.is_ideal  # ideal: p_des - p_act = 0
-    return (
-        (cp.lead_time_s if cp.uses_lead else 0.0) / h,
-        cp.stiffness_n_per_m if mdc else 0.0,
-        cp.damping_n_s_per_m if mdc else 0.0,
-        cp.contact_gate == "measured_force",
-        cp.clamp_nonnegative,
-    )
+    law = compensation_law(cp)
+    if params.table().is_ideal:  # p_des - p_act = 0
+        law = replace(law, motion_correction=False)
+    c = cp.damping_n_s_per_m
+    return law, cp.stiffness_n_per_m, (c if c > 0.0 else None)
+
+
+def _rows(law: CompensationLaw, h: float, k: float, c: float | None, basis: np.ndarray):
+    """The law between its switches as rows over ``basis`` signals: the law
+    evaluated once on unit vectors (it is linear there), so the ticks need no
+    call. ``basis`` rows: the measured force, its previous sample, ``p_des``,
+    ``v_des``, ``p_act``, ``v_act``. Returns the rows with and without the MDC
+    term."""
+    f, prev, p, v, pa, va = basis
+    rate = backward_difference(f, prev, h)
+    with_mdc = compensate(law.linear(), f, rate, p - pa, v - va, k, c)
+    without = compensate(law.linear(motion_correction=False), f, rate)
+    return with_mdc, without
 
 
 def _unrolled(e):
@@ -164,11 +162,19 @@ class _Continuous:
         self.h = h
         self.ideal = params.table().is_ideal
         self.k, self.c = params.contact_stiffness_n_per_m, params.contact_damping_n_s_per_m
-        self.db = params.force_deadband_n
         self.undelayed = params.sensor_delay_s == 0.0
-        lead, kc, cc, self.by_force, self.clamp = _law(params, h)
-        self.lead = lead
-        self.mdc = kc > 0.0 or cc > 0.0
+        law, kc, cc = _law(params)
+        self.law, self.by_force, self.clamp = (
+            law,
+            law.gate == "measured_force",
+            law.clamp_nonnegative,
+        )
+        self.mdc = law.motion_correction and (kc > 0.0 or cc is not None)
+        # The law between switches over [f_mea, previous sample, p, v, p_act, v_act]:
+        # the held part u = lead_f f_mea + lead_prev prev, the MDC row over z.
+        with_mdc, without = _rows(law, h, kc, cc, np.eye(6))
+        self.lead_f, self.lead_prev = float(without[0]), float(without[1])
+        self.g_mdc = np.append(with_mdc[2:], 0.0) if self.mdc else np.zeros(5)
         a = np.zeros((4, 4))
         a[0, 1] = a[2, 3] = 1.0
         if self.ideal:  # the table is the spacecraft: rows 2, 3 copy rows 0, 1
@@ -179,14 +185,14 @@ class _Continuous:
         self.a = a
         self.b = np.array([0.0, -1.0 / params.spacecraft_mass_kg, 0.0, 0.0])
         self.g_raw = np.array([0.0, 0.0, self.k, self.c, 0.0])  # k p_act + c v_act
-        self.g_mdc = np.array([kc, cc, -kc, -cc, 0.0])
         self.cache: dict[tuple, tuple] = {}
         # The switching functions (functional of z, offset) whose signs set the mode.
         sig = []
         if self.undelayed or not self.by_force:
             sig.append((np.array([0.0, 0.0, 1.0, 0.0, 0.0]), 0.0))
+        db = law.force_deadband_n
         if self.undelayed:
-            sig += [(self.g_raw, 0.0)] + ([(self.g_raw, -self.db)] if self.db > 0.0 else [])
+            sig += [(self.g_raw, 0.0)] + ([(self.g_raw, -db)] if db > 0.0 else [])
         if self.clamp:
             sig += [(self.force_row(m), 0.0) for m in self.modes_on()]
         self.sigmas = sig
@@ -203,8 +209,8 @@ class _Continuous:
         row = np.zeros(5)
         if on:
             row[4] = 1.0
-            if contact:
-                row += (1.0 + self.lead) * self.g_raw
+            if contact:  # no delay: the measured force is the contact's
+                row += self.lead_f * self.g_raw
             if mdc:
                 row += self.g_mdc
         return row
@@ -236,13 +242,13 @@ class _Continuous:
         """The force law's mode at ``z`` (``gate``: the held reading is above the deadband)."""
         p, v, pa, va, u = z
         contact = False
-        raw = self.k * pa + self.c * va
         if self.undelayed:
-            contact = pa > 0.0 and raw > 0.0
-            gate = contact and raw > self.db
+            raw = spring_contact_force(self.k, self.c, pa, va)
+            contact = raw > 0.0
+            gate = contact and self.law.gate_open(raw)
         if self.by_force and not gate:
             return _OFF
-        mdc = self.mdc and (self.by_force or pa > 0.0)
+        mdc = self.mdc and self.law.corrects_motion(pa > 0.0)
         mode = (True, contact, mdc)
         if self.clamp and sum(f * x for f, x in zip(self.mode_data(mode)[1], z, strict=True)) < 0.0:
             return _OFF
@@ -301,7 +307,8 @@ def _computer_period(params: HybridLoopParams) -> tuple[float, int]:
 def _run_continuous(params: HybridLoopParams, h: float, n: int, rule: _StopRule):
     """Tick log ``(v, f_act, f_comp)`` of a continuous loop (before each tick's update)."""
     loop = _Continuous(params, h)
-    k_con, c_con, lead, db, by_force = loop.k, loop.c, loop.lead, loop.db, loop.by_force
+    k_con, c_con, by_force = loop.k, loop.c, loop.by_force
+    lead_f, lead_prev, gate_open = loop.lead_f, loop.lead_prev, loop.law.gate_open
     undelayed, mode_of, mode_data = loop.undelayed, loop.mode_of, loop.mode_data
     # Held: the force law is fixed over a tick by the held reading (no switch inside).
     held, clamp = not loop.switches, loop.clamp
@@ -317,8 +324,7 @@ def _run_continuous(params: HybridLoopParams, h: float, n: int, rule: _StopRule)
     vs, fas, fcs = [], [], []
     k, due = 0, rule.due
     while True:
-        raw = k_con * pa + c_con * va
-        f_act = raw if (pa > 0.0 and raw > 0.0) else 0.0
+        f_act = spring_contact_force(k_con, c_con, pa, va)
         if mode is on:
             f_comp = c0 * p + c1 * v + c2 * pa + c3 * va + u
         elif mode == _OFF:
@@ -332,15 +338,15 @@ def _run_continuous(params: HybridLoopParams, h: float, n: int, rule: _StopRule)
         if f_act > 0.0:
             rule.touched = True
         if k * h >= due:
-            if rule.check(k, f_act, f_act if undelayed else F[k + 1], f_comp):
+            if rule.check_tick(k, f_act, f_act if undelayed else F[k + 1], f_comp):
                 return vs, fas, fcs
             due = rule.due
-        if undelayed:
-            u, gate = -lead * f_act, False
+        if undelayed:  # the force rows hold lead_f f_act(t); u the previous sample's part
+            u, gate = lead_prev * f_act, False
         else:
             F.append(f_act)
             f_mea = F[k + 2]
-            u, gate = f_mea + lead * (f_mea - F[k + 1]), f_mea > db
+            u, gate = lead_f * f_mea + lead_prev * F[k + 1], gate_open(f_mea)
         if held:  # clamp here means no MDC term: the force is u
             if (gate or not by_force) and not (clamp and u < 0.0):
                 mode = on
@@ -359,18 +365,22 @@ def _run_continuous(params: HybridLoopParams, h: float, n: int, rule: _StopRule)
 def _run_sampled(params: HybridLoopParams, h: float, n_delay: int, rule: _StopRule):
     """Row log ``(v, f_act, f_comp)`` of a sampled loop (row k: what tick k read and
     computed, and the spacecraft state after its update)."""
-    lead, kc, cc, by_force, clamp = _law(params, h)
+    law, kc, cc = _law(params)
+    with_mdc, without = _rows(law, h, kc, cc, np.eye(6))
+    r_f, r_prev, r_p, r_v, r_pa, r_va = with_mdc.tolist()
+    s_f, s_prev = without[:2].tolist()
+    gate_open, clamp = law.gate_open, law.clamp_nonnegative
+    mdc_when = (law.corrects_motion(False), law.corrects_motion(True))  # by p_act > 0
     k_con, c_con = params.contact_stiffness_n_per_m, params.contact_damping_n_s_per_m
-    db = params.force_deadband_n
     h_m = h / params.spacecraft_mass_kg
     table = params.table()
     ideal = table.is_ideal
     ic = params.initial_conditions()
     p, v, pa, va = ic["p_des_m"], ic["v_des_m_per_s"], ic["p_act_m"], ic["v_act_m_per_s"]
-    if not ideal:  # the table over one tick under a held command: [p_act, v_act, p_cmd]
-        w, zeta = table.omega_rad_per_s, table.damping_ratio
-        m = np.array([[0.0, 1.0, 0.0], [-w * w, -2 * zeta * w, w * w], [0.0, 0.0, 0.0]])
-        (e00, e01, e02), (e10, e11, e12) = expm(m * h)[:2].tolist()
+    if not ideal:  # the table over one tick under a held command
+        phi, gamma = second_order_tick(table.response_frequency_hz, table.damping_ratio, h)
+        (e00, e01), (e10, e11) = phi.tolist()
+        e02, e12 = gamma.tolist()
     F = [0.0] * n_delay  # F[j] = f_act(t_j) at index j + n_delay
     prev = 0.0
     vs, fas, fcs = [], [], []
@@ -378,21 +388,21 @@ def _run_sampled(params: HybridLoopParams, h: float, n_delay: int, rule: _StopRu
     while True:
         if ideal:
             pa, va = p, v
-        raw = k_con * pa + c_con * va
-        f_act = raw if (pa > 0.0 and raw > 0.0) else 0.0
+        f_act = spring_contact_force(k_con, c_con, pa, va)
         if f_act > 0.0:
             rule.touched = True
         F.append(f_act)
         f_mea = F[k]
-        if by_force and not f_mea > db:
+        if not gate_open(f_mea):
             f_comp = 0.0
         else:
-            f_comp = f_mea + lead * (f_mea - prev)
-            if (kc > 0.0 or cc > 0.0) and (by_force or pa > 0.0):
-                f_comp += kc * (p - pa) + cc * (v - va)
+            if mdc_when[pa > 0.0]:
+                f_comp = r_f * f_mea + r_prev * prev + r_p * p + r_v * v + r_pa * pa + r_va * va
+            else:
+                f_comp = s_f * f_mea + s_prev * prev
             if clamp and f_comp < 0.0:
                 f_comp = 0.0
-        if k * h >= rule.due and rule.check(k, f_act, f_mea, f_comp):
+        if k * h >= rule.due and rule.check_tick(k, f_act, f_mea, f_comp):
             return vs, fas, fcs
         prev = f_mea
         v -= f_comp * h_m

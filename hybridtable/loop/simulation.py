@@ -8,14 +8,15 @@ from dataclasses import dataclass
 import numpy as np
 from pydrake.systems.analysis import Simulator
 
-from hybridtable.errors import DivergenceError, SimulationError
-from hybridtable.loop.budget import check_budget, check_steps_taken
+from hybridtable.errors import SimulationError
+from hybridtable.laws.separation import DIVERGED_FORCE_RATIO, SeparationRule
+from hybridtable.loop.budget import check_budget
 from hybridtable.loop.builder import LOG_ROWS, HybridLoop, build_hybrid_loop
 from hybridtable.loop.metrics import ContactMetrics, contact_metrics
 from hybridtable.loop.params import HybridLoopParams
 
 __all__ = [
-    "check_run_ended",
+    "separation_rule",
     "DIVERGED_FORCE_RATIO",
     "SimulationError",
     "SimulationResult",
@@ -29,11 +30,6 @@ __all__ = [
 ]
 
 _F_ACT = LOG_ROWS.index("f_act_n")
-
-#: A compensated force above this many times the undamped peak force
-#: ``v sqrt(k m)`` means the loop diverged (a CoR of this order: the energy of
-#: the contact grown ten-thousandfold).
-DIVERGED_FORCE_RATIO = 100.0
 
 
 @dataclass
@@ -160,8 +156,7 @@ def run_loop(
     else:
         integ.set_target_accuracy(accuracy)
 
-    settle = settle_window_s(params, loop.computer_period_s)
-    f_scale = undamped_peak_force_n(params)
+    rule = separation_rule(params, loop.computer_period_s, t_max, stop_at_separation)
     contact_ctx = loop.contact.GetMyContextFromRoot(context)
     sensor_ctx = loop.sensor.GetMyContextFromRoot(context)
     comp_ctx = loop.compensator.GetMyContextFromRoot(context)
@@ -172,86 +167,45 @@ def run_loop(
     # Advance in chunks and look at the forces between chunks (a per-step
     # Python monitor would cost as much as the systems themselves). The
     # logger holds every step; a chunk only decides when to stop.
-    chunk = check_interval_s(params, loop.computer_period_s)
     simulator.Initialize()
-    started, last_active = False, -math.inf
-    t = 0.0
-    separated = False
-    while t < t_max:
-        t = min(t + chunk, t_max)
+    while True:
         try:
-            simulator.AdvanceTo(t)
+            simulator.AdvanceTo(rule.next_check_s)
         except (RuntimeError, SystemExit) as err:  # Drake asserts reach Python as SystemExit
             raise SimulationError(f"simulation failed: {err}") from None
-        check_steps_taken(simulator.get_num_steps_taken(), t)
         f_act = f_act_port.Eval(contact_ctx)[0]
         f_mea = f_mea_port.Eval(sensor_ctx)[0]
         f_comp = f_comp_port.Eval(comp_ctx)[0]
-        if not all(math.isfinite(x) for x in (f_act, f_mea, f_comp)) or (
-            abs(f_comp) > DIVERGED_FORCE_RATIO * f_scale
+        forces = (f_act, f_mea, f_comp)
+        if rule.check(
+            simulator.get_num_steps_taken(),
+            abs(f_comp),
+            active=f_act > 0.0 or f_mea > params.force_deadband_n or f_comp != 0.0,
+            touched=not rule.started
+            and bool((loop.logger.FindLog(context).data()[_F_ACT] > 0.0).any()),
+            finite=all(math.isfinite(x) for x in forces),
+            forces_n=forces,
         ):
-            raise DivergenceError(
-                f"simulation diverged by t = {t:.4f} s: the force passed "
-                f"{DIVERGED_FORCE_RATIO:g} times the undamped peak force v sqrt(k m) = "
-                f"{f_scale:.3g} N (the loop is unstable for these parameters)"
-            )
-        log = loop.logger.FindLog(context).data()[_F_ACT]
-        if f_act > 0.0 or f_mea > params.force_deadband_n or f_comp != 0.0:
-            started, last_active = True, t
-        elif not started and (log > 0.0).any():
-            started, last_active = True, t
-        elif started and stop_at_separation and t - last_active > settle:
-            separated = True
             break
-    check_run_ended(
-        started,
-        separated or not stop_at_separation,
-        t_max,
-        (f_act, f_mea, f_comp),
-        params.force_deadband_n,
-    )
+    rule.verdict()
     return _collect(loop, context, simulator.get_num_steps_taken())
 
 
-def check_run_ended(
-    started: bool,
-    separated: bool,
-    t_max_s: float,
-    last_forces_n: tuple[float, float, float],
-    force_deadband_n: float,
-) -> None:
-    """Raise the error of a run that found no contact, or whose contact did
-    not end by ``t_max_s`` (the diagram's and the fast path's words).
-
-    Parameters
-    ----------
-    started, separated : bool
-        A contact happened; it ended (or the run was not to stop at it).
-    t_max_s : float
-        The run's end [s].
-    last_forces_n : tuple of float
-        ``(f_act, f_mea, f_comp)`` at the end [N].
-    force_deadband_n : float
-        The compensator's dead band [N].
-
-    Raises
-    ------
-    SimulationError
-    """
-    if not started:
-        raise SimulationError(f"no contact within t_max = {t_max_s:.3f} s")
-    if separated:
-        return
-    f_act, f_mea, f_comp = last_forces_n
-    if f_comp == 0.0 and f_act > 0.0 and f_mea <= force_deadband_n:
-        raise SimulationError(
-            f"the contact did not end within t_max = {t_max_s:.3f} s: the compensated force "
-            f"is 0 while the contact pushes {f_act:.3g} N (every reading at or below "
-            f"force_deadband_n = {force_deadband_n:g} N), so the model never slows"
-        )
-    raise SimulationError(
-        f"the contact did not end within t_max = {t_max_s:.3f} s (spacecraft captured or "
-        "loop unstable)"
+def separation_rule(
+    params: HybridLoopParams,
+    computer_period_s: float,
+    t_max_s: float | None = None,
+    stop_at_separation: bool = True,
+) -> SeparationRule:
+    """The :class:`~hybridtable.laws.separation.SeparationRule` of a 1-D run:
+    its ``t_max``, settling window, check interval and undamped peak force."""
+    return SeparationRule(
+        default_t_max_s(params) if t_max_s is None else t_max_s,
+        settle_window_s(params, computer_period_s),
+        check_interval_s(params, computer_period_s),
+        undamped_peak_force_n(params),
+        params.force_deadband_n,
+        stop_at_separation,
     )
 
 

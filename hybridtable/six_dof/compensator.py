@@ -10,7 +10,9 @@ origin), ``q = [p; theta]`` the device pose coordinates and ``K = -dw/dq``:
 - SDMDC: both.
 
 While the measured force's norm is at or below ``force_deadband_n`` the
-compensated wrench is zero (the 1-D gate on the measured force). ``K`` and
+compensated wrench is zero (the 1-D gate on the measured force). The law is
+the 1-D one, :func:`hybridtable.laws.compensation.compensate`, on arrays
+(``G = -K``, ``D = -C``). ``K`` and
 ``C`` come from a stiffness model: the contact linearized at the table's pose
 at every tick of the contact (Drake's contact,
 :meth:`~hybridtable.six_dof.contact.DockingContact.stiffness`), or a given
@@ -23,6 +25,8 @@ from collections.abc import Callable
 
 import numpy as np
 from pydrake.systems.framework import BasicVector, LeafSystem
+
+from hybridtable.laws.compensation import CompensationLaw, backward_difference, compensate
 
 __all__ = ["StiffnessModel", "WrenchCompensator", "constant_stiffness"]
 
@@ -71,9 +75,13 @@ class WrenchCompensator(LeafSystem):
     ) -> None:
         LeafSystem.__init__(self)
         self._h = float(period_s)
-        self._lead = float(lead_time_s)
         self._stiffness = stiffness
-        self._deadband = float(force_deadband_n)
+        #: The 1-D law on the wrench, gated by the measured force's norm.
+        self.law = CompensationLaw(
+            lead_time_s=float(lead_time_s),
+            motion_correction=stiffness is not None,
+            force_deadband_n=float(force_deadband_n),
+        )
         self._w = self.DeclareVectorInputPort("measured_wrench", 6)
         self._table = self.DeclareVectorInputPort("table_state", 12)
         self._cmd = self.DeclareVectorInputPort("commanded_state", 12)
@@ -86,17 +94,27 @@ class WrenchCompensator(LeafSystem):
 
     def _calc(self, context, output) -> None:
         w = np.array(self._w.Eval(context))
-        if not np.linalg.norm(w[3:]) > self._deadband:
+        level = np.linalg.norm(w[3:])
+        if not self.law.gate_open(level):  # before K: linearizing the contact is costly
             output.SetFromVector(np.zeros(6))
             return
-        out = w.copy()
-        if self._lead > 0.0:
-            out += self._lead * (w - context.get_discrete_state(0).value()) / self._h
-        if self._stiffness is not None:
-            x_act = self._table.Eval(context)
-            x_des = self._cmd.Eval(context)
-            K, C = self._stiffness(x_act[:6], x_act[6:])
-            out -= K @ (x_des[:6] - x_act[:6])
-            if np.any(C):
-                out -= C @ (x_des[6:] - x_act[6:])
+        previous = context.get_discrete_state(0).value()
+        rate = backward_difference(w, previous, self._h)
+        if self._stiffness is None:
+            output.SetFromVector(compensate(self.law, w, rate, gate_force=level))
+            return
+        x_act = self._table.Eval(context)
+        x_des = self._cmd.Eval(context)
+        K, C = self._stiffness(x_act[:6], x_act[6:])
+        # G = dw/dq = -K: the law predicts the wrench at the commanded pose.
+        out = compensate(
+            self.law,
+            w,
+            rate,
+            x_des[:6] - x_act[:6],
+            x_des[6:] - x_act[6:],
+            -K,
+            -C if np.any(C) else None,
+            gate_force=level,
+        )
         output.SetFromVector(out)

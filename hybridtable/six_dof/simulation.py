@@ -9,7 +9,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from pydrake.systems.analysis import Simulator
 
-from hybridtable.errors import DivergenceError, SimulationError
+from hybridtable.errors import SimulationError
+from hybridtable.laws.separation import SeparationRule
 from hybridtable.six_dof.builder import LOG_LAYOUT, DockingLoop, build_docking_loop
 from hybridtable.six_dof.metrics import DockingMetrics, docking_metrics
 from hybridtable.six_dof.params import DockingLoopParams
@@ -108,7 +109,9 @@ def simulate6(
     """Simulate the 6-DoF loop through its first contact.
 
     Runs ``params.duration_s``, or until the contact has ended and the
-    compensated wrench has stayed zero for the sensor delay plus 20 ticks.
+    compensated wrench has stayed zero for the sensor delay plus 20 ticks
+    (:class:`~hybridtable.laws.separation.SeparationRule`: the 1-D loop's
+    divergence stop and step budget too).
 
     Parameters
     ----------
@@ -126,7 +129,8 @@ def simulate6(
         If the contact force grows past 100 times the undamped peak
         ``k v0 / omega``, or a state stops being finite.
     SimulationError
-        If the contact has not ended by :func:`expected_end_s`.
+        If no contact happened or it has not ended by :func:`expected_end_s`,
+        or the run is over the step budget.
     """
     import time
 
@@ -141,43 +145,41 @@ def simulate6(
     h = params.sample_period_s
     a = params.approach
     omega = 2.0 * math.pi * params.contact_frequency_hz
-    force_limit = (
-        100.0 * params.contact.contact_stiffness_n_per_m * a.initial_velocity_m_per_s / omega
-    )
-    t_end = params.duration_s if params.duration_s is not None else expected_end_s(params)
+    separating = params.duration_s is None
     quiet_ticks = params.delay_ticks + 20
+    rule = SeparationRule(
+        expected_end_s(params) if separating else params.duration_s,
+        settle_s=(quiet_ticks - 0.5) * h,  # the contact has ended after quiet_ticks quiet ticks
+        check_interval_s=_CHUNK_S,
+        peak_force_n=params.contact.contact_stiffness_n_per_m * a.initial_velocity_m_per_s / omega,
+        stop_at_separation=separating,
+        end_tolerance_s=0.5 * h,
+    )
     log = loop.logger.FindLog(context)
-    t = 0.0
-    while t < t_end - 0.5 * h:
-        t = min(t + _CHUNK_S, t_end)
-        simulator.AdvanceTo(t)
+    while True:
+        t = rule.next_check_s
+        try:
+            simulator.AdvanceTo(t)
+        except (RuntimeError, SystemExit) as err:  # Drake asserts reach Python as SystemExit
+            raise SimulationError(f"the 6-DoF simulation failed: {err}") from None
         data = log.data()
-        wrench = data[24:30]
-        if not np.all(np.isfinite(data[:, -quiet_ticks:])):
-            raise DivergenceError(
-                f"the 6-DoF loop diverged: a state stopped being finite at t = {t:.3f} s"
-            )
-        peak = float(np.max(np.linalg.norm(wrench[3:, -quiet_ticks:], axis=0)))
-        if peak > force_limit:
-            raise DivergenceError(
-                f"the 6-DoF loop diverged: contact force {peak:.4g} N at t = {t:.3f} s, over 100 "
-                f"times the undamped peak {force_limit / 100:.4g} N"
-            )
+        force = np.linalg.norm(data[27:30], axis=0)
+        quiet = (force == 0.0) & ~np.any(data[36:42] != 0.0, axis=0)
+        loud = np.flatnonzero(~quiet)
+        ended = rule.check(
+            simulator.get_num_steps_taken(),
+            float(np.max(np.linalg.norm(data[24:30][3:, -quiet_ticks:], axis=0), initial=0.0)),
+            active=bool(loud.size) and loud[-1] == data.shape[1] - 1,
+            touched=bool(np.any(force > 0.0)),
+            finite=bool(np.all(np.isfinite(data[:, -quiet_ticks:]))),
+            # quiet for the record's last ticks, counted in ticks
+            active_at_s=t - (data.shape[1] - 1 - loud[-1]) * h if loud.size else None,
+        )
         if progress is not None:
-            progress(t, t_end)
-        if params.duration_s is None:
-            force = np.linalg.norm(data[27:30], axis=0)
-            comp = np.any(data[36:42] != 0.0, axis=0)
-            touched = np.flatnonzero(force > 0)
-            if touched.size and data.shape[1] > touched[0] + quiet_ticks:
-                if not force[-quiet_ticks:].any() and not comp[-quiet_ticks:].any():
-                    break
-    else:
-        if params.duration_s is None:
-            raise SimulationError(
-                f"the 6-DoF contact did not end within {t_end:.2f} s of simulated time "
-                "(the spacecraft stayed on the target)"
-            )
+            progress(t, rule.t_max)
+        if ended:
+            break
+    rule.verdict()
     run = DockingRun(params, np.array(log.sample_times()), _split(log.data()))
     try:
         run.metrics = docking_metrics(

@@ -34,9 +34,10 @@ Each tick of the rig computer (the plant's time step):
    (without a reference model: the commanded lengths at zero rate, as there);
 4. the F/T sensor (:class:`PoseDeviceSensor`) reads the weld's reaction
    wrench and corrects it for the device's weight and inertia by
-   Newton–Euler: the contact wrench on the device about the port origin, in
-   W; it is held one tick, as in the 1-D back-end, so the loop reads at tick
-   ``k`` the wrench of the step ending at ``t_k`` with the pose at ``t_k``.
+   Newton–Euler (:mod:`hybridtable.stewart.ft_sensor`): the contact wrench
+   on the device about the port origin, in W; it is held one tick, as in the
+   1-D back-end, so the loop reads at tick ``k`` the wrench of the step
+   ending at ``t_k`` with the pose at ``t_k``.
 
 :func:`check_stewart_scenario` refuses, before any simulation, a scenario
 whose approach the platform cannot follow.
@@ -63,6 +64,7 @@ from hybridtable.six_dof.contact import register_docking_devices
 from hybridtable.six_dof.params import DockingLoopParams
 from hybridtable.six_dof.pose import rotation_exp, rotation_log
 from hybridtable.stewart.backend import export_plate_pose
+from hybridtable.stewart.ft_sensor import device_payload, payload_compensated_wrench
 from hybridtable.stewart.geometry import (
     StewartGeometry,
     rotation_from_quaternion,
@@ -334,10 +336,12 @@ class PoseDeviceSensor(LeafSystem):
     Output ``step_wrench`` (6: N m, N)
         Over the coming step: the contact wrench on the device ``[moment
         about the port origin; force]`` in W, from the weld's reaction wrench
-        corrected for the device's weight and inertia by Newton–Euler (what a
-        6-axis F/T sensor with payload compensation reports), each component
-        rounded to ``sensor_resolution_n`` (N, and N m) so the round-off of
-        the correction reads as an exact zero with the devices apart.
+        corrected for the device's weight and inertia by Newton–Euler
+        (:func:`~hybridtable.stewart.ft_sensor.payload_compensated_wrench`:
+        what a 6-axis F/T sensor with payload compensation reports), each
+        component rounded to ``sensor_resolution_n`` (N, and N m) so the
+        round-off of the correction reads as an exact zero with the devices
+        apart.
     Output ``weld_wrench`` (6: N m, N)
         The weld's raw reaction wrench on the device ``[torque about the
         plate origin; force]`` in W, over the coming step.
@@ -350,12 +354,7 @@ class PoseDeviceSensor(LeafSystem):
         self._nq = plant.num_positions()
         self._iq = handles.plate_position_start
         self._iv = handles.plate_velocity_start
-        device = handles.device
-        self._mass = handles.geometry.device_mass_kg
-        self._com = np.array(device.default_com())
-        M_com = device.default_spatial_inertia().Shift(self._com)
-        self._inertia = M_com.CalcRotationalInertia().CopyToFullMatrix3()
-        self._gravity = np.array([0.0, 0.0, -handles.params.gravity_m_per_s2])
+        self._payload = device_payload(handles)
         self._weld = int(handles.sensor_weld.index())
         self._resolution = handles.params.sensor_resolution_n
         self._state = self.DeclareVectorInputPort("plant_state", plant.num_multibody_states())
@@ -389,18 +388,18 @@ class PoseDeviceSensor(LeafSystem):
         a = self._accel.Eval(context)[self._iv : self._iv + 6]
         dw, dv = a[:3], a[3:]
         F = self._reaction.Eval(context)[self._weld]
-        f_weld = R @ F.translational()
-        t_weld = R @ F.rotational()  # about the device (= plate) origin
-        r = R @ self._com
-        a_com = dv + _cross(dw, r) + _cross(w, _cross(w, r))
-        # Newton: m a_com = f_weld + f_contact + m g.
-        f = self._mass * (a_com - self._gravity) - f_weld
-        # Euler about the centre of mass: I dw + w x I w = t_weld,com + t_contact,com.
-        I_w = R @ self._inertia @ R.T
-        t_com = I_w @ dw + _cross(w, I_w @ w) - (t_weld - _cross(r, f_weld))
-        # About the port origin.
-        t_port = t_com + _cross(r - R @ self._k.port_in_plate_m, f)
-        return np.concatenate([t_port, f])
+        # The weld's wrench on the device about its (= the plate's) origin, in
+        # the device frame; the contact's moment about the port origin.
+        return payload_compensated_wrench(
+            self._payload,
+            R,
+            w,
+            dw,
+            dv,
+            F.rotational(),
+            F.translational(),
+            moment_point_m=self._k.port_in_plate_m,
+        )
 
     def _calc_step_wrench(self, context, output) -> None:
         res = self._resolution

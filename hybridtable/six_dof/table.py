@@ -20,7 +20,8 @@ import math
 import numpy as np
 from pydrake.systems.framework import DiagramBuilder, System
 from pydrake.systems.primitives import LinearSystem, PassThrough
-from scipy.linalg import expm
+
+from hybridtable.laws.table import second_order_tick
 
 __all__ = ["PoseTable", "add_pose_table", "table_tick_matrices"]
 
@@ -29,13 +30,10 @@ def table_tick_matrices(
     response_hz: float, damping_ratio: float, period_s: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """``(Phi, Gamma)`` (2x2, 2x1) of one coordinate's response over a tick
-    with the command held: ``[x, x'] <- Phi [x, x'] + Gamma u``."""
-    w = 2.0 * math.pi * response_hz
-    M = np.zeros((3, 3))
-    M[:2, :2] = [[0.0, 1.0], [-w * w, -2.0 * damping_ratio * w]]
-    M[1, 2] = w * w
-    E = expm(M * period_s)
-    return E[:2, :2], E[:2, 2:3]
+    with the command held: ``[x, x'] <- Phi [x, x'] + Gamma u``
+    (:func:`hybridtable.laws.table.second_order_tick`)."""
+    Phi, gamma = second_order_tick(response_hz, damping_ratio, period_s)
+    return Phi, gamma[:, None]
 
 
 class PoseTable:

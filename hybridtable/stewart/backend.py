@@ -38,6 +38,7 @@ from pydrake.systems.primitives import (
 from hybridtable.errors import WorkspaceError
 from hybridtable.loop.builder import HybridLoop, add_hybrid_loop
 from hybridtable.loop.params import HybridLoopParams
+from hybridtable.stewart.ft_sensor import device_payload, payload_compensated_wrench
 from hybridtable.stewart.geometry import rotation_from_quaternion
 from hybridtable.stewart.hunt_crossley import hunt_crossley_dissipation
 from hybridtable.stewart.params import StewartParams, reference_matrices
@@ -154,8 +155,10 @@ class DeviceSensor(LeafSystem):
         Over the coming step: the contact force along the docking axis,
         compression positive, from the weld's reaction force corrected for the
         device's weight and inertia (what a rig's F/T sensor with payload
-        compensation reports, rounded to ``sensor_resolution_n``), and the
-        tip's acceleration along the axis.
+        compensation reports: minus the force component along z of
+        :func:`~hybridtable.stewart.ft_sensor.payload_compensated_wrench`,
+        rounded to ``sensor_resolution_n``), and the tip's acceleration along
+        the axis.
     Output ``wrench`` (6: N m, N)
         Raw reaction wrench ``[torque; force]`` of the plate on the device,
         at the sensor (the device frame origin), in the device frame, over the
@@ -172,9 +175,7 @@ class DeviceSensor(LeafSystem):
         self._tip = g.device_tip_center_m
         self._tip_radius = g.device_tip_radius_m
         self._face = handles.contact_face_height_m
-        self._mass = g.device_mass_kg
-        self._com = handles.device.default_com()
-        self._gravity = np.array([0.0, 0.0, -handles.params.gravity_m_per_s2])
+        self._payload = device_payload(handles)
         self._weld = int(handles.sensor_weld.index())
         self._resolution = handles.params.sensor_resolution_n
         self._state = self.DeclareVectorInputPort("plant_state", plant.num_multibody_states())
@@ -222,10 +223,11 @@ class DeviceSensor(LeafSystem):
         a = self._accel.Eval(context)[self._iv : self._iv + 6]
         dw, dv = a[:3], a[3:]
         F = self._reaction.Eval(context)[self._weld]
-        f_weld_z = R[2] @ F.translational()
-        # Device: m a_com = f_weld + f_contact + m g  ->  compression = -f_contact.z
-        a_com = self._z_kinematics(R, w, dw, dv, self._com)[2]
-        compression = f_weld_z - self._mass * (a_com - self._gravity[2])
+        # The contact force on the device along z; compression pushes it down.
+        wrench = payload_compensated_wrench(
+            self._payload, R, w, dw, dv, F.rotational(), F.translational()
+        )
+        compression = -wrench[5]
         compression = self._resolution * round(compression / self._resolution)
         output.SetFromVector([compression, self._z_kinematics(R, w, dw, dv, self._tip)[2]])
 

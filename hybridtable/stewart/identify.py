@@ -21,12 +21,12 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import LogVectorOutput, TrajectorySource, ZeroOrderHold
 from pydrake.trajectories import PiecewisePolynomial
-from scipy.linalg import expm
 from scipy.optimize import least_squares
 from scipy.signal import lfilter
 
 from hybridtable._validation import check_nonnegative, check_positive
 from hybridtable.errors import ParameterError
+from hybridtable.laws.table import second_order_tick
 from hybridtable.stewart.backend import StewartTable
 from hybridtable.stewart.params import StewartParams, heave_servo_gains
 from hybridtable.stewart.progress import add_progress_ticker
@@ -150,20 +150,9 @@ def drive_table(
     return motion, force
 
 
-def _discrete_model(frequency_hz: float, damping_ratio: float, h: float):
-    w = 2.0 * math.pi * frequency_hz
-    A = np.array([[0.0, 1.0], [-w * w, -2.0 * damping_ratio * w]])
-    B = np.array([0.0, w * w])
-    M = np.zeros((3, 3))
-    M[:2, :2] = A
-    M[:2, 2] = B
-    E = expm(M * h)
-    return E[:2, :2], E[:2, 2]
-
-
 def _simulate_model(frequency_hz, damping_ratio, gain, u, h):
     """y_k = x_k[0] with x_{k+1} = Ad x_k + Bd gain u_k, x_0 = 0 (as a filter)."""
-    Ad, Bd = _discrete_model(frequency_hz, damping_ratio, h)
+    Ad, Bd = second_order_tick(frequency_hz, damping_ratio, h)
     # Transfer function y/u = z^-1 (b0 + b1 z^-1) / (1 + a1 z^-1 + a2 z^-2).
     a1 = -np.trace(Ad)
     a2 = np.linalg.det(Ad)

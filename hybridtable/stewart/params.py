@@ -17,6 +17,7 @@ import numpy as np
 
 from hybridtable._validation import check_nonnegative, check_positive
 from hybridtable.errors import ParameterError
+from hybridtable.laws.table import second_order_tick
 from hybridtable.stewart.geometry import StewartGeometry
 
 __all__ = [
@@ -185,16 +186,11 @@ def reference_matrices(
     """Discrete (A, B, C, D) of the servo's reference model, exact for a
     command held over each time step: state and output ``[p_r, v_r]``, input
     ``[p_des, v_des]`` (``v_des`` unused)."""
-    from scipy.linalg import expm
-
     if params.reference_response_hz is None:
         raise ParameterError("these StewartParams have no reference model")
-    w = 2.0 * math.pi * params.reference_response_hz
-    z = params.reference_damping_ratio
-    M = np.zeros((3, 3))
-    M[:2, :2] = [[0.0, 1.0], [-w * w, -2.0 * z * w]]
-    M[1, 2] = w * w
-    E = expm(M * params.time_step_s)
+    Phi, gamma = second_order_tick(
+        params.reference_response_hz, params.reference_damping_ratio, params.time_step_s
+    )
     B = np.zeros((2, 2))
-    B[:, 0] = E[:2, 2]
-    return E[:2, :2], B, np.eye(2), np.zeros((2, 2))
+    B[:, 0] = gamma
+    return Phi, B, np.eye(2), np.zeros((2, 2))

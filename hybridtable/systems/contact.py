@@ -11,13 +11,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from pydrake.autodiffutils import AutoDiffXd
-from pydrake.systems.framework import LeafSystem_
-from pydrake.systems.scalar_conversion import TemplateSystem
+from pydrake.systems.framework import System
 
 from hybridtable._validation import check_nonnegative, check_positive
+from hybridtable.laws.compiled import compiled_system
+from hybridtable.laws.contact import spring_contact_force, spring_contact_force_rate
 
-__all__ = ["ContactParams", "UnilateralSpringContact", "UnilateralSpringContact_"]
+__all__ = ["ContactParams", "UnilateralSpringContact"]
 
 
 @dataclass(frozen=True)
@@ -46,55 +46,37 @@ class ContactParams:
         )
 
 
-@TemplateSystem.define("UnilateralSpringContact_", T_list=[float, AutoDiffXd])
-def UnilateralSpringContact_(T):
-    class Impl(LeafSystem_[T]):
-        """Unilateral spring-damper contact between the table's device and the
-        passive device.
+def UnilateralSpringContact(params: ContactParams, bilateral: bool = False) -> System:
+    """Unilateral spring-damper contact between the table's device and the
+    passive device, compiled from :mod:`hybridtable.laws.contact`.
 
-        Ports
-        -----
-        Input ``motion`` (size 3: m, m/s, m/s^2)
-            ``[p_act, v_act, a_act]``, penetration and its rates.
-        Output ``force`` (size 1, N)
-            Actual contact force f_act, compression positive, zero apart.
-        Output ``force_rate`` (size 1, N/s)
-            d f_act / dt (``k v + c a`` in contact, zero apart); used by the
-            continuous-time SDC in analysis.
+    Ports
+    -----
+    Input ``motion`` (size 3: m, m/s, m/s^2)
+        ``[p_act, v_act, a_act]``, penetration and its rates.
+    Output ``force`` (size 1, N)
+        Actual contact force f_act, compression positive, zero apart.
+    Output ``force_rate`` (size 1, N/s)
+        d f_act / dt (``k v + c a`` in contact, zero apart); used by the
+        continuous-time SDC in analysis.
 
-        ``bilateral=True`` drops the unilateral gating (``f = k p + c v`` for
-        any sign of ``p``), the linearization used by the stability analysis:
-        ``max(p, 0)`` has zero slope at ``p = 0``.
-        """
+    ``bilateral=True`` drops the unilateral gating (``f = k p + c v`` for
+    any sign of ``p``), the linearization used by the stability analysis:
+    ``max(p, 0)`` has zero slope at ``p = 0`` (an ``AffineSystem``).
+    """
+    k, c = params.stiffness_n_per_m, params.damping_n_s_per_m
 
-        def _construct(self, params: ContactParams, bilateral: bool = False, converter=None):
-            LeafSystem_[T].__init__(self, converter)
-            self.params = params
-            self.bilateral = bool(bilateral)
-            self._k = params.stiffness_n_per_m
-            self._c = params.damping_n_s_per_m
-            self._motion = self.DeclareVectorInputPort("motion", 3)
-            self.DeclareVectorOutputPort("force", 1, self._calc_force)
-            self.DeclareVectorOutputPort("force_rate", 1, self._calc_force_rate)
+    def outputs(signals):
+        p, v, a = signals["motion"]
+        return {
+            "force": [spring_contact_force(k, c, p, v, bilateral)],
+            "force_rate": [spring_contact_force_rate(k, c, p, v, a, bilateral)],
+        }
 
-        def _construct_copy(self, other, converter=None):
-            Impl._construct(self, other.params, other.bilateral, converter=converter)
-
-        def _in_contact(self, p, f):
-            return self.bilateral or (p > 0.0 and f > 0.0)
-
-        def _calc_force(self, context, output):
-            p, v, _ = self._motion.Eval(context)
-            f = self._k * p + self._c * v
-            output.SetAtIndex(0, f if self._in_contact(p, f) else 0.0 * f)
-
-        def _calc_force_rate(self, context, output):
-            p, v, a = self._motion.Eval(context)
-            f = self._k * p + self._c * v
-            rate = self._k * v + self._c * a
-            output.SetAtIndex(0, rate if self._in_contact(p, f) else 0.0 * rate)
-
-    return Impl
-
-
-UnilateralSpringContact = UnilateralSpringContact_[None]
+    # A Python callback: the loop reads the contact once a step (the logger)
+    # and at the sensor's ticks, fewer times than a compiled system's
+    # integrated state would (benchmarks/bench_core.py).
+    system = compiled_system("contact", {"motion": 3}, outputs, compiled=False)
+    system.params = params
+    system.bilateral = bool(bilateral)
+    return system

@@ -7,6 +7,7 @@ import math
 import pytest
 
 from hybridtable.errors import SimulationError
+from hybridtable.laws import separation
 from hybridtable.loop import budget
 from hybridtable.loop.budget import (
     SAMPLED_MEAN_STEP_S,
@@ -76,6 +77,7 @@ def test_the_running_guard_stops_a_run_past_the_budget(monkeypatch):
     # A run the estimate lets through is stopped by the steps it really takes.
     p = paper_params(sample_rate_hz=1000.0)
     monkeypatch.setattr(budget, "MAX_INTEGRATOR_STEPS", 5000)
+    monkeypatch.setattr(separation, "MAX_INTEGRATOR_STEPS", 5000)  # the running guard's
     monkeypatch.setattr(budget, "SAMPLED_MEAN_STEP_S", 1.0)  # estimate: 1 step per tick
     with pytest.raises(SimulationError, match="too stiff to simulate: the integrator took"):
         simulate(p)

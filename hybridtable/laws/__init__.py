@@ -1,0 +1,46 @@
+"""The physical laws of the rig, each written once, used by every engine.
+
+Each module holds one law as plain functions of plain numbers. The same
+function runs on ``float`` (the fast exact-discrete engine, the 6-DoF rig
+computer), on ``AutoDiffXd`` (``Linearize``), on numpy arrays (the 6-DoF
+wrench) and on ``pydrake.symbolic`` expressions, from which the Drake systems
+of :mod:`hybridtable.systems` and :mod:`hybridtable.compensators` are compiled
+(:func:`~hybridtable.laws.compiled.compiled_system`): the diagram evaluates the
+law in C++ without a Python callback per step.
+
+========================  ===================================================
+module                    law
+========================  ===================================================
+``select``                a branch on a signal, for numbers and expressions
+``compensation``          the rig computer's compensation (gate, SDC lead,
+                          MDC term, clamp; Eq. 2-7), 1-D and 6-DoF
+``contact``               the unilateral spring-damper contact
+``table``                 a second-order response over a held tick
+``separation``            run until separated: when a run ends, diverged or not
+``compiled``              a law as a compiled Drake system with named ports
+========================  ===================================================
+"""
+
+from hybridtable._lazy import lazy_exports
+
+__all__, __getattr__, __dir__ = lazy_exports(
+    __name__,
+    {
+        "compensation": (
+            "GATES",
+            "CompensationLaw",
+            "compensate",
+            "backward_difference",
+        ),
+        "compiled": ("compiled_system", "LawSystem"),
+        "contact": ("spring_contact_force", "spring_contact_force_rate"),
+        "select": ("select", "both"),
+        "separation": (
+            "DIVERGED_FORCE_RATIO",
+            "MAX_INTEGRATOR_STEPS",
+            "SeparationRule",
+            "check_steps_taken",
+        ),
+        "table": ("second_order_tick",),
+    },
+)

@@ -1,0 +1,149 @@
+"""The rig computer's compensation law (the paper's Eq. 2-7), 1-D and 6-DoF.
+
+The compensator predicts the contact force at the pose the spacecraft model
+commands from what the sensor measured at the pose the table reached::
+
+    f_comp = f_mea + T_lead r                           (SDC: phase lead, Eq. 2-3)
+                   + G (q_des - q_act) + D (qd_des - qd_act)   (MDC, Eq. 4-6)
+
+- ``r`` is the measured force's rate: the rig computer's backward difference
+  ``(f_mea[k] - f_mea[k-1]) / h`` (:func:`backward_difference`), or ``df/dt``
+  in a continuous analysis;
+- ``G = df/dq`` and ``D = df/dqd`` are the contact's gradients the compensator
+  believes. Along one axis ``G = k_con`` and ``D = c_con`` (compression
+  positive); on the wrench ``[moment; force]`` of the 6-DoF loop they are 6x6
+  matrices, ``G = -K`` with the paper's stiffness ``K = -dw/dq``. The 1-D law is
+  the 6-DoF law on the contact normal.
+
+Contact gating (``gate``): ``"measured_force"`` zeroes ``f_comp`` while the
+measured force (its norm on a wrench) is at or below ``force_deadband_n``;
+``"table_position"`` adds the MDC term only while the table's position says
+the devices touch; ``"none"`` is the linear compensator of the stability
+analysis. ``clamp_nonnegative`` keeps a 1-D ``f_comp`` from pulling.
+
+:func:`compensate` is the one definition: the Drake compensators are compiled
+from it (:mod:`hybridtable.compensators.paper`, ``.online``), the fast engine
+calls it per tick and derives its exact per-mode force rows from it
+(:mod:`hybridtable.loop.fast`), and the 6-DoF wrench compensator calls it on
+arrays (:mod:`hybridtable.six_dof.compensator`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from hybridtable.laws.select import select
+
+__all__ = ["CompensationLaw", "GATES", "compensate", "backward_difference"]
+
+#: How the compensator tells contact.
+GATES: tuple[str, ...] = ("measured_force", "table_position", "none")
+
+
+@dataclass(frozen=True)
+class CompensationLaw:
+    """The switches and constants of the law; the gains ``G`` and ``D`` are
+    arguments of :func:`compensate` (they may be signals: an online
+    identifier's estimate, a stiffness linearized at every tick).
+
+    Parameters
+    ----------
+    lead_time_s : float
+        ``T_lead`` of the SDC (0: no lead).
+    motion_correction : bool
+        Add the MDC term.
+    force_deadband_n : float
+        The measured-force gate's threshold [N].
+    gate : {"measured_force", "table_position", "none"}
+    clamp_nonnegative : bool
+        Clamp a scalar ``f_comp`` at zero.
+    """
+
+    lead_time_s: float = 0.0
+    motion_correction: bool = False
+    force_deadband_n: float = 0.0
+    gate: str = "measured_force"
+    clamp_nonnegative: bool = False
+
+    def __post_init__(self) -> None:
+        if self.gate not in GATES:
+            raise ValueError(f"gate must be one of {GATES}, not {self.gate!r}")
+
+    def gate_open(self, level: Any) -> Any:
+        """The compensated force may act: the measured force's ``level`` is
+        above the dead band (always, without the measured-force gate)."""
+        return level > self.force_deadband_n if self.gate == "measured_force" else True
+
+    def corrects_motion(self, touching: Any) -> Any:
+        """The MDC term acts (with the table-position gate: only while ``touching``)."""
+        if not self.motion_correction:
+            return False
+        return touching if self.gate == "table_position" else True
+
+    def linear(self, motion_correction: bool | None = None) -> CompensationLaw:
+        """The same law without its switches (no gate, no clamp), with or
+        without the MDC term: the compensator between two switches."""
+        return CompensationLaw(
+            lead_time_s=self.lead_time_s,
+            motion_correction=(
+                self.motion_correction if motion_correction is None else motion_correction
+            ),
+            force_deadband_n=self.force_deadband_n,
+            gate="none",
+        )
+
+
+def _times(gain: Any, x: Any) -> Any:
+    """``gain x``: a product for scalars, a matrix product for a matrix gain."""
+    return gain @ x if getattr(gain, "ndim", 0) >= 2 else gain * x
+
+
+def backward_difference(value: Any, previous: Any, period_s: float) -> Any:
+    """The rig computer's rate of a sampled signal: ``(x[k] - x[k-1]) / h``."""
+    return (value - previous) / period_s
+
+
+def compensate(
+    law: CompensationLaw,
+    measured: Any,
+    rate: Any = 0.0,
+    response_error: Any = 0.0,
+    rate_error: Any = 0.0,
+    stiffness: Any = 0.0,
+    damping: Any = None,
+    touching: Any = True,
+    gate_force: Any = None,
+) -> Any:
+    """The compensated force (or wrench) fed to the spacecraft model.
+
+    Parameters
+    ----------
+    law : CompensationLaw
+    measured : scalar or ndarray
+        ``f_mea`` [N] (or the wrench ``[moment; force]``, N m and N).
+    rate : scalar or ndarray
+        Its rate ``r`` [N/s] (read only with a lead).
+    response_error, rate_error : scalar or ndarray
+        ``q_des - q_act`` [m, rad] and ``qd_des - qd_act`` [m/s, rad/s].
+    stiffness, damping : scalar or ndarray
+        ``G`` and ``D`` (``damping=None``: no rate term).
+    touching : bool or Formula
+        The table's position says the devices touch (``p_act > 0``); read by
+        the ``"table_position"`` gate.
+    gate_force : scalar, optional
+        What the measured-force gate compares with the dead band (default
+        ``measured``; the norm of the force on a wrench).
+    """
+    f = measured
+    if law.lead_time_s > 0.0:
+        f = f + law.lead_time_s * rate
+    if law.motion_correction:
+        corrected = f + _times(stiffness, response_error)
+        if damping is not None:
+            corrected = corrected + _times(damping, rate_error)
+        f = select(law.corrects_motion(touching), corrected, f)
+    if law.clamp_nonnegative:
+        f = select(f < 0.0, 0.0 * f, f)
+    level = measured if gate_force is None else gate_force
+    return select(law.gate_open(level), f, 0.0 * measured)

@@ -1,0 +1,218 @@
+"""A law compiled into a Drake system with named ports: no Python per step.
+
+:func:`compiled_system` calls a law (a function of :mod:`hybridtable.laws`)
+once on ``pydrake.symbolic`` variables and builds the Drake system that
+evaluates the resulting expressions in C++:
+
+- an affine law (the ungated compensator, the bilateral contact of the
+  stability analysis) becomes an ``AffineSystem``: exact derivatives for
+  ``Linearize``, scalar-convertible to ``AutoDiffXd``;
+- a switching law (a gate, a contact that never pulls) becomes a
+  ``SymbolicVectorSystem`` with ``if_then_else``.
+
+Named input ports feed a ``Multiplexer``; a ``held`` input is the value a
+``ZeroOrderHold`` sampled at the rig computer's last tick (the backward
+difference's previous sample; held whether the law reads it or not, so the
+system's states do not depend on its constants); several named outputs come out of a
+``Demultiplexer``. An input the law does not read is still a port (so every
+compensator has the same ports) and is read by nothing.
+
+Drake 1.51's ``SymbolicVectorSystem`` demands continuous dynamics whenever a
+diagram around it integrates (``DoCalcTimeDerivatives`` fails on a
+stateless or discrete one), so a switching law carries one continuous state
+that stays 0 (``x' = 0``; its integration error is 0, so the integrator's
+step control is unchanged).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from pydrake.autodiffutils import AutoDiffXd
+from pydrake.symbolic import (
+    DecomposeAffineExpressions,
+    Expression,
+    MakeVectorVariable,
+    Variables,
+)
+from pydrake.systems.framework import BasicVector_, DiagramBuilder, LeafSystem_, System
+from pydrake.systems.primitives import (
+    AffineSystem,
+    Demultiplexer,
+    Multiplexer,
+    PassThrough,
+    SymbolicVectorSystem,
+    ZeroOrderHold,
+)
+from pydrake.systems.scalar_conversion import TemplateSystem
+
+__all__ = ["compiled_system", "LawSystem", "LawSystem_"]
+
+#: ``law(signals) -> {output name: expressions}``; ``signals`` maps every input
+#: (and held input) name to its vector of variables.
+Law = Callable[[Mapping[str, np.ndarray]], Mapping[str, Sequence[Any]]]
+
+
+def _expression(e: Any) -> Expression:
+    return e if isinstance(e, Expression) else Expression(e)
+
+
+def _affine(expressions: Sequence[Expression], variables: Sequence) -> AffineSystem | None:
+    """``y = D u + y0`` when every expression is affine in ``variables``, else None."""
+    if not variables:
+        return None
+    try:
+        D, y0 = DecomposeAffineExpressions(expressions, variables)
+    except RuntimeError:  # not affine: a switch (if_then_else) or a product of signals
+        return None
+    n = len(variables)
+    return AffineSystem(
+        np.zeros((0, 0)), np.zeros((0, n)), np.zeros(0), np.zeros((len(expressions), 0)), D, y0
+    )
+
+
+def _symbolic(expressions: Sequence[Expression], variables: Sequence) -> SymbolicVectorSystem:
+    """The expressions evaluated in C++, with the one state Drake demands (see above)."""
+    unused = MakeVectorVariable(1, "unused")
+    return SymbolicVectorSystem(
+        state=unused, dynamics=[Expression(0.0)], input=list(variables), output=expressions
+    )
+
+
+@TemplateSystem.define("LawSystem_", T_list=[float, AutoDiffXd])
+def LawSystem_(T):
+    class Impl(LeafSystem_[T]):
+        """A law evaluated by a Python callback (``float`` or ``AutoDiffXd``).
+
+        Cheaper than the compiled form where the diagram evaluates the law
+        rarely: once per tick of a sampled rig computer, once per step for
+        the logger (the compiled form's state is integrated, which evaluates
+        its inputs at every integrator stage).
+        """
+
+        def _construct(self, inputs, law, held, output_sizes, read, converter=None):
+            LeafSystem_[T].__init__(self, converter)
+            self._args = (inputs, law, held, output_sizes, read)
+            self._law = law
+            self._ports = {n: self.DeclareVectorInputPort(n, size) for n, size in inputs.items()}
+            # Only the ports the law reads are evaluated (others may be unconnected).
+            self._read = [(n, p) for n, p in self._ports.items() if n in read]
+            self._held = {}
+            for i, (n, (source, period)) in enumerate(held.items()):
+                self.DeclareDiscreteState(inputs[source])
+                self._held[n] = (i, self._ports[source])
+                self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._make_store(i, source))
+            for n, size in output_sizes.items():
+                self.DeclareVectorOutputPort(n, BasicVector_[T](size), self._make_calc(n))
+
+        def _construct_copy(self, other, converter=None):
+            Impl._construct(self, *other._args, converter=converter)
+
+        def _make_store(self, index, source):
+            port = self._ports[source]
+
+            def store(context, discrete_state):
+                discrete_state.get_mutable_vector(index).SetFromVector(port.Eval(context))
+
+            return store
+
+        def _make_calc(self, name):
+            def calc(context, output):
+                signals = {n: port.Eval(context) for n, port in self._read}
+                for n, (i, _) in self._held.items():
+                    signals[n] = context.get_discrete_state(i).value()
+                output.SetFromVector(np.atleast_1d(self._law(signals)[name]))
+
+            return calc
+
+    return Impl
+
+
+LawSystem = LawSystem_[None]
+
+
+def compiled_system(
+    name: str,
+    inputs: Mapping[str, int],
+    law: Law,
+    held: Mapping[str, tuple[str, float]] | None = None,
+    compiled: bool = True,
+) -> System:
+    """Compile ``law`` into a Drake system named ``name``.
+
+    Parameters
+    ----------
+    name : str
+    inputs : mapping of str to int
+        Input port names and sizes, in port order.
+    law : callable
+        ``law(signals) -> {output name: expressions}`` (output ports in the
+        mapping's order).
+    held : mapping of str to (str, float), optional
+        ``{name: (input, period_s)}``: ``name`` is ``input`` as a
+        ``ZeroOrderHold`` of that period sampled it at the last tick.
+
+    compiled : bool
+        False: a switching law is a :class:`LawSystem` (a Python callback of
+        ``law`` on the signals' values) instead of a ``SymbolicVectorSystem``;
+        an affine law is an ``AffineSystem`` either way.
+
+    Returns
+    -------
+    System
+        Input ports ``inputs``, output ports the law's.
+    """
+    held = dict(held or {})
+    signals = {n: MakeVectorVariable(size, n) for n, size in inputs.items()}
+    for n, (source, _) in held.items():
+        signals[n] = MakeVectorVariable(inputs[source], n)
+    outputs = {n: [_expression(e) for e in np.atleast_1d(v)] for n, v in law(signals).items()}
+    expressions = [e for es in outputs.values() for e in es]
+    used = Variables()
+    for e in expressions:
+        used.insert(e.GetVariables())
+    read = [n for n in signals if any(used.include(v) for v in signals[n])]
+    variables = [v for n in read for v in signals[n]]
+
+    core = _affine(expressions, variables)
+    if core is None and not compiled:
+        sizes = {n: len(es) for n, es in outputs.items()}
+        system = LawSystem(dict(inputs), law, held, sizes, tuple(read))
+        system.set_name(name)
+        return system
+    builder = DiagramBuilder()
+    core = builder.AddNamedSystem(f"{name}_law", core or _symbolic(expressions, variables))
+    # Every input port of a subsystem that reads each named input.
+    consumers: dict[str, list] = {n: [] for n in inputs}
+    if variables:
+        mux = builder.AddNamedSystem(f"{name}_inputs", Multiplexer([len(signals[n]) for n in read]))
+        builder.Connect(mux.get_output_port(), core.get_input_port())
+    for h, (src, period) in held.items():  # held even when unread: the same states
+        zoh = builder.AddNamedSystem(h, ZeroOrderHold(period, inputs[src]))
+        consumers[src].append(zoh.get_input_port())
+        if h in read:
+            builder.Connect(zoh.get_output_port(), mux.get_input_port(read.index(h)))
+    for i, n in enumerate(read):
+        if n in inputs:
+            consumers[n].insert(0, mux.get_input_port(i))
+    for n, size in inputs.items():
+        ports = consumers[n] or [
+            builder.AddNamedSystem(f"{n}_unread", PassThrough(size)).get_input_port()
+        ]
+        builder.ExportInput(ports[0], n)
+        for port in ports[1:]:
+            builder.ConnectInput(n, port)
+    if len(outputs) == 1:
+        builder.ExportOutput(core.get_output_port(), next(iter(outputs)))
+    else:
+        demux = builder.AddNamedSystem(
+            f"{name}_outputs", Demultiplexer([len(es) for es in outputs.values()])
+        )
+        builder.Connect(core.get_output_port(), demux.get_input_port())
+        for i, n in enumerate(outputs):
+            builder.ExportOutput(demux.get_output_port(i), n)
+    diagram = builder.Build()
+    diagram.set_name(name)
+    return diagram

@@ -1,0 +1,47 @@
+"""The unilateral spring-damper contact: it pushes, never pulls.
+
+``f = k p + c v`` while the devices overlap (``p > 0``) and the sum pushes
+(``f > 0``); zero otherwise. Its rate is ``k v + c a`` where the force acts.
+The Drake contact (:mod:`hybridtable.systems.contact`, compiled from these
+functions) and the fast engine's contact force are this law; ``bilateral``
+drops the gate (the linearization used by the stability analysis).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from hybridtable.laws.select import both, select
+
+__all__ = ["spring_contact_force", "spring_contact_force_rate"]
+
+
+def _touching(p: Any, f: Any, bilateral: bool) -> Any:
+    return True if bilateral else both(p > 0.0, f > 0.0)
+
+
+def spring_contact_force(
+    stiffness_n_per_m: float,
+    damping_n_s_per_m: float,
+    p_m: Any,
+    v_m_per_s: Any,
+    bilateral: bool = False,
+) -> Any:
+    """The contact force [N], compression positive, at penetration ``p_m`` and
+    its rate ``v_m_per_s``."""
+    f = stiffness_n_per_m * p_m + damping_n_s_per_m * v_m_per_s
+    return select(_touching(p_m, f, bilateral), f, 0.0 * f)
+
+
+def spring_contact_force_rate(
+    stiffness_n_per_m: float,
+    damping_n_s_per_m: float,
+    p_m: Any,
+    v_m_per_s: Any,
+    a_m_per_s2: Any,
+    bilateral: bool = False,
+) -> Any:
+    """``d f / dt`` [N/s]: ``k v + c a`` where the contact force acts, else 0."""
+    f = stiffness_n_per_m * p_m + damping_n_s_per_m * v_m_per_s
+    rate = stiffness_n_per_m * v_m_per_s + damping_n_s_per_m * a_m_per_s2
+    return select(_touching(p_m, f, bilateral), rate, 0.0 * rate)

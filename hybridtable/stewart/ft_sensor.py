@@ -1,0 +1,145 @@
+"""The F/T sensor's payload compensation: the contact wrench from the sensor's reading.
+
+The 6-axis force/torque sensor sits between the Stewart platform's top plate
+and the active docking device (the plant's weld of the device to the plate,
+:mod:`hybridtable.stewart.plant`). It measures the wrench the plate exerts on
+the device, which carries the device's own weight and inertia besides the
+contact. A rig's sensor with *payload compensation* reports the contact
+wrench instead; :func:`payload_compensated_wrench` is that law, written once
+for the two back-ends that read it
+(:class:`~hybridtable.stewart.backend.DeviceSensor`, the axial force, and
+:class:`~hybridtable.six_dof.stewart_backend.PoseDeviceSensor`, the full
+wrench).
+
+Frames. W is the world (any inertial frame with gravity ``g``); D is the
+device's frame, whose origin ``o`` is the sensor's reference point and whose
+rotation in W is ``R`` (W <- D). The device is one rigid body of mass ``m``,
+centre of mass ``c`` at ``r = R c_D`` from ``o``, and rotational inertia
+``I_D`` about ``c`` (axes of D; ``I = R I_D R^T`` in W). Its motion is the
+angular velocity ``w``, the angular acceleration ``dw`` and the acceleration
+``a_o`` of its origin, all in W. The sensor reads the force ``f_s`` and the
+torque ``t_s`` about ``o``, both on the device, in D.
+
+The law. Three wrenches act on the device: the sensor's, its weight ``m g``
+at ``c`` and the contact's ``(f, t)``. By Newton–Euler, with
+``a_c = a_o + dw x r + w x (w x r)`` the acceleration of the centre of mass:
+
+- Newton: ``m a_c = R f_s + f + m g``, so ``f = m (a_c - g) - R f_s``;
+- Euler about ``c``: ``I dw + w x I w = (R t_s - r x R f_s) + t_c``, so
+  ``t_c = I dw + w x I w - (R t_s - r x R f_s)``;
+- about a point ``p`` fixed on the device at ``R p_D`` from ``o``:
+  ``t_p = t_c + (r - R p_D) x f``.
+
+The result is ``[t_p; f]`` in W (N m, N): the contact wrench on the device.
+A device that moves, spins and hangs in gravity with nothing touching it
+reads zero; a device at rest reads the contact alone.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from hybridtable.stewart.plant import StewartPlant
+
+__all__ = ["DevicePayload", "device_payload", "payload_compensated_wrench"]
+
+
+def _cross(a, b) -> np.ndarray:
+    """a x b for 3-vectors (scalar arithmetic: np.cross is slow on small arrays)."""
+    return np.array(
+        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    )
+
+
+@dataclass(frozen=True)
+class DevicePayload:
+    """The payload a sensor compensates: the rigid device beyond the sensor.
+
+    Attributes
+    ----------
+    mass_kg : float
+        The device's mass ``m``.
+    com_m : ndarray (3,)
+        Its centre of mass ``c_D`` in its frame D (m from the sensor's origin).
+    inertia_kg_m2 : ndarray (3, 3)
+        Its rotational inertia ``I_D`` about the centre of mass, axes of D.
+    gravity_m_per_s2 : ndarray (3,)
+        The gravity vector ``g`` in the world W.
+    """
+
+    mass_kg: float
+    com_m: np.ndarray
+    inertia_kg_m2: np.ndarray
+    gravity_m_per_s2: np.ndarray
+
+
+def device_payload(handles: StewartPlant) -> DevicePayload:
+    """The payload of the platform's F/T sensor: the device welded to the
+    plate (its mass, centre of mass and central inertia as the plant has
+    them) in the plant's gravity along ``-z``."""
+    device = handles.device
+    com = np.array(device.default_com())
+    inertia = device.default_spatial_inertia().Shift(com).CalcRotationalInertia()
+    return DevicePayload(
+        mass_kg=handles.geometry.device_mass_kg,
+        com_m=com,
+        inertia_kg_m2=inertia.CopyToFullMatrix3(),
+        gravity_m_per_s2=np.array([0.0, 0.0, -handles.params.gravity_m_per_s2]),
+    )
+
+
+def payload_compensated_wrench(
+    payload: DevicePayload,
+    rotation: np.ndarray,
+    angular_velocity_rad_per_s: Sequence[float],
+    angular_acceleration_rad_per_s2: Sequence[float],
+    origin_acceleration_m_per_s2: Sequence[float],
+    sensor_torque_n_m: Sequence[float],
+    sensor_force_n: Sequence[float],
+    moment_point_m: np.ndarray | None = None,
+) -> np.ndarray:
+    """The contact wrench on the device from the sensor's reading (see the module).
+
+    Parameters
+    ----------
+    payload : DevicePayload
+        The device beyond the sensor.
+    rotation : ndarray (3, 3)
+        ``R``: the device frame D in the world W (W <- D).
+    angular_velocity_rad_per_s, angular_acceleration_rad_per_s2 : array (3,)
+        ``w`` and ``dw`` of the device, in W.
+    origin_acceleration_m_per_s2 : array (3,)
+        ``a_o``: the acceleration of D's origin (the sensor's point), in W.
+    sensor_torque_n_m, sensor_force_n : array (3,)
+        The sensor's reading on the device, ``t_s`` about D's origin and
+        ``f_s``, in D.
+    moment_point_m : ndarray (3,), optional
+        ``p_D``: the point of the device (in D, m) about which the moment is
+        reported; default D's origin.
+
+    Returns
+    -------
+    ndarray (6,)
+        ``[t_p; f]``: the contact's moment about the point (N m) and force
+        (N) on the device, in W.
+    """
+    R = rotation
+    w = angular_velocity_rad_per_s
+    dw = angular_acceleration_rad_per_s2
+    f_sensor = R @ sensor_force_n
+    t_sensor = R @ sensor_torque_n_m  # about D's origin
+    r = R @ payload.com_m
+    a_com = origin_acceleration_m_per_s2 + _cross(dw, r) + _cross(w, _cross(w, r))
+    # Newton: m a_com = f_sensor + f_contact + m g.
+    f = payload.mass_kg * (a_com - payload.gravity_m_per_s2) - f_sensor
+    # Euler about the centre of mass: I dw + w x I w = t_sensor,com + t_contact,com.
+    I_w = R @ payload.inertia_kg_m2 @ R.T
+    t_com = I_w @ dw + _cross(w, I_w @ w) - (t_sensor - _cross(r, f_sensor))
+    # About the point.
+    arm = r if moment_point_m is None else r - R @ moment_point_m
+    return np.concatenate([t_com + _cross(arm, f), f])
