@@ -7,7 +7,11 @@ package on ``PYTHONPATH`` each), what the physics core decides:
   ``none`` and ``SDMDC``, and a 1 kHz sampled rig computer with SDMDC: wall
   time per run (median of the repetitions, each the best of ``--runs`` runs
   after a warm-up), integrator steps, and the time per step;
-- optionally ``diagnose`` on the shipped runs (``--diagnose DIR``).
+- optionally ``diagnose`` (one process, ``workers=1``) on the shipped runs
+  (``--diagnose DIR``) and on three sets of three runs from the independent rig
+  generator ``tests/generators/effectsim.py`` (nothing hidden, contact
+  damping, an extra sensor delay): wall time, model runs (in the ``steps``
+  column) and the verdict, which must not change.
 
 The old checkout is a folder (``git worktree add ../old eae8025``) or a
 commit, checked out into a temporary worktree. Ratios old/new > 1 mean the
@@ -55,14 +59,24 @@ print(json.dumps(out))
 """
 
 DIAGNOSE = r"""
-import json, sys, time
+import json, sys, tempfile, time
+from pathlib import Path
 from hybridtable.diagnosis.diagnose import diagnose
 from hybridtable.measurement.run_reader import read_runs
-runs = read_runs([sys.argv[1]])
-t = time.perf_counter()
-d = diagnose(runs, workers=1)
-print(json.dumps({"diagnose_wall_s": time.perf_counter() - t, "verdict": d.verdict,
-                  "model_runs": d.simulations}))
+from tests.generators.effectsim import make_runs
+sets = {"diagnose_examples": read_runs([sys.argv[1]])}
+tmp = Path(tempfile.mkdtemp())
+for effect in ("none", "contact_damping", "extra_delay"):
+    sets[f"diagnose_rigsim_{effect}"] = make_runs(
+        tmp / effect, effect, velocities=(0.05, 0.08, 0.12), seed=1, duration_s=0.965
+    )
+out = {}
+for name, runs in sets.items():
+    t = time.perf_counter()
+    d = diagnose(runs, workers=1)
+    out[name] = {"wall_s": time.perf_counter() - t, "steps": d.simulations,
+                 "cor": d.staircase[-1]["error"], "verdict": d.verdict}
+print(json.dumps(out))
 """
 
 
@@ -145,11 +159,10 @@ def main(argv: list[str] | None = None) -> int:
             f"{name:<28} {1e3 * o:8.1f} {1e3 * n:8.1f} {o / n:8.2f} {f'{so}/{sn}':>12} "
             f"{1e6 * n / sn:12.1f}"
         )
-    if args.diagnose:
-        o = statistics.median(s["diagnose_wall_s"] for s in sides["old"])
-        n = statistics.median(s["diagnose_wall_s"] for s in sides["new"])
-        rows.append({"case": "diagnose", "old_s": o, "new_s": n, "ratio": o / n})
-        print(f"{'diagnose ' + args.diagnose:<28} {o:7.2f}s {n:7.2f}s {o / n:8.2f}")
+    for name in names:
+        if name.startswith("diagnose"):
+            verdicts = {sides[k][0][name]["verdict"] for k in sides}
+            print(f"  {name}: verdict {' / '.join(sorted(verdicts))}")
     if args.json:
         Path(args.json).write_text(json.dumps(rows, indent=2) + "\n")
     return 0

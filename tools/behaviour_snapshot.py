@@ -119,16 +119,18 @@ def save(out: Path, runs: str | None) -> int:
     return 1 if failed else 0
 
 
-#: Keys whose values are clock readings (run times, creation stamps), not
-#: behaviour: left out of the diff.
-_CLOCKS = ("wall", "real_time", "created")
+#: Keys whose values are clock readings (run times, creation stamps) or the
+#: machine's (a scheduler's address), not behaviour: left out of the diff.
+_CLOCKS = ("wall", "real_time", "created", "compute_time", "scheduler", "seconds")
 
 
-def _strip(obj):
+def _strip(obj, root: str = ""):
+    if isinstance(obj, str) and root:
+        return obj.replace(root, "<out>")
     if isinstance(obj, dict):
-        return {k: _strip(v) for k, v in obj.items() if not any(w in k for w in _CLOCKS)}
+        return {k: _strip(v, root) for k, v in obj.items() if not any(w in k for w in _CLOCKS)}
     if isinstance(obj, list):
-        return [_strip(v) for v in obj]
+        return [_strip(v, root) for v in obj]
     return obj
 
 
@@ -165,6 +167,8 @@ def _differences(a, b, path: str = "", rtol: float = 0.0) -> list[str]:
 #: Only the reading is masked; the rest of the line is compared.
 _TIMING = re.compile(
     r"\(\d+(\.\d+)? s\)|wall time \d+(\.\d+)? s|: \d+(\.\d+)? s$|, \d+(\.\d+)? s\)"
+    r"|simulated in \d+(\.\d+)? s \(\d+(\.\d+)? x real time\)"
+    r"|runs in \d+(\.\d+)? s \(\d+(\.\d+)? runs/s"
 )
 
 
@@ -186,7 +190,10 @@ def diff(a: Path, b: Path, rtol: float = 0.0) -> int:
             continue
         if pa.suffix == ".json":
             found = _differences(
-                _strip(json.loads(pa.read_text())), _strip(json.loads(pb.read_text())), "", rtol
+                _strip(json.loads(pa.read_text()), str(a)),
+                _strip(json.loads(pb.read_text()), str(b)),
+                "",
+                rtol,
             )
         else:
             la, lb = _text_lines(pa, a), _text_lines(pb, b)

@@ -13,6 +13,8 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
 __all__ = ["select", "both"]
 
 
@@ -24,6 +26,8 @@ def both(a: Any, b: Any) -> Any:
     """``a and b`` for ``bool`` conditions, ``logical_and`` for formulas."""
     if a.__class__ is bool and b.__class__ is bool:
         return a and b
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return np.logical_and(a, b)
     if _is_formula(a) or _is_formula(b):
         from pydrake.symbolic import logical_and
 
@@ -41,6 +45,8 @@ def select(condition: Any, then: Any, otherwise: Any) -> Any:
     """
     if condition.__class__ is bool:
         return then if condition else otherwise
+    if isinstance(condition, np.ndarray):  # elementwise over arrays of samples
+        return np.where(condition, then, otherwise)
     if _is_formula(condition):
         from pydrake.symbolic import if_then_else
 

@@ -119,6 +119,9 @@ def replay_command(
     n = len(p)
     if n < 2 or len(v) != n:
         raise ValueError("the command needs two equally long series of at least 2 ticks")
+    laws = _law_replay(params, physics, p, v)
+    if laws is not None:
+        return laws
     builder = DiagramBuilder()
     # Pieces centred on the ticks: the value at tick k is sample k even when
     # Drake's event time differs from k h by rounding.
@@ -179,6 +182,51 @@ def replay_command(
         f_act_n=f_act.copy(),
         f_mea_n=f_mea.copy(),
         steps=simulator.get_num_steps_taken(),
+    )
+
+
+def _law_replay(
+    params: HybridLoopParams, physics: RigPhysics, p: np.ndarray, v: np.ndarray
+) -> ReplayResult | None:
+    """The replay without a simulator, where every part of the physics states
+    its law at the ticks: a table with an exact sampled form
+    (:meth:`~hybridtable.systems.table.SampledTable.respond`), a contact with a
+    ``force_law`` and a sensor with ``readings``. The same systems' own
+    coefficients and law functions, evaluated tick by tick as the discrete
+    Drake diagram does; None where a part (a user's wrapped system, a
+    continuous sensor) has no such form, and the diagram replays."""
+    h = params.sample_period_s
+    table = physics.make_table(params)
+    sampled = getattr(table, "sampled", None)
+    table = sampled(h) if sampled is not None else None
+    contact = physics.make_contact(params)
+    sensor = physics.make_sensor(params)
+    law = getattr(contact, "force_law", None)
+    if table is None or law is None or not hasattr(sensor, "readings"):
+        return None
+    if contact.num_continuous_states() or sensor.num_continuous_states():
+        return None
+    ic = params.initial_conditions()
+    motion = table.respond(np.column_stack([p, v]), ic["p_act_m"], ic["v_act_m_per_s"])
+    if getattr(contact, "force_law_elementwise", False):
+        f_act = np.asarray(law(motion[:, 0], motion[:, 1], motion[:, 2]), dtype=float)
+    else:
+        f_act = np.array([law(*row) for row in motion.tolist()], dtype=float)
+    f_mea = sensor.readings(f_act)
+    if f_mea is None:
+        return None
+    if not (np.isfinite(motion).all() and np.isfinite(f_mea).all()):
+        raise SimulationError("replay diverged (non-finite table motion or force)")
+    return ReplayResult(
+        params=params,
+        time_s=h * np.arange(len(p)),
+        p_des_m=p.copy(),
+        v_des_m_per_s=v.copy(),
+        p_act_m=motion[:, 0].copy(),
+        v_act_m_per_s=motion[:, 1].copy(),
+        f_act_n=f_act,
+        f_mea_n=np.asarray(f_mea, dtype=float),
+        steps=0,
     )
 
 

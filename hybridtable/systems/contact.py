@@ -79,4 +79,8 @@ def UnilateralSpringContact(params: ContactParams, bilateral: bool = False) -> S
     system = compiled_system("contact", {"motion": 3}, outputs, compiled=False)
     system.params = params
     system.bilateral = bool(bilateral)
+    #: ``force_law(p, v, a) -> f``: the law this system evaluates (on numbers or,
+    #: elementwise, on arrays of samples).
+    system.force_law = lambda p, v, a: spring_contact_force(k, c, p, v, bilateral)
+    system.force_law_elementwise = True
     return system

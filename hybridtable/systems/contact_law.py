@@ -170,6 +170,8 @@ def ContactLaw_(T):
         def _construct(self, params: ContactLawParams, converter=None):
             LeafSystem_[T].__init__(self, converter)
             self.params = params
+            #: ``force_law(p, v, a) -> f``: the law this system evaluates.
+            self.force_law = lambda p, v, a: contact_law_force(params, p, v, a)[0]
             self._motion = self.DeclareVectorInputPort("motion", 3)
             self.DeclareVectorOutputPort("force", 1, self._calc_force)
             self.DeclareVectorOutputPort("force_rate", 1, self._calc_force_rate)

@@ -146,3 +146,31 @@ class MeasurementChain(Diagram):
         builder.ExportInput(entry.get_input_port(), "force")
         builder.ExportOutput(out, "measured_force")
         builder.BuildInto(self)
+
+    def readings(self, force_n: np.ndarray) -> np.ndarray:
+        """The readings at the ticks for the actual force at the ticks: the
+        chain's difference equations, operation for operation those of its
+        Drake primitives (no simulator)."""
+        p = self.params
+        y = np.asarray(force_n, dtype=float)
+        if p.time_constant_s > 0.0:
+            a, b0, b1 = first_order_hold_filter(p.time_constant_s, p.sample_period_s)
+            gain, z, out = a * b1 + b0, 0.0, np.empty(len(y))
+            for k, u in enumerate(y.tolist()):
+                out[k] = 1.0 * z + b1 * u
+                z = a * z + gain * u
+            y = out
+        m, alpha = p.taps()
+        out = _shifted(y, m)
+        if alpha > 0.0:
+            out = (1 - alpha) * out + alpha * _shifted(y, m + 1)
+        if p.bias_n != 0.0:
+            out = out + p.bias_n
+        return out
+
+
+def _shifted(x: np.ndarray, ticks: int) -> np.ndarray:
+    """``x[k - ticks]``, zero before the start (a ``DiscreteTimeDelay``'s taps)."""
+    if ticks == 0:
+        return x.copy()
+    return np.concatenate([np.zeros(min(ticks, len(x))), x[: max(len(x) - ticks, 0)]])

@@ -147,3 +147,14 @@ class ForceSensorDelay(Diagram):
         builder.ExportInput(inner.get_input_port(), "force")
         builder.ExportOutput(inner.get_output_port(), "measured_force")
         builder.BuildInto(self)
+        self._samples = m if mode == "sampled" and T > 0.0 else (0 if T == 0.0 else None)
+
+    def readings(self, force_n: np.ndarray) -> np.ndarray | None:
+        """The readings at the ticks for the actual force at the ticks
+        (``f_mea[k] = f_act[k - M]``, zero before the start); None unless the
+        delay is sampled or zero."""
+        if self._samples is None:
+            return None
+        x = np.asarray(force_n, dtype=float)
+        m = min(self._samples, len(x))
+        return np.concatenate([np.zeros(m), x[: len(x) - m]])

@@ -162,6 +162,30 @@ class SecondOrderTable(Diagram):
             sub.SetContinuousState(np.array([position_m, velocity_m_per_s]))
 
 
+def _ordered_dot(row: np.ndarray, X: np.ndarray) -> np.ndarray:
+    """``X @ row`` with the products summed in index order (as Eigen does for a
+    small matrix), elementwise over the rows of ``X``."""
+    total = row[0] * X[:, 0]
+    for j in range(1, len(row)):
+        total = total + row[j] * X[:, j]
+    return total
+
+
+def _affine_step(A: np.ndarray, B: np.ndarray):
+    """``(x, u) -> A x + B u`` for a small system, unrolled: each row's products
+    summed in index order, ``A x`` and ``B u`` added last (as Eigen does)."""
+    n, m = B.shape
+    xs = [f"x{j}" for j in range(n)]
+    us = [f"u{j}" for j in range(m)]
+
+    def row(coeffs, names):
+        return " + ".join(f"{float(c)!r} * {v}" for c, v in zip(coeffs, names, strict=True))
+
+    body = ", ".join(f"({row(A[i], xs)}) + ({row(B[i], us)})" for i in range(n))
+    code = f"lambda {', '.join(xs + us)}: ({body},)"
+    return eval(code, {"__builtins__": {}})  # noqa: S307 (numbers and names only)
+
+
 class SampledTable(Diagram):
     """A linear table's exact response to a command held over ticks, at the ticks.
 
@@ -201,7 +225,33 @@ class SampledTable(Diagram):
         builder.ExportOutput(self._linear.get_output_port(), "motion")
         builder.BuildInto(self)
 
+    def initial_state(self, position_m: float, velocity_m_per_s: float) -> np.ndarray:
+        """The state with every ``[p, v]`` pair at ``position_m``, ``velocity_m_per_s``."""
+        return np.tile([position_m, velocity_m_per_s], self._pairs)
+
     def set_initial_state(self, context, position_m: float, velocity_m_per_s: float) -> None:
         """Every ``[p, v]`` pair of the state at ``position_m``, ``velocity_m_per_s``."""
-        x = np.tile([position_m, velocity_m_per_s], self._pairs)
+        x = self.initial_state(position_m, velocity_m_per_s)
         self.GetSubsystemContext(self._linear, context).SetDiscreteState(x)
+
+    def respond(
+        self, commands: np.ndarray, position_m: float, velocity_m_per_s: float
+    ) -> np.ndarray:
+        """The motion at the ticks (N, 3) for the commands (N, 2) held from each
+        tick to the next, from the initial state: ``y[k] = C x[k] + D u[k]``,
+        ``x[k+1] = A x[k] + B u[k]`` with this system's own matrices (what the
+        Drake system computes, without a simulator)."""
+        lin = self._linear
+        A, B, C, D = (np.asarray(m, dtype=float) for m in (lin.A(), lin.B(), lin.C(), lin.D()))
+        u = np.asarray(commands, dtype=float)
+        step = _affine_step(A, B)
+        x = tuple(self.initial_state(position_m, velocity_m_per_s).tolist())
+        states = []
+        for uk in u.tolist():
+            states.append(x)
+            x = step(*x, *uk)
+        X = np.array(states).reshape(len(u), A.shape[0])
+        # Outputs, vectorized over the ticks with the same sums in the same order.
+        return np.column_stack(
+            [_ordered_dot(c, X) + _ordered_dot(d, u) for c, d in zip(C, D, strict=True)]
+        )
