@@ -54,9 +54,7 @@ def _diagram_replay(monkeypatch, run, physics):
 def test_the_law_replay_is_the_diagram_bit_for_bit(monkeypatch, run, name):
     physics = SPECS[name].physics()
     params = replay_module.rig_params(run.info, run.where("json"))
-    laws = replay_module._law_replay(
-        physics.apply(params), physics, run.p_des_m, run.v_des_m_per_s
-    )
+    laws = replay_module._law_replay(physics.apply(params), physics, run.p_des_m, run.v_des_m_per_s)
     assert laws is not None, f"{name}: every part states its law, no simulator needed"
     diagram = _diagram_replay(monkeypatch, run, physics)
     assert diagram.steps > 0  # the diagram path really simulated
