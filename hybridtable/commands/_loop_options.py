@@ -12,6 +12,7 @@ import argparse
 
 __all__ = [
     "LOOP_OPTIONS",
+    "add_loop_option",
     "add_loop_arguments",
     "given_loop_options",
     "loop_value",
@@ -45,9 +46,50 @@ LOOP_OPTIONS: dict[str, tuple[object, str, str]] = {
 }
 
 
+#: Loop quantities some commands take besides :data:`LOOP_OPTIONS` (same shape).
+EXTRA_OPTIONS: dict[str, tuple[object, str, str]] = {
+    "contact_damping_ratio": (0.0, "1", "contact damping as a ratio c / (2 sqrt(k m))"),
+}
+
+
+def add_loop_option(
+    parser, name: str, note: str = "", words: str | None = None, default: object = None
+) -> None:
+    """Add the flag of the loop quantity ``name`` to ``parser`` (a parser or a
+    group): its unit, plausible range (:data:`hybridtable.limits.LIMITS`) and
+    default from one place (:data:`LOOP_OPTIONS`), so no command re-types them.
+
+    Parameters
+    ----------
+    note : str
+        Words appended inside the default's parentheses (e.g. ``"; with
+        --model: the model's"``).
+    words : str, optional
+        What the quantity is, in the command's words (default: the table's).
+    default : float, optional
+        The command's own default, shown in the help (default: the table's).
+    """
+    from hybridtable.commands._common import UNIT_METAVARS, number_type, range_words
+
+    standard, unit, text = {**LOOP_OPTIONS, **EXTRA_OPTIONS}[name]
+    what, _, derived = text.partition(" (default")
+    if default is not None:
+        shown = f" (default {default:g}{note})"
+    elif derived:
+        shown = f" (default{derived[:-1]}{note})"
+    else:
+        shown = f" (default {standard:g}{note})"
+    parser.add_argument(
+        "--" + name.replace("_", "-"),
+        type=number_type(name, unit),
+        metavar=UNIT_METAVARS[unit],
+        default=None,
+        help=f"{words or what} [{unit}], {range_words(name)}{shown}",
+    )
+
+
 def add_loop_arguments(parser: argparse.ArgumentParser) -> None:
     """Options shared by the commands that set up one loop (defaults: Table 1)."""
-    from hybridtable.commands._common import UNIT_METAVARS, number_type, range_words
     from hybridtable.compensators.registry import compensator_names
 
     g = parser.add_argument_group("loop parameters (defaults: the paper's Table 1 point)")
@@ -57,17 +99,8 @@ def add_loop_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="NAME",
         help=f"one of {', '.join(compensator_names())} (default none)",
     )
-    for name, (default, unit, text) in LOOP_OPTIONS.items():
-        words, _, derived = text.partition(" (default")
-        shown = f" (default{derived}" if derived else f" (default {default:g})"
-        accepted = name  # its plausible range, hybridtable.limits.LIMITS
-        g.add_argument(
-            "--" + name.replace("_", "-"),
-            type=number_type(accepted, unit),
-            metavar=UNIT_METAVARS[unit],
-            default=None,
-            help=f"{words} [{unit}], {range_words(accepted)}{shown}",
-        )
+    for name in LOOP_OPTIONS:
+        add_loop_option(g, name)
     g.add_argument(
         "--passivity",
         action="store_true",

@@ -30,6 +30,7 @@ def register(sub) -> None:
         number_list,
         number_type,
     )
+    from hybridtable.commands._loop_options import add_loop_option
     from hybridtable.commands._model_options import add_model_argument, add_plugin_argument
     from hybridtable.compensators.registry import compensator_names
     from hybridtable.studies.compensator_sweep import SCENARIOS
@@ -80,23 +81,16 @@ def register(sub) -> None:
         default=None,
         help="position noise std / peak deflection [1], 0 to 1 (default 1e-4)",
     )
-    p.add_argument(
-        "--contact-damping-ratio",
-        type=number_type("contact_damping_ratio"),
-        default=None,
-        metavar="RATIO",
-        help="damping ratio of the damped scenario's contact [1], 0 to 10 (default 0.1)",
+    add_loop_option(
+        p,
+        "contact_damping_ratio",
+        words="damping ratio of the damped scenario's contact",
+        default=SWEEP_DEFAULTS["contact_damping_ratio"],
     )
     p.add_argument(
         "--no-passivity", action="store_true", help="skip the runs with the passivity guard"
     )
-    p.add_argument(
-        "--sample-rate-hz",
-        type=number_type("sample_rate_hz"),
-        metavar="HZ",
-        default=None,
-        help="sampled rig computer [Hz], 1 to 1e+06 (default: continuous loop, as the paper)",
-    )
+    add_loop_option(p, "sample_rate_hz", " loop, as the paper")
     p.add_argument(
         "--seed",
         type=integer_type(*SEED_RANGE),

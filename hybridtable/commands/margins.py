@@ -13,16 +13,20 @@ from pathlib import Path
 import numpy as np
 
 from hybridtable.commands._grid import DEFAULT_TABLES, default_delays, parse_list
+from hybridtable.commands._loop_options import LOOP_OPTIONS, add_loop_option
 
 __all__ = ["register", "run"]
 
 #: Defaults of the rig options without ``--model`` (None in the parser, so
 #: that ``--model`` can tell an option given from one left alone).
 RIG_DEFAULTS = {
-    "table_damping_ratio": 0.8,
-    "contact_frequency_hz": 1.0,
-    "contact_stiffness_n_per_m": 1e5,
-    "initial_velocity_m_per_s": 0.1,
+    name: LOOP_OPTIONS[name][0]
+    for name in (
+        "table_damping_ratio",
+        "contact_frequency_hz",
+        "contact_stiffness_n_per_m",
+        "initial_velocity_m_per_s",
+    )
 }
 
 
@@ -64,66 +68,30 @@ def register(sub) -> None:
         help="table response frequencies of the grid [Hz], same syntax, each 0.1 to 10000, "
         f"inf = ideal table (default {DEFAULT_TABLES})",
     )
-    p.add_argument(
-        "--table-damping-ratio",
-        type=number_type("table_damping_ratio"),
-        default=None,
-        metavar="RATIO",
-        help="table damping ratio [1], 0 to 10 (default 0.8; with --model: the model's rig's)",
+    model = "; with --model: the model's"
+    add_loop_option(p, "table_damping_ratio", model + " rig's")
+    add_loop_option(
+        p,
+        "contact_frequency_hz",
+        model + " mass",
+        "contact natural frequency, sets the spacecraft mass",
     )
-    p.add_argument(
-        "--contact-frequency-hz",
-        type=number_type("contact_frequency_hz"),
-        default=None,
-        metavar="HZ",
-        help="contact natural frequency [Hz], 0.001 to 10000, sets the spacecraft mass (default 1; with "
-        "--model: the model's mass)",
-    )
-    p.add_argument(
-        "--contact-stiffness-n-per-m",
-        type=number_type("contact_stiffness_n_per_m"),
-        default=None,
-        metavar="N_PER_M",
-        help="contact stiffness [N/m], 1 to 1e+10 (default 1e5; with --model: the model's rig's)",
-    )
+    add_loop_option(p, "contact_stiffness_n_per_m", model + " rig's")
     g = p.add_mutually_exclusive_group()
-    g.add_argument(
-        "--contact-damping-n-s-per-m",
-        type=number_type("contact_damping_n_s_per_m"),
-        default=None,
-        metavar="N_S_PER_M",
-        help="contact damping [N s/m], 0 to 1e+08 (default 0: an undamped spring; with --model: "
-        "the model's)",
+    add_loop_option(g, "contact_damping_n_s_per_m", model)
+    add_loop_option(g, "contact_damping_ratio")
+    add_loop_option(p, "lead_time_s", "; with --model: the rig's lead time", "SDC lead")
+    add_loop_option(
+        p,
+        "initial_velocity_m_per_s",
+        model + " nominal one",
+        "approach velocity of the validation runs",
     )
-    g.add_argument(
-        "--contact-damping-ratio",
-        type=number_type("contact_damping_ratio"),
-        default=None,
-        metavar="RATIO",
-        help="contact damping as a ratio c / (2 sqrt(k m)) [1], 0 to 10 (default 0)",
-    )
-    p.add_argument(
-        "--lead-time-s",
-        type=number_type("lead_time_s"),
-        default=None,
-        metavar="SECONDS",
-        help="SDC lead [s], 0 to 1 (default: the delay; with --model: the rig's lead time)",
-    )
-    p.add_argument(
-        "--initial-velocity-m-per-s",
-        type=number_type("initial_velocity_m_per_s"),
-        default=None,
-        metavar="M_PER_S",
-        help="approach velocity of the validation runs [m/s], 0.0001 to 10 (default 0.1; with "
-        "--model: the model's nominal one)",
-    )
-    p.add_argument(
-        "--sample-rate-hz",
-        type=number_type("sample_rate_hz"),
-        default=None,
-        metavar="HZ",
-        help="sampled-data model of a rig computer at this rate [Hz], 1 to 1e+06 (default: "
-        "continuous; delays must be whole samples; with --model: the model's rig's rate)",
+    add_loop_option(
+        p,
+        "sample_rate_hz",
+        "; delays must be whole samples; with --model: the model's rig's rate",
+        "sampled-data model of a rig computer at this rate",
     )
     p.add_argument(
         "--pade-order",
