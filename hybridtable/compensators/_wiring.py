@@ -4,17 +4,10 @@ from __future__ import annotations
 
 from pydrake.systems.framework import DiagramBuilder, InputPort, OutputPort, System
 
+from hybridtable.compensators.paper import COMPENSATOR_INPUTS
 from hybridtable.systems.sensor import ForceSensorDelay
 
 __all__ = ["COMPENSATOR_INPUTS", "export_compensator_ports", "sensor_like_delay"]
-
-#: Input ports of every compensator (:class:`hybridtable.compensators.paper.Compensator`).
-COMPENSATOR_INPUTS: tuple[str, ...] = (
-    "measured_force",
-    "measured_force_rate",
-    "table_motion",
-    "commanded_state",
-)
 
 
 def export_compensator_ports(

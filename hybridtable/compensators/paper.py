@@ -29,10 +29,10 @@ from hybridtable.laws.compensation import CompensationLaw, backward_difference, 
 from hybridtable.laws.compiled import compiled_system
 
 __all__ = [
+    "COMPENSATOR_INPUTS",
     "COMPENSATORS",
     "CONTACT_GATES",
     "CompensatorParams",
-    "COMPENSATOR_INPUTS",
     "Compensator",
     "compensation_law",
     "compensator_output",
@@ -44,6 +44,14 @@ COMPENSATORS: tuple[str, ...] = ("none", "SDC", "MDC", "SDMDC")
 
 
 CONTACT_GATES: tuple[str, ...] = ("measured_force", "table_position")
+
+#: Input ports of every compensator, name -> size (units in :func:`Compensator`).
+COMPENSATOR_INPUTS: dict[str, int] = {
+    "measured_force": 1,
+    "measured_force_rate": 1,
+    "table_motion": 3,
+    "commanded_state": 2,
+}
 
 
 @dataclass(frozen=True)
@@ -90,15 +98,6 @@ class CompensatorParams:
     def uses_motion_correction(self) -> bool:
         """True when the MDC force correction is active."""
         return self.kind in ("MDC", "SDMDC")
-
-
-#: Input ports of every compensator, name -> size (units in :func:`Compensator`).
-COMPENSATOR_INPUTS: dict[str, int] = {
-    "measured_force": 1,
-    "measured_force_rate": 1,
-    "table_motion": 3,
-    "commanded_state": 2,
-}
 
 
 def compensation_law(params: CompensatorParams, gated: bool = True) -> CompensationLaw:
@@ -184,15 +183,16 @@ def Compensator(
         inputs["contact_parameters"] = 2
     c = params.damping_n_s_per_m
 
-    def outputs(signals):
+    def compensated_force(signals):
         if gains_input:
             k_hat, c_hat = signals["contact_parameters"]
             gains = (k_hat, c_hat)
         else:
             gains = (params.stiffness_n_per_m, c if c > 0.0 else None)
-        return {"compensated_force": [compensator_output(law, signals, h, *gains)]}
+        return compensator_output(law, signals, h, *gains)
 
     held = {} if h is None else {"previous_measured_force": ("measured_force", h)}
+    outputs = {"compensated_force": compensated_force}
     system = compiled_system("compensator", inputs, outputs, held, compiled)
     system.params = params
     system.derivative_period_s = h

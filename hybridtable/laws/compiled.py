@@ -1,8 +1,8 @@
 """A law compiled into a Drake system with named ports: no Python per step.
 
-:func:`compiled_system` calls a law (a function of :mod:`hybridtable.laws`)
-once on ``pydrake.symbolic`` variables and builds the Drake system that
-evaluates the resulting expressions in C++:
+:func:`compiled_system` calls the law of each output port (a function of
+:mod:`hybridtable.laws`) once on ``pydrake.symbolic`` variables and builds the
+Drake system that evaluates the resulting expressions in C++:
 
 - an affine law (the ungated compensator, the bilateral contact of the
   stability analysis) becomes an ``AffineSystem``: exact derivatives for
@@ -50,9 +50,9 @@ from pydrake.systems.scalar_conversion import TemplateSystem
 
 __all__ = ["compiled_system", "LawSystem", "LawSystem_"]
 
-#: ``law(signals) -> {output name: expressions}``; ``signals`` maps every input
-#: (and held input) name to its vector of variables.
-Law = Callable[[Mapping[str, np.ndarray]], Mapping[str, Sequence[Any]]]
+#: ``law(signals) -> value`` of one output port: a number or a sequence;
+#: ``signals`` maps every input (and held input) name to its vector of values.
+Law = Callable[[Mapping[str, Any]], Any]
 
 
 def _expression(e: Any) -> Expression:
@@ -92,20 +92,19 @@ def LawSystem_(T):
         its inputs at every integrator stage).
         """
 
-        def _construct(self, inputs, law, held, output_sizes, read, converter=None):
+        def _construct(self, inputs, outputs, held, output_sizes, reads, converter=None):
             LeafSystem_[T].__init__(self, converter)
-            self._args = (inputs, law, held, output_sizes, read)
-            self._law = law
+            self._args = (inputs, outputs, held, output_sizes, reads)
             self._ports = {n: self.DeclareVectorInputPort(n, size) for n, size in inputs.items()}
-            # Only the ports the law reads are evaluated (others may be unconnected).
-            self._read = [(n, p) for n, p in self._ports.items() if n in read]
             self._held = {}
             for i, (n, (source, period)) in enumerate(held.items()):
                 self.DeclareDiscreteState(inputs[source])
-                self._held[n] = (i, self._ports[source])
+                self._held[n] = i
                 self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._make_store(i, source))
             for n, size in output_sizes.items():
-                self.DeclareVectorOutputPort(n, BasicVector_[T](size), self._make_calc(n))
+                self.DeclareVectorOutputPort(
+                    n, BasicVector_[T](size), self._make_calc(outputs[n], reads[n], size)
+                )
 
         def _construct_copy(self, other, converter=None):
             Impl._construct(self, *other._args, converter=converter)
@@ -118,12 +117,21 @@ def LawSystem_(T):
 
             return store
 
-        def _make_calc(self, name):
+        def _make_calc(self, law, read, size):
+            # Only the inputs this output's law reads are evaluated (others may
+            # be unconnected), as Python numbers (cheaper than numpy scalars).
+            ports = [(n, self._ports[n]) for n in read if n in self._ports]
+            held = [(n, self._held[n]) for n in read if n in self._held]
+
             def calc(context, output):
-                signals = {n: port.Eval(context) for n, port in self._read}
-                for n, (i, _) in self._held.items():
-                    signals[n] = context.get_discrete_state(i).value()
-                output.SetFromVector(np.atleast_1d(self._law(signals)[name]))
+                signals = {n: port.Eval(context).tolist() for n, port in ports}
+                for n, i in held:
+                    signals[n] = context.get_discrete_state(i).value().tolist()
+                value = law(signals)
+                if size == 1 and not isinstance(value, list | tuple | np.ndarray):
+                    output.SetAtIndex(0, value)
+                else:
+                    output.SetFromVector(np.atleast_1d(value))
 
             return calc
 
@@ -136,27 +144,26 @@ LawSystem = LawSystem_[None]
 def compiled_system(
     name: str,
     inputs: Mapping[str, int],
-    law: Law,
+    outputs: Mapping[str, Law],
     held: Mapping[str, tuple[str, float]] | None = None,
     compiled: bool = True,
 ) -> System:
-    """Compile ``law`` into a Drake system named ``name``.
+    """Compile the laws of ``outputs`` into one Drake system named ``name``.
 
     Parameters
     ----------
     name : str
     inputs : mapping of str to int
         Input port names and sizes, in port order.
-    law : callable
-        ``law(signals) -> {output name: expressions}`` (output ports in the
+    outputs : mapping of str to callable
+        Output port name -> its law ``law(signals) -> value`` (ports in the
         mapping's order).
     held : mapping of str to (str, float), optional
         ``{name: (input, period_s)}``: ``name`` is ``input`` as a
         ``ZeroOrderHold`` of that period sampled it at the last tick.
-
     compiled : bool
         False: a switching law is a :class:`LawSystem` (a Python callback of
-        ``law`` on the signals' values) instead of a ``SymbolicVectorSystem``;
+        the laws on the signals' values) instead of a ``SymbolicVectorSystem``;
         an affine law is an ``AffineSystem`` either way.
 
     Returns
@@ -168,18 +175,24 @@ def compiled_system(
     signals = {n: MakeVectorVariable(size, n) for n, size in inputs.items()}
     for n, (source, _) in held.items():
         signals[n] = MakeVectorVariable(inputs[source], n)
-    outputs = {n: [_expression(e) for e in np.atleast_1d(v)] for n, v in law(signals).items()}
-    expressions = [e for es in outputs.values() for e in es]
-    used = Variables()
-    for e in expressions:
-        used.insert(e.GetVariables())
-    read = [n for n in signals if any(used.include(v) for v in signals[n])]
+    laws = dict(outputs)
+    traced = {n: [_expression(e) for e in np.atleast_1d(f(signals))] for n, f in laws.items()}
+    expressions = [e for es in traced.values() for e in es]
+
+    def reading(es) -> list[str]:
+        used = Variables()
+        for e in es:
+            used.insert(e.GetVariables())
+        return [n for n in signals if any(used.include(v) for v in signals[n])]
+
+    read = reading(expressions)
     variables = [v for n in read for v in signals[n]]
 
     core = _affine(expressions, variables)
     if core is None and not compiled:
-        sizes = {n: len(es) for n, es in outputs.items()}
-        system = LawSystem(dict(inputs), law, held, sizes, tuple(read))
+        sizes = {n: len(es) for n, es in traced.items()}
+        reads = {n: tuple(reading(es)) for n, es in traced.items()}
+        system = LawSystem(dict(inputs), laws, held, sizes, reads)
         system.set_name(name)
         return system
     builder = DiagramBuilder()
@@ -204,14 +217,14 @@ def compiled_system(
         builder.ExportInput(ports[0], n)
         for port in ports[1:]:
             builder.ConnectInput(n, port)
-    if len(outputs) == 1:
-        builder.ExportOutput(core.get_output_port(), next(iter(outputs)))
+    if len(traced) == 1:
+        builder.ExportOutput(core.get_output_port(), next(iter(traced)))
     else:
         demux = builder.AddNamedSystem(
-            f"{name}_outputs", Demultiplexer([len(es) for es in outputs.values()])
+            f"{name}_outputs", Demultiplexer([len(es) for es in traced.values()])
         )
         builder.Connect(core.get_output_port(), demux.get_input_port())
-        for i, n in enumerate(outputs):
+        for i, n in enumerate(traced):
             builder.ExportOutput(demux.get_output_port(i), n)
     diagram = builder.Build()
     diagram.set_name(name)

@@ -24,8 +24,8 @@ def _is_formula(x: Any) -> bool:
 
 def both(a: Any, b: Any) -> Any:
     """``a and b`` for ``bool`` conditions, ``logical_and`` for formulas."""
-    if a.__class__ is bool and b.__class__ is bool:
-        return a and b
+    if isinstance(a, bool | np.bool_) and isinstance(b, bool | np.bool_):
+        return bool(a and b)
     if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
         return np.logical_and(a, b)
     if _is_formula(a) or _is_formula(b):
@@ -43,7 +43,7 @@ def select(condition: Any, then: Any, otherwise: Any) -> Any:
     condition : bool or pydrake.symbolic.Formula
     then, otherwise : float, AutoDiffXd, ndarray or pydrake.symbolic.Expression
     """
-    if condition.__class__ is bool:
+    if isinstance(condition, bool | np.bool_):
         return then if condition else otherwise
     if isinstance(condition, np.ndarray):  # elementwise over arrays of samples
         return np.where(condition, then, otherwise)

@@ -66,16 +66,18 @@ def UnilateralSpringContact(params: ContactParams, bilateral: bool = False) -> S
     """
     k, c = params.stiffness_n_per_m, params.damping_n_s_per_m
 
-    def outputs(signals):
+    def force(signals):
+        p, v, _ = signals["motion"]
+        return spring_contact_force(k, c, p, v, bilateral)
+
+    def force_rate(signals):
         p, v, a = signals["motion"]
-        return {
-            "force": [spring_contact_force(k, c, p, v, bilateral)],
-            "force_rate": [spring_contact_force_rate(k, c, p, v, a, bilateral)],
-        }
+        return spring_contact_force_rate(k, c, p, v, a, bilateral)
 
     # A Python callback: the loop reads the contact once a step (the logger)
     # and at the sensor's ticks, fewer times than a compiled system's
     # integrated state would (benchmarks/bench_core.py).
+    outputs = {"force": force, "force_rate": force_rate}
     system = compiled_system("contact", {"motion": 3}, outputs, compiled=False)
     system.params = params
     system.bilateral = bool(bilateral)
