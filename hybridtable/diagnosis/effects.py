@@ -43,7 +43,7 @@ from typing import Any
 import numpy as np
 
 from hybridtable.errors import ParameterError
-from hybridtable.measurement.rig import RigPhysics
+from hybridtable.measurement.rig import RigPhysics, run_with_model_mass
 from hybridtable.measurement.run_format import Run
 from hybridtable.systems.contact_law import ContactLaw, ContactLawParams
 from hybridtable.systems.measurement_chain import MeasurementChain, MeasurementChainParams
@@ -318,11 +318,9 @@ class ModelSpec:
         return changes, left
 
     def closed_loop_run(self, run: Run) -> Run:
-        """``run`` with the spacecraft mass the model integrates with."""
-        if self.mass_ratio == 1.0:
-            return run
-        info = replace(run.info, spacecraft_mass_kg=run.info.spacecraft_mass_kg * self.mass_ratio)
-        return replace(run, info=info)
+        """``run`` with the spacecraft mass the model integrates with
+        (:func:`~hybridtable.measurement.rig.run_with_model_mass`)."""
+        return run_with_model_mass(run, self.mass_ratio)
 
 
 # -- effects -------------------------------------------------------------------

@@ -41,7 +41,7 @@ from hybridtable.diagnosis.effects import Effect, ModelSpec, RigScale
 from hybridtable.diagnosis.registry import build_spec, get_effect
 from hybridtable.errors import ParameterError
 from hybridtable.measurement.phases import cor_from_record
-from hybridtable.measurement.rig import RigPhysics
+from hybridtable.measurement.rig import RigPhysics, model_mass_kg
 from hybridtable.measurement.run_format import Run, RunInfo
 
 __all__ = [
@@ -199,7 +199,10 @@ class RigModel:
 
     def physics(self, run_id: str | None = None, name: str = "model") -> RigPhysics:
         """The :class:`~hybridtable.measurement.rig.RigPhysics` of the model
-        (its effects, and the rig computer as the audit found it)."""
+        (its effects, and the rig computer as the audit found it, with the mass
+        it found the computer integrating with, if any). The ``mass_error``
+        ratio is not in it: the closed loop takes it from
+        :meth:`closed_loop_run`."""
         physics = self.spec().physics(name=name)
         computer = self.computer_for(run_id)
         return replace(physics, computer=computer) if computer else physics
@@ -210,19 +213,29 @@ class RigModel:
         (:meth:`~hybridtable.diagnosis.effects.ModelSpec.linear_changes`), the
         compensator's beliefs left at their nominal values, and the rig
         computer as the audit found it (its compensator kind only when
-        ``keep_compensator`` is false). Also returns what the linear models
-        leave out, in words."""
+        ``keep_compensator`` is false) integrating with the ``mass_error``
+        ratio times ``params``' mass
+        (:func:`~hybridtable.measurement.rig.model_mass_kg`). Also returns
+        what the linear models leave out, in words.
+
+        With both a ``mass_error`` ratio and an audited mass, the ratio wins
+        here, while the closed loop (:meth:`closed_loop_run` with
+        :meth:`physics`) runs with the audited mass."""
         spec = self.spec()
         changes, left = spec.linear_changes(params)
         computer = self.computer_for(None)
         if keep_compensator:
             computer.pop("compensator", None)
         if spec.mass_ratio != 1.0:
-            computer["spacecraft_mass_kg"] = params.spacecraft_mass_kg * spec.mass_ratio
+            computer["spacecraft_mass_kg"] = model_mass_kg(
+                params.spacecraft_mass_kg, spec.mass_ratio
+            )
         return RigPhysics(changes=changes, computer=computer).apply(params), left
 
     def closed_loop_run(self, run: Run) -> Run:
-        """``run`` with the spacecraft mass the model's computer integrates with."""
+        """``run`` with the spacecraft mass the model's computer integrates with
+        (:func:`~hybridtable.measurement.rig.run_with_model_mass` of the
+        ``mass_error`` ratio); an audited mass in :meth:`physics` replaces it."""
         return self.spec().closed_loop_run(run)
 
     def rig_differences(self, runs: Sequence[Run]) -> list[str]:

@@ -18,8 +18,11 @@ contact_damping_ratio      contact_damping_ratio          damping proportional t
                                                           same damping ratio at every stiffness
 =========================  =============================  ===========================================
 
-Hidden damping is not known to the MDC (it compensates with the stated,
-undamped contact). A delay or lead pushed below zero is held at zero.
+An effect on the physics (extra delay, hidden damping) is not known to the
+compensator: it keeps believing what it did before the effect
+(:meth:`~hybridtable.loop.params.HybridLoopParams.with_physics`), e.g. the MDC
+compensates with the stated, undamped contact. A delay or lead pushed below
+zero is held at zero.
 """
 
 from __future__ import annotations
@@ -39,12 +42,11 @@ def _frequency(c: Conditions, p: HybridLoopParams, v: Mapping[str, float]) -> Hy
 
 
 def _extra_delay(c: Conditions, p: HybridLoopParams, v: Mapping[str, float]) -> HybridLoopParams:
-    lead = p.sensor_delay_s if p.lead_time_s is None else p.lead_time_s
-    return p.with_(sensor_delay_s=max(0.0, p.sensor_delay_s + v["extra_delay_s"]), lead_time_s=lead)
+    return p.with_physics(sensor_delay_s=max(0.0, p.sensor_delay_s + v["extra_delay_s"]))
 
 
 def _lead(c: Conditions, p: HybridLoopParams, v: Mapping[str, float]) -> HybridLoopParams:
-    lead = p.sensor_delay_s if p.lead_time_s is None else p.lead_time_s
+    lead = p.beliefs()["lead_time_s"]
     return p.with_(lead_time_s=max(0.0, lead + v["lead_error_s"]))
 
 
@@ -57,16 +59,12 @@ def _table_damping(c: Conditions, p: HybridLoopParams, v: Mapping[str, float]) -
 
 
 def _stiffness(c: Conditions, p: HybridLoopParams, v: Mapping[str, float]) -> HybridLoopParams:
-    believed = p.compensator_stiffness_n_per_m or p.contact_stiffness_n_per_m
+    believed = p.beliefs()["compensator_stiffness_n_per_m"]
     return p.with_(compensator_stiffness_n_per_m=believed * v["compensator_stiffness_ratio"])
 
 
 def _unknown_damping(p: HybridLoopParams, extra_n_s_per_m: float) -> HybridLoopParams:
-    believed = 0.0 if p.compensator_damping_n_s_per_m is None else p.compensator_damping_n_s_per_m
-    return p.with_(
-        contact_damping_n_s_per_m=p.contact_damping_n_s_per_m + extra_n_s_per_m,
-        compensator_damping_n_s_per_m=believed,
-    )
+    return p.with_physics(contact_damping_n_s_per_m=p.contact_damping_n_s_per_m + extra_n_s_per_m)
 
 
 def _damping(c: Conditions, p: HybridLoopParams, v: Mapping[str, float]) -> HybridLoopParams:

@@ -22,11 +22,21 @@ from hybridtable.systems.table import TableParams
 
 __all__ = [
     "TABLE_INITIAL_STATES",
+    "BELIEFS",
     "HybridLoopParams",
 ]
 
 
 TABLE_INITIAL_STATES: tuple[str, ...] = ("tracking", "command", "rest", "given")
+
+#: What the compensator believes -> the true value it believes unless told
+#: (``None``): the SDC's lead is the sensor delay, the MDC's stiffness and
+#: damping are the contact's (:meth:`HybridLoopParams.beliefs`).
+BELIEFS: dict[str, str] = {
+    "lead_time_s": "sensor_delay_s",
+    "compensator_stiffness_n_per_m": "contact_stiffness_n_per_m",
+    "compensator_damping_n_s_per_m": "contact_damping_n_s_per_m",
+}
 
 #: The fields checked against their plausible range (:data:`hybridtable.limits.LIMITS`).
 _PLAUSIBLE_FIELDS: tuple[str, ...] = (
@@ -71,7 +81,8 @@ class HybridLoopParams:
     lead_time_s : float or None
         SDC lead time; ``None`` means ``sensor_delay_s`` (the paper's choice).
     compensator_stiffness_n_per_m, compensator_damping_n_s_per_m : float or None
-        What the MDC believes; ``None`` means the true contact values.
+        What the MDC believes; ``None`` means the true contact values
+        (:data:`BELIEFS`, resolved by :meth:`beliefs`).
     force_deadband_n : float
         Measured forces at or below this are "no contact".
     clamp_nonnegative : bool
@@ -227,6 +238,41 @@ class HybridLoopParams:
         """A copy with some fields changed (validated again)."""
         return replace(self, **changes)
 
+    # -- what the compensator believes -----------------------------------------
+    def beliefs(self) -> dict[str, float]:
+        """What the compensator believes, resolved: each field of :data:`BELIEFS`,
+        or, where it is ``None``, the true value it stands for (the compensator
+        believes the truth unless told otherwise)."""
+        out = {}
+        for belief, truth in BELIEFS.items():
+            value = getattr(self, belief)
+            out[belief] = getattr(self, truth) if value is None else value
+        return out
+
+    def with_beliefs_pinned(self) -> HybridLoopParams:
+        """A copy whose compensator beliefs are explicit (:meth:`beliefs`), so
+        that a later change of the true values leaves them where they are."""
+        return self.with_(**self.beliefs())
+
+    def with_physics(self, **changes) -> HybridLoopParams:
+        """A copy with true (physical) values changed while the compensator
+        keeps believing what it believed before the change (a hidden effect:
+        the rig's software does not know of it).
+
+        Raises
+        ------
+        ParameterError
+            If ``changes`` names a belief (:data:`BELIEFS`): that is the
+            compensator's, not physics; change it with :meth:`with_`.
+        """
+        told = [name for name in changes if name in BELIEFS]
+        if told:
+            raise ParameterError(
+                f"with_physics: {', '.join(told)} is what the compensator believes, "
+                "not physics (use with_)"
+            )
+        return self.with_beliefs_pinned().with_(**changes)
+
     def with_contact_damping_ratio(self, damping_ratio: float) -> HybridLoopParams:
         """A copy whose contact damping is ``damping_ratio`` of the critical one:
         ``c = 2 zeta sqrt(k m)`` (N s/m), ``zeta >= 0``."""
@@ -248,18 +294,13 @@ class HybridLoopParams:
         return SensorParams(self.sensor_delay_s)
 
     def compensator_params(self) -> CompensatorParams:
-        def pick(value, default):
-            return default if value is None else value
-
+        """The paper's compensator of this loop, with what it believes (:meth:`beliefs`)."""
+        believed = self.beliefs()
         return CompensatorParams(
             kind=self.compensator,
-            lead_time_s=pick(self.lead_time_s, self.sensor_delay_s),
-            stiffness_n_per_m=pick(
-                self.compensator_stiffness_n_per_m, self.contact_stiffness_n_per_m
-            ),
-            damping_n_s_per_m=pick(
-                self.compensator_damping_n_s_per_m, self.contact_damping_n_s_per_m
-            ),
+            lead_time_s=believed["lead_time_s"],
+            stiffness_n_per_m=believed["compensator_stiffness_n_per_m"],
+            damping_n_s_per_m=believed["compensator_damping_n_s_per_m"],
             force_deadband_n=self.force_deadband_n,
             clamp_nonnegative=self.clamp_nonnegative,
             contact_gate=self.contact_gate,

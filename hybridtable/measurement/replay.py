@@ -202,12 +202,13 @@ def _law_replay(
     contact = physics.make_contact(params)
     sensor = physics.make_sensor(params)
     law = getattr(contact, "force_law", None)
-    if table is None or law is None or not hasattr(sensor, "readings"):
+    respond = getattr(table, "respond", None)
+    if respond is None or law is None or not hasattr(sensor, "readings"):
         return None
     if contact.num_continuous_states() or sensor.num_continuous_states():
         return None
     ic = params.initial_conditions()
-    motion = table.respond(np.column_stack([p, v]), ic["p_act_m"], ic["v_act_m_per_s"])
+    motion = respond(np.column_stack([p, v]), ic["p_act_m"], ic["v_act_m_per_s"])
     if getattr(contact, "force_law_elementwise", False):
         f_act = np.asarray(law(motion[:, 0], motion[:, 1], motion[:, 2]), dtype=float)
     else:

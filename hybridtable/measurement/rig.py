@@ -19,7 +19,7 @@ of the run's JSON file: it is the rig's software, not physics.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -40,6 +40,8 @@ __all__ = [
     "RigPhysics",
     "PhysicalPart",
     "rig_params",
+    "model_mass_kg",
+    "run_with_model_mass",
     "add_physical_part",
     "build_rig_loop",
     "simulate_rig",
@@ -116,26 +118,13 @@ class RigPhysics:
             )
 
     def apply(self, params: HybridLoopParams) -> HybridLoopParams:
-        """``params`` with :attr:`changes` applied (the compensator's beliefs
-        pinned to their values before the change), then :attr:`computer`."""
+        """``params`` with :attr:`changes` applied, the compensator believing
+        what it did before them
+        (:meth:`~hybridtable.loop.params.HybridLoopParams.with_physics`), then
+        :attr:`computer`."""
         if not self.changes and not self.computer:
             return params
-
-        # The beliefs as compensator_params() resolves them, for any
-        # compensator (a plug-in's kind is not one CompensatorParams knows).
-        def pick(value, default):
-            return default if value is None else value
-
-        pinned = params.with_(
-            lead_time_s=pick(params.lead_time_s, params.sensor_delay_s),
-            compensator_stiffness_n_per_m=pick(
-                params.compensator_stiffness_n_per_m, params.contact_stiffness_n_per_m
-            ),
-            compensator_damping_n_s_per_m=pick(
-                params.compensator_damping_n_s_per_m, params.contact_damping_n_s_per_m
-            ),
-        )
-        return pinned.with_(**dict(self.changes)).with_(**dict(self.computer))
+        return params.with_physics(**dict(self.changes)).with_(**dict(self.computer))
 
     def make_table(self, params: HybridLoopParams) -> System:
         return self.table(params) if self.table else SecondOrderTable(params.table())
@@ -186,6 +175,30 @@ def rig_params(info: RunInfo, source: str | None = None) -> HybridLoopParams:
         )
     except ParameterError as err:
         raise MeasurementError(f"{source or 'run ' + info.run_id}: {err}") from None
+
+
+def model_mass_kg(stated_mass_kg: float, mass_ratio: float = 1.0) -> float:
+    """The mass the rig computer's spacecraft model integrates with, kg:
+    ``mass_ratio`` times the stated one.
+
+    ``stated_mass_kg`` is the spacecraft's mass as stated (a run's JSON
+    ``spacecraft_mass_kg``, or that of the loop a model is put on), kg;
+    ``mass_ratio`` is the ``mass_error`` effect's ratio (1: the computer
+    integrates with the stated mass). The physical part (table, contact,
+    sensor) does not see it: only the closed loop does.
+    """
+    return stated_mass_kg * mass_ratio
+
+
+def run_with_model_mass(run: Run, mass_ratio: float) -> Run:
+    """``run`` whose JSON mass is the one its rig computer integrates with
+    (:func:`model_mass_kg`), for :func:`simulate_rig`; ``run`` itself for a
+    ratio of 1. A ``spacecraft_mass_kg`` in the :attr:`RigPhysics.computer`
+    the run is simulated with still replaces it."""
+    if mass_ratio == 1.0:
+        return run
+    mass = model_mass_kg(run.info.spacecraft_mass_kg, mass_ratio)
+    return replace(run, info=replace(run.info, spacecraft_mass_kg=mass))
 
 
 #: The key of a run's JSON extras that gives its table's state at t = 0 (set by

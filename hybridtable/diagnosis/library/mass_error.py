@@ -5,8 +5,9 @@ Physics: the rig computer integrates the spacecraft's motion with a mass
 commanded velocity change in contact is off by ``1 / r``.
 
 Model: ``ModelSpec.mass_ratio = r`` (the closed loop runs with the changed
-mass); ``r = 1`` is nominal. The replay of the physical part cannot see it:
-the effect is fitted in the closed loop only (``stage="closed_loop"``).
+mass, :func:`hybridtable.measurement.rig.model_mass_kg`); ``r = 1`` is
+nominal. The replay of the physical part cannot see it: the effect is fitted
+in the closed loop only (``stage="closed_loop"``).
 
 Signature: in ``v_des_m_per_s`` during compression and restitution, the
 spacecraft's velocity change is off by the mass ratio.
