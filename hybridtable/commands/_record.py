@@ -114,6 +114,7 @@ def run_record(args: argparse.Namespace, model) -> dict:
     from hybridtable.commands._common import check_outputs, write_json
     from hybridtable.diagnosis.model_file import tool_version
     from hybridtable.measurement.recorder import record_run, write_run
+    from hybridtable.measurement.rig import model_mass_kg
     from hybridtable.systems.noise import MeasurementNoiseParams
 
     refuse_unsupported(args, "simulate --record")
@@ -165,7 +166,7 @@ def run_record(args: argparse.Namespace, model) -> dict:
         noise = MeasurementNoiseParams(sigma_f, sigma_x, args.seed + i, args.noise_ar1)
         phys = physics
         if spec.mass_ratio != 1.0:  # the computer integrates with another mass
-            mass = info.spacecraft_mass_kg * spec.mass_ratio
+            mass = model_mass_kg(info.spacecraft_mass_kg, spec.mass_ratio)
             phys = replace(physics, computer={**physics.computer, "spacecraft_mass_kg": mass})
         run, truth = record_run(info, phys, noise, args.duration_s)
         records.append(run)

@@ -215,7 +215,7 @@ def run_model(args: argparse.Namespace, model) -> dict:
     fitted to, at its own conditions, against its recorded CoR and the
     nominal model's; with loop options, one run of the modelled rig there."""
     from hybridtable.commands._loop_options import given_loop_options
-    from hybridtable.measurement.rig import simulate_rig_contact
+    from hybridtable.measurement.rig import model_mass_kg, simulate_rig_contact
 
     refuse_unsupported(args, "simulate --model")
     physics, spec, effects = rig_physics(args, model)
@@ -232,7 +232,8 @@ def run_model(args: argparse.Namespace, model) -> dict:
         cases = [(info, physics, None)]
     for info, phys, mrun in cases:
         if spec.mass_ratio != 1.0:
-            info = replace(info, spacecraft_mass_kg=info.spacecraft_mass_kg * spec.mass_ratio)
+            mass = model_mass_kg(info.spacecraft_mass_kg, spec.mass_ratio)
+            info = replace(info, spacecraft_mass_kg=mass)
         modelled = _metrics(simulate_rig_contact(info, phys))
         nominal = _metrics(simulate_rig_contact(info))
         row = {

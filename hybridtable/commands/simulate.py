@@ -312,7 +312,11 @@ def _simulate_with_effects(args: argparse.Namespace, params):
     if changes_sensor and params.sample_period_s is None:
         raise CommandError("--add: effects of the force sensor need --sample-rate-hz")
     if spec.mass_ratio != 1.0:
-        params = params.with_(spacecraft_mass_kg=params.spacecraft_mass_kg * spec.mass_ratio)
+        from hybridtable.measurement.rig import model_mass_kg
+
+        params = params.with_(
+            spacecraft_mass_kg=model_mass_kg(params.spacecraft_mass_kg, spec.mass_ratio)
+        )
     loop = build_hybrid_loop(
         params,
         table=physics.make_table(params),

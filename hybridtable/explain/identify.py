@@ -76,9 +76,7 @@ def _reference(name: str, cases: Sequence[Case], effects, at) -> float:
     if name == "delay":
         return float(np.mean([p.sensor_delay_s for p in loops]))
     if name == "T_lead":
-        return float(
-            np.mean([p.sensor_delay_s if p.lead_time_s is None else p.lead_time_s for p in loops])
-        )
+        return float(np.mean([p.beliefs()["lead_time_s"] for p in loops]))
     return 0.0
 
 

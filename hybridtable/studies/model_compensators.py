@@ -72,14 +72,11 @@ def physics_loop_params(params, physics, mass_ratio: float = 1.0):
     """``params`` as a rig with ``physics`` runs them: the physics' parameter
     changes and rig-computer changes, and the spacecraft mass the rig
     computer integrates with (``params``' mass times ``mass_ratio``)."""
-    # RigPhysics.apply pins the compensator's beliefs through
-    # HybridLoopParams.compensator_params(), which knows the paper's four
-    # kinds only: apply it to a paper kind and put the loop's back.
-    q = physics.apply(params.with_(compensator="none"))
-    if "compensator" not in physics.computer:
-        q = q.with_(compensator=params.compensator)
+    from hybridtable.measurement.rig import model_mass_kg
+
+    q = physics.apply(params)  # the beliefs pinned for any compensator (with_physics)
     if mass_ratio != 1.0:
-        q = q.with_(spacecraft_mass_kg=params.spacecraft_mass_kg * mass_ratio)
+        q = q.with_(spacecraft_mass_kg=model_mass_kg(params.spacecraft_mass_kg, mass_ratio))
     return q
 
 
