@@ -15,6 +15,7 @@ module                    law
 ``compensation``          the rig computer's compensation (gate, SDC lead,
                           MDC term, clamp; Eq. 2-7), 1-D and 6-DoF
 ``contact``               the unilateral spring-damper contact
+``spacecraft``            the rig computer's model over a tick (semi-implicit Euler)
 ``table``                 a second-order response over a held tick
 ``separation``            run until separated: when a run ends, diverged or not
 ``compiled``              a law as a compiled Drake system with named ports
@@ -41,6 +42,7 @@ __all__, __getattr__, __dir__ = lazy_exports(
             "SeparationRule",
             "check_steps_taken",
         ),
+        "spacecraft": ("computer_step",),
         "table": ("second_order_tick",),
     },
 )

@@ -47,6 +47,7 @@ from hybridtable.errors import ParameterError, SimulationError
 from hybridtable.laws.compensation import CompensationLaw, backward_difference, compensate
 from hybridtable.laws.contact import spring_contact_force
 from hybridtable.laws.separation import SeparationRule
+from hybridtable.laws.spacecraft import computer_step
 from hybridtable.laws.table import second_order_tick
 from hybridtable.loop.budget import check_budget
 from hybridtable.loop.metrics import ContactMetrics, contact_metrics
@@ -372,7 +373,9 @@ def _run_sampled(params: HybridLoopParams, h: float, n_delay: int, rule: _StopRu
     gate_open, clamp = law.gate_open, law.clamp_nonnegative
     mdc_when = (law.corrects_motion(False), law.corrects_motion(True))  # by p_act > 0
     k_con, c_con = params.contact_stiffness_n_per_m, params.contact_damping_n_s_per_m
-    h_m = h / params.spacecraft_mass_kg
+    A, B = computer_step(params.spacecraft_mass_kg, h)  # the rig computer's model, one tick
+    (a00, a01), (a10, a11) = A.tolist()
+    b0, b1 = B[:, 0].tolist()
     table = params.table()
     ideal = table.is_ideal
     ic = params.initial_conditions()
@@ -405,8 +408,7 @@ def _run_sampled(params: HybridLoopParams, h: float, n_delay: int, rule: _StopRu
         if k * h >= rule.due and rule.check_tick(k, f_act, f_mea, f_comp):
             return vs, fas, fcs
         prev = f_mea
-        v -= f_comp * h_m
-        p += h * v
+        p, v = a00 * p + a01 * v + b0 * f_comp, a10 * p + a11 * v + b1 * f_comp
         if not ideal:
             pa, va = e00 * pa + e01 * va + e02 * p, e10 * pa + e11 * va + e12 * p
         vs.append(v)

@@ -14,6 +14,7 @@ from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import LinearSystem
 
 from hybridtable._validation import check_finite, check_positive
+from hybridtable.laws.spacecraft import computer_step
 
 __all__ = ["SpacecraftParams", "Spacecraft", "spacecraft_matrices"]
 
@@ -50,9 +51,7 @@ def spacecraft_matrices(
         A = np.array([[0.0, 1.0], [0.0, 0.0]])
         B = np.array([[0.0], [-1.0 / m]])
     else:
-        h = check_positive("sample_period_s", sample_period_s)
-        A = np.array([[1.0, h], [0.0, 1.0]])
-        B = np.array([[-h * h / m], [-h / m]])
+        A, B = computer_step(m, check_positive("sample_period_s", sample_period_s))
     return A, B, C, D
 
 
