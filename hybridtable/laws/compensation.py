@@ -50,7 +50,8 @@ class CompensationLaw:
     Parameters
     ----------
     lead_time_s : float
-        ``T_lead`` of the SDC (0: no lead).
+        ``T_lead`` of the SDC (0: no lead); the constants may be symbolic
+        variables (a law traced once for every value, :mod:`hybridtable.loop.fast`).
     motion_correction : bool
         Add the MDC term.
     force_deadband_n : float
@@ -69,6 +70,12 @@ class CompensationLaw:
     def __post_init__(self) -> None:
         if self.gate not in GATES:
             raise ValueError(f"gate must be one of {GATES}, not {self.gate!r}")
+
+    @property
+    def has_lead(self) -> bool:
+        """The SDC lead acts (a symbolic lead time counts as one)."""
+        lead = self.lead_time_s
+        return not isinstance(lead, float | int) or lead > 0.0
 
     def gate_open(self, level: Any) -> Any:
         """The compensated force may act: the measured force's ``level`` is
@@ -136,7 +143,7 @@ def compensate(
         ``measured``; the norm of the force on a wrench).
     """
     f = measured
-    if law.lead_time_s > 0.0:
+    if law.has_lead:
         f = f + law.lead_time_s * rate
     if law.motion_correction:
         corrected = f + _times(stiffness, response_error)

@@ -26,6 +26,7 @@ step control is unchanged).
 
 from __future__ import annotations
 
+import operator
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
@@ -34,7 +35,9 @@ from pydrake.autodiffutils import AutoDiffXd
 from pydrake.symbolic import (
     DecomposeAffineExpressions,
     Expression,
+    Formula,
     MakeVectorVariable,
+    Variable,
     Variables,
 )
 from pydrake.systems.framework import BasicVector_, DiagramBuilder, LeafSystem_, System
@@ -48,7 +51,7 @@ from pydrake.systems.primitives import (
 )
 from pydrake.systems.scalar_conversion import TemplateSystem
 
-__all__ = ["compiled_system", "LawSystem", "LawSystem_"]
+__all__ = ["compiled_system", "python_function", "LawSystem", "LawSystem_"]
 
 #: ``law(signals) -> value`` of one output port: a number or a sequence;
 #: ``signals`` maps every input (and held input) name to its vector of values.
@@ -139,6 +142,65 @@ def LawSystem_(T):
 
 
 LawSystem = LawSystem_[None]
+
+
+_OPERATORS = {
+    operator.gt: ">",
+    operator.ge: ">=",
+    operator.lt: "<",
+    operator.le: "<=",
+    operator.eq: "==",
+    operator.ne: "!=",
+    operator.truediv: "/",
+}
+
+
+def _python_source(node: Any, names: dict) -> str:
+    """Python source of a symbolic expression or formula (the law's trace)."""
+    if isinstance(node, float | int):
+        return repr(float(node))
+    if isinstance(node, Variable):
+        return names[node.get_id()]
+    f, args = node.Unapply()
+    parts = [_python_source(a, names) for a in args]
+    label = getattr(f, "__name__", "")
+    if f in (Expression, Formula) or label == "Expression":  # a constant or a variable
+        return parts[0] if parts else repr(float(node.Evaluate()))
+    if label == "True_":
+        return "True"
+    if label == "False_":
+        return "False"
+    if label == "_reduce_add":
+        return "(" + " + ".join(parts) + ")"
+    if label == "_reduce_mul":
+        return "(" + " * ".join(parts) + ")"
+    if label == "if_then_else":
+        return f"({parts[1]} if {parts[0]} else {parts[2]})"
+    if label in ("logical_and", "logical_or"):
+        return "(" + f" {label[8:]} ".join(parts) + ")"
+    if label == "logical_not":
+        return f"(not {parts[0]})"
+    if f in _OPERATORS:
+        return f"({parts[0]} {_OPERATORS[f]} {parts[1]})"
+    raise NotImplementedError(f"no Python form for {label or f} in {node}")
+
+
+def python_function(law: Callable[..., Any], arguments: Sequence[str]) -> Callable[..., Any]:
+    """``law`` compiled into a plain Python function of ``arguments`` (numbers
+    in, a number out): the law traced once on symbolic variables, its
+    expression written as one Python expression. For the fast engine's ticks:
+    one call, no branch on types (the law's ``select`` and ``both`` are paid
+    once, here). The law must trace (no Python ``if`` on a signal)."""
+    variables = [Variable(a) for a in arguments]
+    value = law(*variables)
+    names = {v.get_id(): f"x{i}" for i, v in enumerate(variables)}
+    if isinstance(value, bool):
+        source = repr(value)
+    else:
+        node = value if isinstance(value, Expression | Formula) else Expression(value)
+        source = _python_source(node, names)
+    params = ", ".join(names[v.get_id()] for v in variables)
+    return eval(f"lambda {params}: {source}", {"__builtins__": {}})  # noqa: S307
 
 
 def compiled_system(

@@ -43,7 +43,11 @@ def select(condition: Any, then: Any, otherwise: Any) -> Any:
     condition : bool or pydrake.symbolic.Formula
     then, otherwise : float, AutoDiffXd, ndarray or pydrake.symbolic.Expression
     """
-    if isinstance(condition, bool | np.bool_):
+    if condition is True:  # the numbers' path first: it is the hot one
+        return then
+    if condition is False:
+        return otherwise
+    if isinstance(condition, np.bool_):
         return then if condition else otherwise
     if isinstance(condition, np.ndarray):  # elementwise over arrays of samples
         return np.where(condition, then, otherwise)

@@ -35,7 +35,9 @@ the first tick at or after each of its check times.
 
 from __future__ import annotations
 
+import functools
 import math
+import types
 from dataclasses import replace
 
 import numpy as np
@@ -45,6 +47,7 @@ from scipy.optimize import brentq
 from hybridtable.compensators.paper import COMPENSATORS, compensation_law
 from hybridtable.errors import ParameterError, SimulationError
 from hybridtable.laws.compensation import CompensationLaw, backward_difference, compensate
+from hybridtable.laws.compiled import python_function
 from hybridtable.laws.contact import spring_contact_force
 from hybridtable.laws.separation import SeparationRule
 from hybridtable.laws.spacecraft import computer_step
@@ -123,6 +126,42 @@ def _law(params: HybridLoopParams) -> tuple[CompensationLaw, float, float | None
         law = replace(law, motion_correction=False)
     c = cp.damping_n_s_per_m
     return law, cp.stiffness_n_per_m, (c if c > 0.0 else None)
+
+
+def _bound(function, *constants):
+    """``function`` with its trailing arguments bound to ``constants`` (its code
+    is compiled once; binding is as cheap as a closure, and calls stay plain)."""
+    return types.FunctionType(function.__code__, function.__globals__, None, constants)
+
+
+@functools.cache
+def _contact_function():
+    """The contact law as one plain function ``(p, v, k, c) -> f`` (traced once:
+    :func:`~hybridtable.laws.compiled.python_function`)."""
+    return python_function(lambda p, v, k, c: spring_contact_force(k, c, p, v), "pvkc")
+
+
+@functools.cache
+def _gate_function(gate: str):
+    """The compensator's gate ``(level, dead band) -> open`` as a plain function."""
+    return python_function(
+        lambda f, db: CompensationLaw(force_deadband_n=db, gate=gate).gate_open(f), ("f", "db")
+    )
+
+
+@functools.cache
+def _compensator_function(lead: bool, mdc: bool, gate: str, clamp: bool, damping: bool):
+    """The sampled rig computer's compensation law for one set of switches, as a
+    plain function ``(f_mea, prev, p, v, p_act, v_act, T_lead, h, dead band, k, c)
+    -> f_comp`` (traced once per set, its constants as arguments)."""
+
+    def law(f, prev, p, v, pa, va, lead_s, h, db, k, c):
+        switches = CompensationLaw(lead_s if lead else 0.0, mdc, db, gate, clamp)
+        rate = backward_difference(f, prev, h)
+        return compensate(switches, f, rate, p - pa, v - va, k, c if damping else None, pa > 0.0)
+
+    names = ("f", "prev", "p", "v", "pa", "va", "lead", "h", "db", "k", "c")
+    return python_function(law, names)
 
 
 def _rows(law: CompensationLaw, h: float, k: float, c: float | None, basis: np.ndarray):
@@ -309,7 +348,9 @@ def _run_continuous(params: HybridLoopParams, h: float, n: int, rule: _StopRule)
     """Tick log ``(v, f_act, f_comp)`` of a continuous loop (before each tick's update)."""
     loop = _Continuous(params, h)
     k_con, c_con, by_force = loop.k, loop.c, loop.by_force
-    lead_f, lead_prev, gate_open = loop.lead_f, loop.lead_prev, loop.law.gate_open
+    lead_f, lead_prev = loop.lead_f, loop.lead_prev
+    contact = _bound(_contact_function(), k_con, c_con)
+    gate_open = _bound(_gate_function(loop.law.gate), loop.law.force_deadband_n)
     undelayed, mode_of, mode_data = loop.undelayed, loop.mode_of, loop.mode_data
     # Held: the force law is fixed over a tick by the held reading (no switch inside).
     held, clamp = not loop.switches, loop.clamp
@@ -325,7 +366,7 @@ def _run_continuous(params: HybridLoopParams, h: float, n: int, rule: _StopRule)
     vs, fas, fcs = [], [], []
     k, due = 0, rule.due
     while True:
-        f_act = spring_contact_force(k_con, c_con, pa, va)
+        f_act = contact(pa, va)
         if mode is on:
             f_comp = c0 * p + c1 * v + c2 * pa + c3 * va + u
         elif mode == _OFF:
@@ -367,12 +408,13 @@ def _run_sampled(params: HybridLoopParams, h: float, n_delay: int, rule: _StopRu
     """Row log ``(v, f_act, f_comp)`` of a sampled loop (row k: what tick k read and
     computed, and the spacecraft state after its update)."""
     law, kc, cc = _law(params)
-    with_mdc, without = _rows(law, h, kc, cc, np.eye(6))
-    r_f, r_prev, r_p, r_v, r_pa, r_va = with_mdc.tolist()
-    s_f, s_prev = without[:2].tolist()
-    gate_open, clamp = law.gate_open, law.clamp_nonnegative
-    mdc_when = (law.corrects_motion(False), law.corrects_motion(True))  # by p_act > 0
     k_con, c_con = params.contact_stiffness_n_per_m, params.contact_damping_n_s_per_m
+    contact = _bound(_contact_function(), k_con, c_con)
+    switches = (law.has_lead, law.motion_correction, law.gate, law.clamp_nonnegative)
+    compensator = _bound(
+        _compensator_function(*switches, cc is not None),
+        *(law.lead_time_s, h, law.force_deadband_n, kc, 0.0 if cc is None else cc),
+    )
     A, B = computer_step(params.spacecraft_mass_kg, h)  # the rig computer's model, one tick
     (a00, a01), (a10, a11) = A.tolist()
     b0, b1 = B[:, 0].tolist()
@@ -387,26 +429,20 @@ def _run_sampled(params: HybridLoopParams, h: float, n_delay: int, rule: _StopRu
     F = [0.0] * n_delay  # F[j] = f_act(t_j) at index j + n_delay
     prev = 0.0
     vs, fas, fcs = [], [], []
-    k = 0
+    k, due = 0, rule.due
     while True:
         if ideal:
             pa, va = p, v
-        f_act = spring_contact_force(k_con, c_con, pa, va)
+        f_act = contact(pa, va)
         if f_act > 0.0:
             rule.touched = True
         F.append(f_act)
         f_mea = F[k]
-        if not gate_open(f_mea):
-            f_comp = 0.0
-        else:
-            if mdc_when[pa > 0.0]:
-                f_comp = r_f * f_mea + r_prev * prev + r_p * p + r_v * v + r_pa * pa + r_va * va
-            else:
-                f_comp = s_f * f_mea + s_prev * prev
-            if clamp and f_comp < 0.0:
-                f_comp = 0.0
-        if k * h >= rule.due and rule.check_tick(k, f_act, f_mea, f_comp):
-            return vs, fas, fcs
+        f_comp = compensator(f_mea, prev, p, v, pa, va)
+        if k * h >= due:
+            if rule.check_tick(k, f_act, f_mea, f_comp):
+                return vs, fas, fcs
+            due = rule.due
         prev = f_mea
         p, v = a00 * p + a01 * v + b0 * f_comp, a10 * p + a11 * v + b1 * f_comp
         if not ideal:
