@@ -18,7 +18,8 @@ module                    law
 ``spacecraft``            the rig computer's model over a tick (semi-implicit Euler)
 ``table``                 a second-order response over a held tick
 ``separation``            run until separated: when a run ends, diverged or not
-``compiled``              a law as a compiled Drake system with named ports
+``compiled``              a law as a compiled Drake system with named ports, or
+                          as one plain Python function (the fast engine's ticks)
 ========================  ===================================================
 """
 
@@ -33,7 +34,7 @@ __all__, __getattr__, __dir__ = lazy_exports(
             "compensate",
             "backward_difference",
         ),
-        "compiled": ("compiled_system", "LawSystem"),
+        "compiled": ("compiled_system", "python_function", "LawSystem"),
         "contact": ("spring_contact_force", "spring_contact_force_rate"),
         "select": ("select", "both"),
         "separation": (
