@@ -1,12 +1,19 @@
 """The physical laws of the rig, each written once, used by every engine.
 
-Each module holds one law as plain functions of plain numbers. The same
-function runs on ``float`` (the fast exact-discrete engine, the 6-DoF rig
-computer), on ``AutoDiffXd`` (``Linearize``), on numpy arrays (the 6-DoF
-wrench) and on ``pydrake.symbolic`` expressions, from which the Drake systems
-of :mod:`hybridtable.systems` and :mod:`hybridtable.compensators` are compiled
-(:func:`~hybridtable.laws.compiled.compiled_system`): the diagram evaluates the
-law in C++ without a Python callback per step.
+Each module holds one law as plain functions. The switching laws
+(``compensation``, ``contact``, written with :func:`~hybridtable.laws.select.select`)
+run on ``float`` (the fast exact-discrete engine, the 6-DoF rig computer), on
+``AutoDiffXd`` (``Linearize``), on numpy arrays (the 6-DoF wrench, the
+replay's samples) and on ``pydrake.symbolic`` expressions, from which the
+Drake systems of :mod:`hybridtable.systems` and :mod:`hybridtable.compensators`
+are compiled (:func:`~hybridtable.laws.compiled.compiled_system`: the diagram
+evaluates the law in C++ without a Python callback per step) and the fast
+engine's tick functions generated (:func:`~hybridtable.laws.compiled.python_function`).
+``table``, ``spacecraft`` and ``separation`` are numeric (matrices of a tick,
+the stop rule). Rules that belong to a parameter set stay with it: what the
+compensator believes in :mod:`hybridtable.loop.params`, the computer's mass in
+:mod:`hybridtable.measurement.rig`, the F/T payload compensation in
+:mod:`hybridtable.stewart.ft_sensor`.
 
 ========================  ===================================================
 module                    law

@@ -13,7 +13,9 @@ commands from what the sensor measured at the pose the table reached::
   believes. Along one axis ``G = k_con`` and ``D = c_con`` (compression
   positive); on the wrench ``[moment; force]`` of the 6-DoF loop they are 6x6
   matrices, ``G = -K`` with the paper's stiffness ``K = -dw/dq``. The 1-D law is
-  the 6-DoF law on the contact normal.
+  the 6-DoF law on the contact normal, but for the gate's level: the 6-DoF
+  loop gates on the measured force's norm, the 1-D loop on the signed
+  compression (a pull beyond the dead band opens the one, not the other).
 
 Contact gating (``gate``): ``"measured_force"`` zeroes ``f_comp`` while the
 measured force (its norm on a wrench) is at or below ``force_deadband_n``;

@@ -26,6 +26,7 @@ step control is unchanged).
 
 from __future__ import annotations
 
+import math
 import operator
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
@@ -84,6 +85,24 @@ def _symbolic(expressions: Sequence[Expression], variables: Sequence) -> Symboli
     )
 
 
+class _Signals(dict):
+    """A law's input values by port name, as Python numbers; a port the law's
+    trace did not show (a term Drake simplified away, e.g. a zero gain) is
+    evaluated when the law reads it."""
+
+    def __init__(self, context, ports, held) -> None:
+        super().__init__()
+        self._context, self._ports, self._held = context, ports, held
+
+    def __missing__(self, name: str):
+        if name in self._held:
+            value = self._context.get_discrete_state(self._held[name]).value().tolist()
+        else:
+            value = self._ports[name].Eval(self._context).tolist()
+        self[name] = value
+        return value
+
+
 @TemplateSystem.define("LawSystem_", T_list=[float, AutoDiffXd])
 def LawSystem_(T):
     class Impl(LeafSystem_[T]):
@@ -121,13 +140,15 @@ def LawSystem_(T):
             return store
 
         def _make_calc(self, law, read, size):
-            # Only the inputs this output's law reads are evaluated (others may
-            # be unconnected), as Python numbers (cheaper than numpy scalars).
+            # The inputs this output's law is known to read are evaluated up
+            # front; any other only if the law asks (it may be unconnected).
             ports = [(n, self._ports[n]) for n in read if n in self._ports]
             held = [(n, self._held[n]) for n in read if n in self._held]
 
             def calc(context, output):
-                signals = {n: port.Eval(context).tolist() for n, port in ports}
+                signals = _Signals(context, self._ports, self._held)
+                for n, port in ports:
+                    signals[n] = port.Eval(context).tolist()
                 for n, i in held:
                     signals[n] = context.get_discrete_state(i).value().tolist()
                 value = law(signals)
@@ -152,6 +173,24 @@ _OPERATORS = {
     operator.eq: "==",
     operator.ne: "!=",
     operator.truediv: "/",
+}
+
+
+#: Drake's symbolic functions -> their Python names in :data:`_NAMESPACE`.
+_FUNCTIONS = {
+    name: name for name in ("abs", "min", "max", "exp", "log", "sqrt", "sin", "cos", "tanh")
+}
+
+#: What the generated code may call: the functions above and the non-finite
+#: constants (``repr`` writes ``inf`` and ``nan``), nothing else.
+_NAMESPACE = {
+    "__builtins__": {},
+    "inf": math.inf,
+    "nan": math.nan,
+    "abs": abs,
+    "min": min,
+    "max": max,
+    **{name: getattr(math, name) for name in ("exp", "log", "sqrt", "sin", "cos", "tanh")},
 }
 
 
@@ -182,6 +221,10 @@ def _python_source(node: Any, names: dict) -> str:
         return f"(not {parts[0]})"
     if f in _OPERATORS:
         return f"({parts[0]} {_OPERATORS[f]} {parts[1]})"
+    if label == "pow":
+        return f"({parts[0]} ** {parts[1]})"
+    if label in _FUNCTIONS:
+        return f"{_FUNCTIONS[label]}({', '.join(parts)})"
     raise NotImplementedError(f"no Python form for {label or f} in {node}")
 
 
@@ -200,7 +243,7 @@ def python_function(law: Callable[..., Any], arguments: Sequence[str]) -> Callab
         node = value if isinstance(value, Expression | Formula) else Expression(value)
         source = _python_source(node, names)
     params = ", ".join(names[v.get_id()] for v in variables)
-    return eval(f"lambda {params}: {source}", {"__builtins__": {}})  # noqa: S307
+    return eval(f"lambda {params}: {source}", dict(_NAMESPACE))  # noqa: S307
 
 
 def compiled_system(

@@ -40,15 +40,18 @@ def select(condition: Any, then: Any, otherwise: Any) -> Any:
 
     Parameters
     ----------
-    condition : bool or pydrake.symbolic.Formula
+    condition : bool, numpy bool or boolean array, or pydrake.symbolic.Formula
     then, otherwise : float, AutoDiffXd, ndarray or pydrake.symbolic.Expression
+        (with a ``Formula``: scalar expressions; ``if_then_else`` takes no arrays)
     """
     if condition is True:  # the numbers' path first: it is the hot one
         return then
     if condition is False:
         return otherwise
-    if isinstance(condition, np.bool_):
-        return then if condition else otherwise
+    if isinstance(condition, np.bool_) or (
+        isinstance(condition, np.ndarray) and condition.ndim == 0
+    ):
+        return then if bool(condition) else otherwise
     if isinstance(condition, np.ndarray):  # elementwise over arrays of samples
         return np.where(condition, then, otherwise)
     if _is_formula(condition):

@@ -36,6 +36,7 @@ from pydrake.systems.primitives import LogVectorOutput, TrajectorySource, ZeroOr
 from pydrake.trajectories import PiecewisePolynomial
 
 from hybridtable.errors import SimulationError
+from hybridtable.laws.compiled import LawSystem
 from hybridtable.loop.budget import check_budget
 from hybridtable.loop.params import HybridLoopParams
 from hybridtable.measurement.rig import (
@@ -45,6 +46,10 @@ from hybridtable.measurement.rig import (
     set_table_initial_state,
 )
 from hybridtable.measurement.run_format import Run
+from hybridtable.systems.contact_law import ContactLaw
+from hybridtable.systems.measurement_chain import MeasurementChain
+from hybridtable.systems.sensor import ForceSensorDelay
+from hybridtable.systems.table import SampledTable
 
 __all__ = ["ReplayResult", "replay", "replay_command"]
 
@@ -201,14 +206,20 @@ def _law_replay(
     table = sampled(h) if sampled is not None else None
     contact = physics.make_contact(params)
     sensor = physics.make_sensor(params)
+    # The library's own systems only, by exact type: a user's subclass may
+    # change what its Drake system computes, and is replayed on the diagram.
+    if not (
+        type(table) is SampledTable
+        and (type(contact) is ContactLaw or type(contact) is LawSystem)
+        and type(sensor) in (ForceSensorDelay, MeasurementChain)
+    ):
+        return None
     law = getattr(contact, "force_law", None)
-    respond = getattr(table, "respond", None)
-    if respond is None or law is None or not hasattr(sensor, "readings"):
+    if law is None:
         return None
-    if contact.num_continuous_states() or sensor.num_continuous_states():
-        return None
+    check_budget(params, len(p) * h, h, what="the replay", integrated=False)
     ic = params.initial_conditions()
-    motion = respond(np.column_stack([p, v]), ic["p_act_m"], ic["v_act_m_per_s"])
+    motion = table.respond(np.column_stack([p, v]), ic["p_act_m"], ic["v_act_m_per_s"])
     if getattr(contact, "force_law_elementwise", False):
         f_act = np.asarray(law(motion[:, 0], motion[:, 1], motion[:, 2]), dtype=float)
     else:

@@ -166,20 +166,22 @@ def simulate6(
         force = np.linalg.norm(data[27:30], axis=0)
         quiet = (force == 0.0) & ~np.any(data[36:42] != 0.0, axis=0)
         loud = np.flatnonzero(~quiet)
+        touched = bool(np.any(force > 0.0))  # the contact starts with a contact force
         ended = rule.check(
             simulator.get_num_steps_taken(),
             float(np.max(np.linalg.norm(data[24:30][3:, -quiet_ticks:], axis=0), initial=0.0)),
-            active=bool(loud.size) and loud[-1] == data.shape[1] - 1,
-            touched=bool(np.any(force > 0.0)),
+            active=touched and bool(loud.size) and loud[-1] == data.shape[1] - 1,
+            touched=touched,
             finite=bool(np.all(np.isfinite(data[:, -quiet_ticks:]))),
             # quiet for the record's last ticks, counted in ticks
-            active_at_s=t - (data.shape[1] - 1 - loud[-1]) * h if loud.size else None,
+            active_at_s=t - (data.shape[1] - 1 - loud[-1]) * h if touched and loud.size else None,
         )
         if progress is not None:
             progress(t, rule.t_max)
         if ended:
             break
-    rule.verdict()
+    if separating:  # a record of a given duration is returned as it is
+        rule.verdict()
     run = DockingRun(params, np.array(log.sample_times()), _split(log.data()))
     try:
         run.metrics = docking_metrics(

@@ -183,7 +183,8 @@ def _affine_step(A: np.ndarray, B: np.ndarray):
 
     body = ", ".join(f"({row(A[i], xs)}) + ({row(B[i], us)})" for i in range(n))
     code = f"lambda {', '.join(xs + us)}: ({body},)"
-    return eval(code, {"__builtins__": {}})  # noqa: S307 (numbers and names only)
+    # numbers and names only (``repr`` writes a non-finite coefficient as inf or nan)
+    return eval(code, {"__builtins__": {}, "inf": math.inf, "nan": math.nan})  # noqa: S307
 
 
 class SampledTable(Diagram):
