@@ -95,10 +95,16 @@ def _cases(runs: str | None) -> list[tuple[str, list[str]]]:
     return cases
 
 
-def save(out: Path, runs: str | None) -> int:
+#: The cases ``save --quick`` leaves out (the slowest: minutes on two cores).
+SLOW = ("compensators-quick", "explain-", "simulate6-", "sweep-")
+
+
+def save(out: Path, runs: str | None, quick: bool = False) -> int:
     out.mkdir(parents=True, exist_ok=True)
     failed = 0
     for name, argv in _cases(runs):
+        if quick and name.startswith(SLOW):
+            continue
         argv = [a.replace("{out}", str(out)) for a in argv]
         cmd = [
             sys.executable,
@@ -213,6 +219,11 @@ def main() -> int:
     p = sub.add_parser("save", help="run every command and save its outputs in DIR")
     p.add_argument("dir", type=Path)
     p.add_argument("--runs", help="folder of recorded runs for compare and diagnose")
+    p.add_argument(
+        "--quick",
+        action="store_true",
+        help="leave out the slowest cases (compensators, explain, simulate6, sweep)",
+    )
     d = sub.add_parser("diff", help="compare two saved sets; exit 1 on any difference")
     d.add_argument("a", type=Path)
     d.add_argument("b", type=Path)
@@ -224,7 +235,7 @@ def main() -> int:
     )
     args = parser.parse_args()
     if args.verb == "save":
-        return save(args.dir, args.runs)
+        return save(args.dir, args.runs, args.quick)
     return diff(args.a, args.b, args.rtol)
 
 
