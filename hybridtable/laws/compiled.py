@@ -52,7 +52,7 @@ from pydrake.systems.primitives import (
 )
 from pydrake.systems.scalar_conversion import TemplateSystem
 
-__all__ = ["compiled_system", "python_function", "LawSystem", "LawSystem_"]
+__all__ = ["compiled_system", "python_function", "python_lambda", "LawSystem", "LawSystem_"]
 
 #: ``law(signals) -> value`` of one output port: a number or a sequence;
 #: ``signals`` maps every input (and held input) name to its vector of values.
@@ -86,9 +86,8 @@ def _symbolic(expressions: Sequence[Expression], variables: Sequence) -> Symboli
 
 
 class _Signals(dict):
-    """A law's input values by port name, as Python numbers; a port the law's
-    trace did not show (a term Drake simplified away, e.g. a zero gain) is
-    evaluated when the law reads it."""
+    """A law's input values by port name, as Python numbers, each evaluated
+    when the law first reads it (a port it does not read may be unconnected)."""
 
     def __init__(self, context, ports, held) -> None:
         super().__init__()
@@ -114,9 +113,9 @@ def LawSystem_(T):
         its inputs at every integrator stage).
         """
 
-        def _construct(self, inputs, outputs, held, output_sizes, reads, converter=None):
+        def _construct(self, inputs, outputs, held, output_sizes, converter=None):
             LeafSystem_[T].__init__(self, converter)
-            self._args = (inputs, outputs, held, output_sizes, reads)
+            self._args = (inputs, outputs, held, output_sizes)
             self._ports = {n: self.DeclareVectorInputPort(n, size) for n, size in inputs.items()}
             self._held = {}
             for i, (n, (source, period)) in enumerate(held.items()):
@@ -125,7 +124,7 @@ def LawSystem_(T):
                 self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._make_store(i, source))
             for n, size in output_sizes.items():
                 self.DeclareVectorOutputPort(
-                    n, BasicVector_[T](size), self._make_calc(outputs[n], reads[n], size)
+                    n, BasicVector_[T](size), self._make_calc(outputs[n], size)
                 )
 
         def _construct_copy(self, other, converter=None):
@@ -139,19 +138,10 @@ def LawSystem_(T):
 
             return store
 
-        def _make_calc(self, law, read, size):
-            # The inputs this output's law is known to read are evaluated up
-            # front; any other only if the law asks (it may be unconnected).
-            ports = [(n, self._ports[n]) for n in read if n in self._ports]
-            held = [(n, self._held[n]) for n in read if n in self._held]
-
+        def _make_calc(self, law, size):
             def calc(context, output):
-                signals = _Signals(context, self._ports, self._held)
-                for n, port in ports:
-                    signals[n] = port.Eval(context).tolist()
-                for n, i in held:
-                    signals[n] = context.get_discrete_state(i).value().tolist()
-                value = law(signals)
+                # Only the inputs the law reads are evaluated (others may be unconnected).
+                value = law(_Signals(context, self._ports, self._held))
                 if size == 1 and not isinstance(value, list | tuple | np.ndarray):
                     output.SetAtIndex(0, value)
                 else:
@@ -242,8 +232,14 @@ def python_function(law: Callable[..., Any], arguments: Sequence[str]) -> Callab
     else:
         node = value if isinstance(value, Expression | Formula) else Expression(value)
         source = _python_source(node, names)
-    params = ", ".join(names[v.get_id()] for v in variables)
-    return eval(f"lambda {params}: {source}", dict(_NAMESPACE))  # noqa: S307
+    return python_lambda([names[v.get_id()] for v in variables], source)
+
+
+def python_lambda(arguments: Sequence[str], source: str) -> Callable[..., Any]:
+    """``lambda arguments: source``, compiled with nothing in reach but the
+    numbers' functions and constants of :data:`_NAMESPACE` (generated code:
+    :func:`python_function`, a table's unrolled step)."""
+    return eval(f"lambda {', '.join(arguments)}: {source}", dict(_NAMESPACE))  # noqa: S307
 
 
 def compiled_system(
@@ -284,20 +280,16 @@ def compiled_system(
     traced = {n: [_expression(e) for e in np.atleast_1d(f(signals))] for n, f in laws.items()}
     expressions = [e for es in traced.values() for e in es]
 
-    def reading(es) -> list[str]:
-        used = Variables()
-        for e in es:
-            used.insert(e.GetVariables())
-        return [n for n in signals if any(used.include(v) for v in signals[n])]
-
-    read = reading(expressions)
+    used = Variables()
+    for e in expressions:
+        used.insert(e.GetVariables())
+    read = [n for n in signals if any(used.include(v) for v in signals[n])]
     variables = [v for n in read for v in signals[n]]
 
     core = _affine(expressions, variables)
     if core is None and not compiled:
         sizes = {n: len(es) for n, es in traced.items()}
-        reads = {n: tuple(reading(es)) for n, es in traced.items()}
-        system = LawSystem(dict(inputs), laws, held, sizes, reads)
+        system = LawSystem(dict(inputs), laws, held, sizes)
         system.set_name(name)
         return system
     builder = DiagramBuilder()

@@ -30,7 +30,7 @@ def spring_contact_force(
     """The contact force [N], compression positive, at penetration ``p_m`` and
     its rate ``v_m_per_s``."""
     f = stiffness_n_per_m * p_m + damping_n_s_per_m * v_m_per_s
-    return select(bilateral or both(p_m > 0.0, f > 0.0), f, 0.0 * f)
+    return select(_touching(p_m, f, bilateral), f, 0.0 * f)
 
 
 def spring_contact_force_rate(

@@ -90,11 +90,8 @@ class _StopRule(SeparationRule):
     """The diagram's :class:`~hybridtable.laws.separation.SeparationRule`, checked
     at the first tick at or after each of its check times."""
 
-    def __init__(self, params: HybridLoopParams, period_s: float) -> None:
-        rule = separation_rule(params, period_s)
-        super().__init__(
-            rule.t_max, rule.settle, rule.chunk, rule.peak, rule.deadband, rule.stop_at_separation
-        )
+    def __init__(self, *args, period_s: float, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
         self.eps = 1e-6 * period_s
         self.touched = False
 
@@ -474,7 +471,7 @@ def simulate_fast(params: HybridLoopParams) -> ContactMetrics:
         raise ParameterError(f"the fast path cannot run these parameters: {why}")
     h, n = _computer_period(params)
     check_budget(params, min(default_t_max_s(params), expected_duration_s(params)), h)
-    rule = _StopRule(params, h)
+    rule = separation_rule(params, h, kind=_StopRule, period_s=h)
     run = _run_sampled if params.sample_rate_hz is not None else _run_continuous
     vs, fas, fcs = run(params, h, n, rule)
     rule.verdict()

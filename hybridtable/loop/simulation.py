@@ -196,16 +196,20 @@ def separation_rule(
     computer_period_s: float,
     t_max_s: float | None = None,
     stop_at_separation: bool = True,
+    kind: type[SeparationRule] = SeparationRule,
+    **extra,
 ) -> SeparationRule:
     """The :class:`~hybridtable.laws.separation.SeparationRule` of a 1-D run:
-    its ``t_max``, settling window, check interval and undamped peak force."""
-    return SeparationRule(
+    its ``t_max``, settling window, check interval and undamped peak force
+    (``kind``: a subclass, given ``extra`` keywords)."""
+    return kind(
         default_t_max_s(params) if t_max_s is None else t_max_s,
         settle_window_s(params, computer_period_s),
         check_interval_s(params, computer_period_s),
         undamped_peak_force_n(params),
         params.force_deadband_n,
         stop_at_separation,
+        **extra,
     )
 
 

@@ -20,6 +20,7 @@ from pydrake.systems.primitives import (
 )
 
 from hybridtable._validation import check_finite, check_nonnegative, check_positive
+from hybridtable.systems.sensor import delayed_by_ticks
 
 __all__ = [
     "MeasurementChainParams",
@@ -161,16 +162,9 @@ class MeasurementChain(Diagram):
                 z = a * z + gain * u
             y = out
         m, alpha = p.taps()
-        out = _shifted(y, m)
+        out = delayed_by_ticks(y, m)
         if alpha > 0.0:
-            out = (1 - alpha) * out + alpha * _shifted(y, m + 1)
+            out = (1 - alpha) * out + alpha * delayed_by_ticks(y, m + 1)
         if p.bias_n != 0.0:
             out = out + p.bias_n
         return out
-
-
-def _shifted(x: np.ndarray, ticks: int) -> np.ndarray:
-    """``x[k - ticks]``, zero before the start (a ``DiscreteTimeDelay``'s taps)."""
-    if ticks == 0:
-        return x.copy()
-    return np.concatenate([np.zeros(min(ticks, len(x))), x[: max(len(x) - ticks, 0)]])

@@ -29,6 +29,7 @@ __all__ = [
     "ForceSensorDelay",
     "continuous_delay_period",
     "delay_samples",
+    "delayed_by_ticks",
     "pade_state_space",
 ]
 
@@ -155,6 +156,13 @@ class ForceSensorDelay(Diagram):
         delay is sampled or zero."""
         if self._samples is None:
             return None
-        x = np.asarray(force_n, dtype=float)
-        m = min(self._samples, len(x))
-        return np.concatenate([np.zeros(m), x[: len(x) - m]])
+        return delayed_by_ticks(np.asarray(force_n, dtype=float), self._samples)
+
+
+def delayed_by_ticks(x: np.ndarray, ticks: int) -> np.ndarray:
+    """``x[k - ticks]``, zero before the start: a sampled ``DiscreteTimeDelay``
+    read at the ticks (``DiscreteTimeDelay(h, ticks - 1)``, see above)."""
+    if ticks == 0:
+        return x.copy()
+    m = min(ticks, len(x))
+    return np.concatenate([np.zeros(m), x[: len(x) - m]])

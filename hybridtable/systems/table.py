@@ -18,6 +18,7 @@ from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import LinearSystem, MatrixGain
 
 from hybridtable._validation import check_nonnegative, check_positive_or_inf
+from hybridtable.laws.compiled import python_lambda
 
 __all__ = [
     "TableParams",
@@ -182,9 +183,7 @@ def _affine_step(A: np.ndarray, B: np.ndarray):
         return " + ".join(f"{float(c)!r} * {v}" for c, v in zip(coeffs, names, strict=True))
 
     body = ", ".join(f"({row(A[i], xs)}) + ({row(B[i], us)})" for i in range(n))
-    code = f"lambda {', '.join(xs + us)}: ({body},)"
-    # numbers and names only (``repr`` writes a non-finite coefficient as inf or nan)
-    return eval(code, {"__builtins__": {}, "inf": math.inf, "nan": math.nan})  # noqa: S307
+    return python_lambda(xs + us, f"({body},)")
 
 
 class SampledTable(Diagram):
