@@ -32,6 +32,7 @@ LAYERS: dict[str, int] = {
     "_lazy": 0,
     "_validation": 0,
     "_files": 0,
+    "_components": 0,
     "limits": 0,
     "data": 0,
     "laws": 1,

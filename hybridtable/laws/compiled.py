@@ -52,7 +52,16 @@ from pydrake.systems.primitives import (
 )
 from pydrake.systems.scalar_conversion import TemplateSystem
 
-__all__ = ["compiled_system", "python_function", "python_lambda", "LawSystem", "LawSystem_"]
+from hybridtable._components import Block, Component
+
+__all__ = [
+    "CompiledLaw",
+    "compiled_system",
+    "python_function",
+    "python_lambda",
+    "LawSystem",
+    "LawSystem_",
+]
 
 #: ``law(signals) -> value`` of one output port: a number or a sequence;
 #: ``signals`` maps every input (and held input) name to its vector of values.
@@ -286,43 +295,59 @@ def compiled_system(
     read = [n for n in signals if any(used.include(v) for v in signals[n])]
     variables = [v for n in read for v in signals[n]]
 
-    core = _affine(expressions, variables)
-    if core is None and not compiled:
+    if not compiled and _affine(expressions, variables) is None:
         sizes = {n: len(es) for n, es in traced.items()}
         system = LawSystem(dict(inputs), laws, held, sizes)
         system.set_name(name)
         return system
-    builder = DiagramBuilder()
-    core = builder.AddNamedSystem(f"{name}_law", core or _symbolic(expressions, variables))
-    # Every input port of a subsystem that reads each named input.
-    consumers: dict[str, list] = {n: [] for n in inputs}
-    if variables:
-        mux = builder.AddNamedSystem(f"{name}_inputs", Multiplexer([len(signals[n]) for n in read]))
-        builder.Connect(mux.get_output_port(), core.get_input_port())
-    for h, (src, period) in held.items():  # held even when unread: the same states
-        zoh = builder.AddNamedSystem(h, ZeroOrderHold(period, inputs[src]))
-        consumers[src].append(zoh.get_input_port())
-        if h in read:
-            builder.Connect(zoh.get_output_port(), mux.get_input_port(read.index(h)))
-    for i, n in enumerate(read):
-        if n in inputs:
-            consumers[n].insert(0, mux.get_input_port(i))
-    for n, size in inputs.items():
-        ports = consumers[n] or [
-            builder.AddNamedSystem(f"{n}_unread", PassThrough(size)).get_input_port()
-        ]
-        builder.ExportInput(ports[0], n)
-        for port in ports[1:]:
-            builder.ConnectInput(n, port)
-    if len(traced) == 1:
-        builder.ExportOutput(core.get_output_port(), next(iter(traced)))
-    else:
-        demux = builder.AddNamedSystem(
-            f"{name}_outputs", Demultiplexer([len(es) for es in traced.values()])
-        )
-        builder.Connect(core.get_output_port(), demux.get_input_port())
-        for i, n in enumerate(traced):
-            builder.ExportOutput(demux.get_output_port(i), n)
-    diagram = builder.Build()
-    diagram.set_name(name)
-    return diagram
+
+    def core() -> System:  # a new one each time the law's primitives are added
+        return _affine(expressions, variables) or _symbolic(expressions, variables)
+
+    return CompiledLaw(name, inputs, held, traced, read, signals, core)
+
+
+class CompiledLaw(Component):
+    """A switching or affine law with named ports (see :func:`compiled_system`):
+    its core (``{name}_law``) fed by a ``Multiplexer`` (``{name}_inputs``),
+    the held inputs' ``ZeroOrderHold`` s and, for several outputs, a
+    ``Demultiplexer`` (``{name}_outputs``)."""
+
+    def __init__(self, name, inputs, held, traced, read, signals, core) -> None:
+        Component.__init__(self)
+        self._inputs, self._held, self._traced = dict(inputs), held, traced
+        self._read, self._signals, self._core = read, signals, core
+        self._build(name)
+        self.set_name(name)
+
+    def _add(self, builder: DiagramBuilder, name: str) -> Block:
+        inputs, signals, read = self._inputs, self._signals, self._read
+        core = builder.AddNamedSystem(f"{name}_law", self._core())
+        # Every input port of a subsystem that reads each named input.
+        consumers: dict[str, list] = {n: [] for n in inputs}
+        if read:
+            mux = builder.AddNamedSystem(
+                f"{name}_inputs", Multiplexer([len(signals[n]) for n in read])
+            )
+            builder.Connect(mux.get_output_port(), core.get_input_port())
+        for h, (src, period) in self._held.items():  # held even when unread: the same states
+            zoh = builder.AddNamedSystem(f"{name}_{h}", ZeroOrderHold(period, inputs[src]))
+            consumers[src].append(zoh.get_input_port())
+            if h in read:
+                builder.Connect(zoh.get_output_port(), mux.get_input_port(read.index(h)))
+        for i, n in enumerate(read):
+            if n in inputs:
+                consumers[n].insert(0, mux.get_input_port(i))
+        for n, size in inputs.items():
+            if not consumers[n]:
+                unread = builder.AddNamedSystem(f"{name}_{n}_unread", PassThrough(size))
+                consumers[n].append(unread.get_input_port())
+        if len(self._traced) == 1:
+            outputs = {next(iter(self._traced)): core.get_output_port()}
+        else:
+            demux = builder.AddNamedSystem(
+                f"{name}_outputs", Demultiplexer([len(es) for es in self._traced.values()])
+            )
+            builder.Connect(core.get_output_port(), demux.get_input_port())
+            outputs = {n: demux.get_output_port(i) for i, n in enumerate(self._traced)}
+        return Block(self, consumers, outputs)

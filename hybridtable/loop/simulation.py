@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 from pydrake.systems.analysis import Simulator
 
+from hybridtable._components import eval_output
 from hybridtable.errors import SimulationError
 from hybridtable.laws.separation import DIVERGED_FORCE_RATIO, SeparationRule
 from hybridtable.loop.budget import check_budget
@@ -157,12 +158,8 @@ def run_loop(
         integ.set_target_accuracy(accuracy)
 
     rule = separation_rule(params, loop.computer_period_s, t_max, stop_at_separation)
-    contact_ctx = loop.contact.GetMyContextFromRoot(context)
-    sensor_ctx = loop.sensor.GetMyContextFromRoot(context)
-    comp_ctx = loop.compensator.GetMyContextFromRoot(context)
-    f_act_port = loop.contact.GetOutputPort("force")
-    f_mea_port = loop.sensor.GetOutputPort("measured_force")
-    f_comp_port = loop.compensator.GetOutputPort("compensated_force")
+    watched = ((loop.contact, "force"), (loop.sensor, "measured_force"))
+    watched += ((loop.compensator, "compensated_force"),)
 
     # Advance in chunks and look at the forces between chunks (a per-step
     # Python monitor would cost as much as the systems themselves). The
@@ -173,10 +170,8 @@ def run_loop(
             simulator.AdvanceTo(rule.next_check_s)
         except (RuntimeError, SystemExit) as err:  # Drake asserts reach Python as SystemExit
             raise SimulationError(f"simulation failed: {err}") from None
-        f_act = f_act_port.Eval(contact_ctx)[0]
-        f_mea = f_mea_port.Eval(sensor_ctx)[0]
-        f_comp = f_comp_port.Eval(comp_ctx)[0]
-        forces = (f_act, f_mea, f_comp)
+        forces = tuple(eval_output(part, port, context)[0] for part, port in watched)
+        f_act, f_mea, f_comp = forces
         if rule.check(
             simulator.get_num_steps_taken(),
             abs(f_comp),

@@ -12,6 +12,8 @@ from collections.abc import Iterable, Mapping
 
 from pydrake.systems.framework import DiagramBuilder, System
 
+from hybridtable._components import Block, connect_input
+
 __all__ = ["Edge", "LOOP_WIRING", "PORT_SIZES", "edge", "channel_wiring", "connect"]
 
 #: ``(source system, output port, sink system, input port)``.
@@ -63,8 +65,11 @@ def channel_wiring(
 
 
 def connect(
-    builder: DiagramBuilder, systems: Mapping[str, System], edges: Iterable[Edge] = LOOP_WIRING
+    builder: DiagramBuilder,
+    systems: Mapping[str, System | Block],
+    edges: Iterable[Edge] = LOOP_WIRING,
 ) -> None:
-    """Connect ``systems`` (by name) in ``builder`` along ``edges``."""
+    """Connect ``systems`` (by name; whole systems or the flat blocks of
+    :func:`~hybridtable._components.add_component`) in ``builder`` along ``edges``."""
     for src, out_port, dst, in_port in edges:
-        builder.Connect(systems[src].GetOutputPort(out_port), systems[dst].GetInputPort(in_port))
+        connect_input(builder, systems[src].GetOutputPort(out_port), systems[dst], in_port)

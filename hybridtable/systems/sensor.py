@@ -18,9 +18,10 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from pydrake.systems.framework import Diagram, DiagramBuilder
+from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import DiscreteTimeDelay, LinearSystem, PassThrough
 
+from hybridtable._components import Block, Component
 from hybridtable._validation import check_nonnegative, check_positive
 from hybridtable.errors import ParameterError
 
@@ -86,7 +87,7 @@ def pade_state_space(
     return (np.asarray(ss.A), np.asarray(ss.B), np.asarray(ss.C), np.asarray(ss.D))
 
 
-class ForceSensorDelay(Diagram):
+class ForceSensorDelay(Component):
     """Pure delay of the force-measurement chain, as a Drake system.
 
     Ports
@@ -117,38 +118,41 @@ class ForceSensorDelay(Diagram):
         pade_order: int = 3,
         size: int = 1,
     ) -> None:
-        Diagram.__init__(self)
+        Component.__init__(self)
         self.params = params
         self.mode = mode
+        self.size = size
         T = params.sensor_delay_s
-        builder = DiagramBuilder()
         self.update_period_s: float | None = None
+        self._samples: int | None = 0 if T == 0.0 else None
         if T == 0.0:
-            inner = builder.AddNamedSystem("no_delay", PassThrough(size))
+            pass
         elif mode == "continuous":
-            h, n = continuous_delay_period(T, period_s)
-            self.update_period_s = h
-            inner = builder.AddNamedSystem("delay", DiscreteTimeDelay(h, n, size))
+            self.update_period_s, self._ticks = continuous_delay_period(T, period_s)
         elif mode == "sampled":
-            m = delay_samples(T, period_s)
             self.update_period_s = period_s
-            if m == 0:
-                inner = builder.AddNamedSystem("no_delay", PassThrough(size))
-            else:
-                inner = builder.AddNamedSystem("delay", DiscreteTimeDelay(period_s, m - 1, size))
+            self._samples = self._ticks = delay_samples(T, period_s)
         elif mode == "pade":
-            A, B, C, D = pade_state_space(T, pade_order)
-            eye = np.eye(size)
-            inner = builder.AddNamedSystem(
-                "pade_delay",
-                LinearSystem(np.kron(eye, A), np.kron(eye, B), np.kron(eye, C), np.kron(eye, D)),
-            )
+            self._pade = pade_state_space(T, pade_order)
         else:
             raise ParameterError(f"sensor mode must be continuous, sampled or pade (got {mode!r})")
-        builder.ExportInput(inner.get_input_port(), "force")
-        builder.ExportOutput(inner.get_output_port(), "measured_force")
-        builder.BuildInto(self)
-        self._samples = m if mode == "sampled" and T > 0.0 else (0 if T == 0.0 else None)
+        self._build("delay")
+
+    def _add(self, builder: DiagramBuilder, name: str) -> Block:
+        size, h = self.size, self.update_period_s
+        if self._samples == 0:
+            inner = PassThrough(size)
+        elif self.mode == "continuous":
+            inner = DiscreteTimeDelay(h, self._ticks, size)
+        elif self.mode == "sampled":
+            inner = DiscreteTimeDelay(h, self._ticks - 1, size)
+        else:
+            eye = np.eye(size)
+            inner = LinearSystem(*(np.kron(eye, M) for M in self._pade))
+        inner = builder.AddNamedSystem(name, inner)
+        return Block(
+            self, {"force": [inner.get_input_port()]}, {"measured_force": inner.get_output_port()}
+        )
 
     def readings(self, force_n: np.ndarray) -> np.ndarray | None:
         """The readings at the ticks for the actual force at the ticks

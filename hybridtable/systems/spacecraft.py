@@ -10,9 +10,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from pydrake.systems.framework import Diagram, DiagramBuilder
+from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import LinearSystem
 
+from hybridtable._components import Block, Component
 from hybridtable._validation import check_finite, check_positive
 from hybridtable.laws.spacecraft import computer_step
 
@@ -55,8 +56,9 @@ def spacecraft_matrices(
     return A, B, C, D
 
 
-class Spacecraft(Diagram):
-    """The spacecraft model as a Drake system (a ``LinearSystem`` inside).
+class Spacecraft(Component):
+    """The spacecraft model as a Drake system (a ``LinearSystem``; a component
+    the loop adds flat, :mod:`hybridtable._components`).
 
     Ports
     -----
@@ -85,33 +87,35 @@ class Spacecraft(Diagram):
         initial_position_m: float = 0.0,
         initial_velocity_m_per_s: float = 0.0,
     ) -> None:
-        Diagram.__init__(self)
+        Component.__init__(self)
         self.params = params
         self.sample_period_s = sample_period_s
-        A, B, C, D = spacecraft_matrices(params.mass_kg, sample_period_s)
-        builder = DiagramBuilder()
-        self._linear = builder.AddNamedSystem(
-            "double_integrator",
-            LinearSystem(A, B, C, D, 0.0 if sample_period_s is None else sample_period_s),
-        )
-        builder.ExportInput(self._linear.get_input_port(), "force")
-        builder.ExportOutput(self._linear.get_output_port(), "state")
-        builder.BuildInto(self)
         self._x0 = np.array(
             [
                 check_finite("initial_position_m", initial_position_m),
                 check_finite("initial_velocity_m_per_s", initial_velocity_m_per_s),
             ]
         )
+        self._build("double_integrator")
+
+    def _add(self, builder: DiagramBuilder, name: str) -> Block:
+        A, B, C, D = spacecraft_matrices(self.params.mass_kg, self.sample_period_s)
+        h = self.sample_period_s
+        linear = builder.AddNamedSystem(name, LinearSystem(A, B, C, D, 0.0 if h is None else h))
+        return Block(
+            self, {"force": [linear.get_input_port()]}, {"state": linear.get_output_port()}, linear
+        )
+
+    def _write_state(self, context, position_m: float, velocity_m_per_s: float) -> None:
+        x = np.array([position_m, velocity_m_per_s])
+        if self.sample_period_s is None:
+            context.SetContinuousState(x)
+        else:
+            context.SetDiscreteState(x)
 
     def set_initial_state(self, context, position_m: float, velocity_m_per_s: float) -> None:
         """Set ``[p_des, v_des]`` in this system's (sub)context."""
-        sub = self.GetSubsystemContext(self._linear, context)
-        x = np.array([position_m, velocity_m_per_s])
-        if self.sample_period_s is None:
-            sub.SetContinuousState(x)
-        else:
-            sub.SetDiscreteState(x)
+        Component.set_initial_state(self, context, position_m, velocity_m_per_s)
 
     def set_default_state(self, context) -> None:
         """Apply the constructor's initial position and velocity."""

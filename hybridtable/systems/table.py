@@ -17,6 +17,7 @@ from pydrake.systems.analysis import DiscreteTimeApproximation
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import LinearSystem, MatrixGain
 
+from hybridtable._components import Block, Component
 from hybridtable._validation import check_nonnegative, check_positive_or_inf
 from hybridtable.laws.compiled import python_lambda
 
@@ -114,7 +115,7 @@ def table_step_response(params: TableParams, t_s: np.ndarray) -> np.ndarray:
     return 1.0 + (s2 * np.exp(s1 * t) - s1 * np.exp(s2 * t)) / (s1 - s2)
 
 
-class SecondOrderTable(Diagram):
+class SecondOrderTable(Component):
     """The table response model as a Drake system (a ``LinearSystem`` inside).
 
     Ports
@@ -132,35 +133,37 @@ class SecondOrderTable(Diagram):
     """
 
     def __init__(self, params: TableParams) -> None:
-        Diagram.__init__(self)
+        Component.__init__(self)
         self.params = params
-        builder = DiagramBuilder()
-        if params.is_ideal:
-            self._linear = None
+        self._build("ideal_table" if params.is_ideal else "second_order_table")
+
+    def _add(self, builder: DiagramBuilder, name: str) -> Block:
+        if self.params.is_ideal:
             inner = builder.AddNamedSystem(
-                "ideal_table", MatrixGain(np.vstack([np.eye(2), np.zeros((1, 2))]))
+                name, MatrixGain(np.vstack([np.eye(2), np.zeros((1, 2))]))
             )
         else:
-            A, B, C, D = table_matrices(params)
-            self._linear = inner = builder.AddNamedSystem(
-                "second_order_table", LinearSystem(A, B, C, D)
-            )
-        builder.ExportInput(inner.get_input_port(), "commanded_state")
-        builder.ExportOutput(inner.get_output_port(), "motion")
-        builder.BuildInto(self)
+            inner = builder.AddNamedSystem(name, LinearSystem(*table_matrices(self.params)))
+        return Block(
+            self,
+            {"commanded_state": [inner.get_input_port()]},
+            {"motion": inner.get_output_port()},
+            None if self.params.is_ideal else inner,
+        )
 
     def sampled(self, period_s: float) -> SampledTable | None:
         """This table at the ticks of a held command (:class:`SampledTable`);
         None for the ideal table (no state to discretize)."""
-        if self._linear is None:
+        if self.params.is_ideal:
             return None
         return SampledTable(table_matrices(self.params), period_s)
 
+    def _write_state(self, context, position_m: float, velocity_m_per_s: float) -> None:
+        context.SetContinuousState(np.array([position_m, velocity_m_per_s]))
+
     def set_initial_state(self, context, position_m: float, velocity_m_per_s: float) -> None:
         """Set ``[p_act, v_act]`` (no-op for the ideal table)."""
-        if self._linear is not None:
-            sub = self.GetSubsystemContext(self._linear, context)
-            sub.SetContinuousState(np.array([position_m, velocity_m_per_s]))
+        Component.set_initial_state(self, context, position_m, velocity_m_per_s)
 
 
 def _ordered_dot(row: np.ndarray, X: np.ndarray) -> np.ndarray:
