@@ -29,6 +29,7 @@ from pydrake.systems.framework import (
     OutputPort,
     System,
 )
+from pydrake.systems.primitives import PassThrough
 
 __all__ = [
     "Block",
@@ -51,7 +52,9 @@ class Block:
         The component it was added from; its attributes (``params``, laws,
         ``sampled``...) are read through the block.
     inputs : mapping of str to tuple of InputPort
-        Each named input and the primitives' input ports it feeds.
+        Each named input and the primitives' input ports it feeds (none for an
+        input no primitive reads: the component's diagram keeps it as a port,
+        the flat block leaves it unconnected).
     outputs : mapping of str to OutputPort
     state_system : System or None
         The primitive holding the component's state, if any.
@@ -106,13 +109,21 @@ class Component(Diagram):
     A subclass sets its attributes, then calls ``self._build(name)`` (the
     name of its primitives inside the diagram); it defines
     ``_add(builder, name) -> Block`` and, if it has a state,
-    ``_write_state(primitive_context, *state)``.
+    ``_write_state(primitive_context, *state)``; ``_input_sizes`` gives the
+    size of an input no primitive reads.
     """
+
+    _input_sizes: Mapping[str, int] = {}
 
     def _build(self, name: str) -> None:
         builder = DiagramBuilder()
         self._block = self._add(builder, name)
         for name, ports in self._block.inputs.items():
+            if not ports:  # read by no primitive: still a port of the diagram
+                size = self._input_sizes[name]
+                ports = (
+                    builder.AddNamedSystem(f"{name}_unread", PassThrough(size)).get_input_port(),
+                )
             builder.ExportInput(ports[0], name)
             for port in ports[1:]:
                 builder.ConnectInput(name, port)

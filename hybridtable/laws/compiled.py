@@ -46,7 +46,6 @@ from pydrake.systems.primitives import (
     AffineSystem,
     Demultiplexer,
     Multiplexer,
-    PassThrough,
     SymbolicVectorSystem,
     ZeroOrderHold,
 )
@@ -315,7 +314,8 @@ class CompiledLaw(Component):
 
     def __init__(self, name, inputs, held, traced, read, signals, core) -> None:
         Component.__init__(self)
-        self._inputs, self._held, self._traced = dict(inputs), held, traced
+        self._inputs = self._input_sizes = dict(inputs)
+        self._held, self._traced = held, traced
         self._read, self._signals, self._core = read, signals, core
         self._build(name)
         self.set_name(name)
@@ -338,10 +338,6 @@ class CompiledLaw(Component):
         for i, n in enumerate(read):
             if n in inputs:
                 consumers[n].insert(0, mux.get_input_port(i))
-        for n, size in inputs.items():
-            if not consumers[n]:
-                unread = builder.AddNamedSystem(f"{name}_{n}_unread", PassThrough(size))
-                consumers[n].append(unread.get_input_port())
         if len(self._traced) == 1:
             outputs = {next(iter(self._traced)): core.get_output_port()}
         else:

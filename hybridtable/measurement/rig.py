@@ -307,17 +307,6 @@ def build_rig_loop(run: Run, physics: RigPhysics | None = None, noise=None):
     )
     loop.diagram = builder.Build()
     loop.diagram.set_name(f"rig_loop_{run.run_id}")
-    if not isinstance(loop.table, SecondOrderTable):
-        # HybridLoop initializes only its own table type; give a swapped table
-        # the run's initial state too, when it can take one.
-        base = loop.set_initial_conditions
-
-        def set_initial_conditions(root_context) -> None:
-            base(root_context)
-            table_context = loop.diagram.GetMutableSubsystemContext(loop.table, root_context)
-            set_table_initial_state(loop.table, table_context, params)
-
-        loop.set_initial_conditions = set_initial_conditions
     return loop
 
 
