@@ -26,7 +26,7 @@ def test_hybrid_loop_writes_the_dot_and_replaces_it_only_with_force(tmp_path, ca
     out = tmp_path / "d"
     assert main(["diagram", "hybrid-loop", "--out-dir", str(out)]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert lines[0].startswith("The hybrid loop (Table 1 point, SDMDC) is a Drake diagram of 7")
+    assert lines[0].startswith("The hybrid loop (Table 1 point, SDMDC) is a Drake diagram of 9")
     dot = (out / "hybrid_loop.dot").read_text()
     for system in ("spacecraft", "table", "contact", "force_sensor", "compensator"):
         assert system in dot
