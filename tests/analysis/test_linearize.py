@@ -201,17 +201,26 @@ def test_interconnection_of_two_integrators_is_a_double_integrator():
     np.testing.assert_allclose(m.transfer(s)[:, 0, 0], 1 / s**2, rtol=1e-14)
 
 
-def test_expm_small_is_the_matrix_exponential():
+def test_held_tick_is_the_zero_order_hold_solution():
     from scipy.linalg import expm
 
-    from hybridtable.analysis.sampled import expm_small
+    from hybridtable.laws.table import held_tick
 
     rng = np.random.default_rng(3)
     w = 2 * math.pi * 200.0  # a stiff table over a 1 ms period, as in the ZOH
-    stiff = (
-        np.array([[0, 1, 0, 0], [-w * w, -1.6 * w, w * w, 0], [0, 0, 0, 0], [0, 0, 0, 0]]) * 1e-3
-    )
-    for M in (stiff, rng.standard_normal((5, 5)), 1e-4 * rng.standard_normal((3, 3))):
-        ref = expm(M)
-        np.testing.assert_allclose(expm_small(M), ref, rtol=0, atol=1e-12 * np.abs(ref).max())
-    assert expm_small(np.zeros((0, 0))).shape == (0, 0)
+    stiff = (np.array([[0.0, 1.0], [-w * w, -1.6 * w]]), np.array([[0.0], [w * w]]))
+    cases = (stiff, (rng.standard_normal((5, 5)), rng.standard_normal((5, 2))))
+    for A, B in cases:
+        n, m = B.shape
+        big = np.zeros((n + m, n + m))
+        big[:n, :n], big[:n, n:] = A, B
+        ref = expm(big * 1e-3)
+        Phi, Gamma = held_tick(A, B, 1e-3)
+        scale = np.abs(ref).max()
+        np.testing.assert_allclose(Phi, ref[:n, :n], rtol=0, atol=1e-12 * scale)
+        np.testing.assert_allclose(Gamma, ref[:n, n:], rtol=0, atol=1e-12 * scale)
+    # A double integrator under a held force: the closed form.
+    Phi, Gamma = held_tick([[0.0, 1.0], [0.0, 0.0]], [[0.0], [1.0]], 0.5)
+    np.testing.assert_allclose(Phi, [[1.0, 0.5], [0.0, 1.0]], atol=1e-15)
+    np.testing.assert_allclose(Gamma, [[0.125], [0.5]], atol=1e-15)
+    assert held_tick(np.zeros((0, 0)), np.zeros((0, 1)), 1e-3)[0].shape == (0, 0)
