@@ -43,6 +43,7 @@ from typing import Any
 import numpy as np
 
 from hybridtable.errors import ParameterError
+from hybridtable.laws.contact import critical_damping_n_s_per_m
 from hybridtable.measurement.rig import RigPhysics, run_with_model_mass
 from hybridtable.measurement.run_format import Run
 from hybridtable.systems.contact_law import ContactLaw, ContactLawParams
@@ -137,7 +138,7 @@ class RigScale:
 
     @property
     def critical_damping_n_s_per_m(self) -> float:
-        return 2.0 * math.sqrt(self.stiffness_n_per_m * self.mass_kg)
+        return critical_damping_n_s_per_m(self.stiffness_n_per_m, self.mass_kg)
 
     @property
     def nyquist_hz(self) -> float:

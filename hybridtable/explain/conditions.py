@@ -14,7 +14,7 @@ from dataclasses import asdict, dataclass, fields
 
 from hybridtable._validation import check_nonnegative, check_positive, check_positive_or_inf
 from hybridtable.errors import ParameterError
-from hybridtable.loop.params import HybridLoopParams
+from hybridtable.loop.params import HybridLoopParams, believed
 
 __all__ = ["CONDITION_FIELDS", "PAPER_CONDITIONS", "Conditions"]
 
@@ -82,7 +82,7 @@ class Conditions:
     @property
     def lead_s(self) -> float:
         """The SDC's lead, s (the sensor delay when not stated)."""
-        return self.sensor_delay_s if self.lead_time_s is None else self.lead_time_s
+        return believed(self, "lead_time_s")
 
     @property
     def spacecraft_mass_kg(self) -> float:

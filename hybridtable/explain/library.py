@@ -27,11 +27,11 @@ zero is held at zero.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 
 from hybridtable.explain.conditions import Conditions
 from hybridtable.explain.effects import CorEffect, CorParameter
+from hybridtable.laws.contact import critical_damping_n_s_per_m
 from hybridtable.loop.params import HybridLoopParams
 
 __all__ = ["builtin_cor_effects"]
@@ -72,7 +72,7 @@ def _damping(c: Conditions, p: HybridLoopParams, v: Mapping[str, float]) -> Hybr
 
 
 def _damping_ratio(c: Conditions, p: HybridLoopParams, v: Mapping[str, float]) -> HybridLoopParams:
-    critical = 2.0 * math.sqrt(p.contact_stiffness_n_per_m * p.spacecraft_mass_kg)
+    critical = critical_damping_n_s_per_m(p.contact_stiffness_n_per_m, p.spacecraft_mass_kg)
     return _unknown_damping(p, v["contact_damping_ratio"] * critical)
 
 

@@ -9,11 +9,18 @@ drops the gate (the linearization used by the stability analysis).
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from hybridtable.laws.select import both, select
 
-__all__ = ["spring_contact_force", "spring_contact_force_rate"]
+__all__ = ["critical_damping_n_s_per_m", "spring_contact_force", "spring_contact_force_rate"]
+
+
+def critical_damping_n_s_per_m(stiffness_n_per_m: float, mass_kg: float) -> float:
+    """The damping ``2 sqrt(k m)`` [N s/m] at which the contact on the mass
+    ``mass_kg`` stops rebounding (damping ratio 1)."""
+    return 2.0 * math.sqrt(stiffness_n_per_m * mass_kg)
 
 
 def _touching(p: Any, f: Any, bilateral: bool) -> Any:

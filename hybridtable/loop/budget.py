@@ -23,6 +23,7 @@ import math
 from dataclasses import dataclass
 
 from hybridtable.errors import SimulationError
+from hybridtable.laws.contact import critical_damping_n_s_per_m
 from hybridtable.laws.separation import MAX_INTEGRATOR_STEPS, check_steps_taken
 from hybridtable.loop.params import HybridLoopParams
 
@@ -102,7 +103,7 @@ def fastest_pole_rad_per_s(params: HybridLoopParams) -> tuple[float, str]:
     if params.sample_rate_hz is None:
         k, m = params.contact_stiffness_n_per_m, params.spacecraft_mass_kg
         omega = math.sqrt(k / m)
-        zeta = params.contact_damping_n_s_per_m / (2.0 * math.sqrt(k * m))
+        zeta = params.contact_damping_n_s_per_m / critical_damping_n_s_per_m(k, m)
         poles.append(
             (
                 _pole(omega, zeta),

@@ -51,7 +51,7 @@ from hybridtable.laws.compiled import python_function
 from hybridtable.laws.contact import spring_contact_force
 from hybridtable.laws.separation import SeparationRule
 from hybridtable.laws.spacecraft import computer_step
-from hybridtable.laws.table import second_order_tick
+from hybridtable.laws.table import second_order_matrices, second_order_tick
 from hybridtable.loop.budget import check_budget
 from hybridtable.loop.metrics import ContactMetrics, contact_metrics
 from hybridtable.loop.params import HybridLoopParams
@@ -213,12 +213,14 @@ class _Continuous:
         self.lead_f, self.lead_prev = float(without[0]), float(without[1])
         self.g_mdc = np.append(with_mdc[2:], 0.0) if self.mdc else np.zeros(5)
         a = np.zeros((4, 4))
-        a[0, 1] = a[2, 3] = 1.0
+        a[0, 1] = 1.0
         if self.ideal:  # the table is the spacecraft: rows 2, 3 copy rows 0, 1
-            a[3] = a[1]
-        else:
-            w, z = params.table().omega_rad_per_s, params.table_damping_ratio
-            a[3] = (w * w, 0.0, -w * w, -2.0 * z * w)
+            a[2:] = a[:2]
+        else:  # the table's law, driven by p_des
+            a_table, b_table = second_order_matrices(
+                params.table_response_hz, params.table_damping_ratio
+            )
+            a[2:, 2:], a[2:, 0] = a_table, b_table[:, 0]
         self.a = a
         self.b = np.array([0.0, -1.0 / params.spacecraft_mass_kg, 0.0, 0.0])
         self.g_raw = np.array([0.0, 0.0, self.k, self.c, 0.0])  # k p_act + c v_act

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import Any
 
 from hybridtable._validation import (
     check_choice,
@@ -14,6 +15,7 @@ from hybridtable._validation import (
 from hybridtable.compensators.paper import CompensatorParams
 from hybridtable.compensators.registry import compensator_names
 from hybridtable.errors import ParameterError
+from hybridtable.laws.contact import critical_damping_n_s_per_m
 from hybridtable.limits import check_plausible, limit_of, limit_words
 from hybridtable.systems.contact import ContactParams
 from hybridtable.systems.sensor import SensorParams
@@ -24,6 +26,7 @@ __all__ = [
     "TABLE_INITIAL_STATES",
     "BELIEFS",
     "HybridLoopParams",
+    "believed",
 ]
 
 
@@ -37,6 +40,15 @@ BELIEFS: dict[str, str] = {
     "compensator_stiffness_n_per_m": "contact_stiffness_n_per_m",
     "compensator_damping_n_s_per_m": "contact_damping_n_s_per_m",
 }
+
+
+def believed(params: Any, belief: str) -> float:
+    """What the compensator believes for ``belief`` (a key of :data:`BELIEFS`)
+    in any parameter set with both fields (the 1-D and 6-DoF loops', a CoR
+    table's conditions): the stated value, or the true one it stands for."""
+    value = getattr(params, belief)
+    return getattr(params, BELIEFS[belief]) if value is None else value
+
 
 #: The fields checked against their plausible range (:data:`hybridtable.limits.LIMITS`).
 _PLAUSIBLE_FIELDS: tuple[str, ...] = (
@@ -243,11 +255,7 @@ class HybridLoopParams:
         """What the compensator believes, resolved: each field of :data:`BELIEFS`,
         or, where it is ``None``, the true value it stands for (the compensator
         believes the truth unless told otherwise)."""
-        out = {}
-        for belief, truth in BELIEFS.items():
-            value = getattr(self, belief)
-            out[belief] = getattr(self, truth) if value is None else value
-        return out
+        return {belief: believed(self, belief) for belief in BELIEFS}
 
     def with_beliefs_pinned(self) -> HybridLoopParams:
         """A copy whose compensator beliefs are explicit (:meth:`beliefs`), so
@@ -278,7 +286,9 @@ class HybridLoopParams:
         ``c = 2 zeta sqrt(k m)`` (N s/m), ``zeta >= 0``."""
         zeta = check_nonnegative("contact_damping_ratio", damping_ratio)
         check_plausible("contact_damping_ratio", zeta)
-        c = 2.0 * zeta * math.sqrt(self.contact_stiffness_n_per_m * self.spacecraft_mass_kg)
+        c = zeta * critical_damping_n_s_per_m(
+            self.contact_stiffness_n_per_m, self.spacecraft_mass_kg
+        )
         return self.with_(contact_damping_n_s_per_m=c)
 
     def spacecraft(self) -> SpacecraftParams:

@@ -23,6 +23,7 @@ from hybridtable._validation import (
 )
 from hybridtable.errors import ParameterError
 from hybridtable.limits import check_plausible
+from hybridtable.loop.params import believed
 
 __all__ = [
     "TABLE_BACKENDS",
@@ -385,7 +386,7 @@ class DockingLoopParams:
     @property
     def effective_lead_time_s(self) -> float:
         """The SDC lead: ``lead_time_s`` or the sensor delay."""
-        return self.sensor_delay_s if self.lead_time_s is None else self.lead_time_s
+        return believed(self, "lead_time_s")
 
     @property
     def contact_frequency_hz(self) -> float:

@@ -13,6 +13,7 @@ from functools import lru_cache
 
 from hybridtable._validation import check_nonnegative, check_positive
 from hybridtable.errors import ParameterError
+from hybridtable.laws.contact import critical_damping_n_s_per_m
 
 __all__ = ["hunt_crossley_cor", "hunt_crossley_dissipation"]
 
@@ -63,7 +64,7 @@ def hunt_crossley_dissipation(
     v = check_positive("velocity_m_per_s", velocity_m_per_s)
     if c == 0.0:
         return 0.0
-    zeta = c / (2.0 * math.sqrt(k * m))
+    zeta = c / critical_damping_n_s_per_m(k, m)
     if zeta >= 1.0:
         raise ParameterError(
             f"contact damping ratio {zeta:.3f} >= 1 has no Hunt–Crossley equivalent "

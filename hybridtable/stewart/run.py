@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from hybridtable.errors import ParameterError
+from hybridtable.laws.contact import critical_damping_n_s_per_m
 from hybridtable.loop.params import HybridLoopParams
 from hybridtable.loop.simulation import SimulationResult, run_loop, simulate
 from hybridtable.stewart.backend import add_stewart_loop, stewart_params_for_loop
@@ -161,7 +162,7 @@ def check_stewart_loop(params: HybridLoopParams, stewart: StewartParams | None =
             f"(needs initial_gap_m <= {gap:.4f})"
         )
     k, c = params.contact_stiffness_n_per_m, params.contact_damping_n_s_per_m
-    critical = 2.0 * math.sqrt(k * params.spacecraft_mass_kg)
+    critical = critical_damping_n_s_per_m(k, params.spacecraft_mass_kg)
     if c >= critical:
         raise ParameterError(
             f"contact_damping_n_s_per_m {c:g} is at or above the contact's critical damping "
