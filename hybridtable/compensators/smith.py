@@ -35,6 +35,7 @@ from hybridtable._validation import check_nonnegative
 from hybridtable.compensators._wiring import export_compensator_ports, sensor_like_delay
 from hybridtable.compensators.identification import ContactIdentifier, IdentifierParams
 from hybridtable.errors import ParameterError
+from hybridtable.laws.compensation import above_deadband, nonnegative
 from hybridtable.laws.contact import spring_contact_force
 
 __all__ = [
@@ -120,21 +121,17 @@ def SmithPredictor_(T):
         def _calc(self, context, output):
             p = self.params
             deadband = p.force_deadband_n
-            f_mea = self._f.Eval(context)[0]
-            if not f_mea > deadband:
-                f_mea = 0.0 * f_mea
+            f_mea = above_deadband(self._f.Eval(context)[0], deadband)
             p_des, v_des = self._cmd.Eval(context)
             p_old, v_old, _ = self._delayed.Eval(context)
             if self.adaptive:
                 k, c = self._kc.Eval(context)
             else:
                 k, c = p.stiffness_n_per_m, p.damping_n_s_per_m
-            predicted = unilateral_force(k, c, p_old, v_old)
-            if not predicted > deadband:
-                predicted = 0.0 * predicted
+            predicted = above_deadband(unilateral_force(k, c, p_old, v_old), deadband)
             f = f_mea + unilateral_force(k, c, p_des, v_des) - predicted
-            if p.clamp_nonnegative and f < 0.0:
-                f = 0.0 * f
+            if p.clamp_nonnegative:
+                f = nonnegative(f)
             output.SetAtIndex(0, f)
 
     return Impl

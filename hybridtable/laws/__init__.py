@@ -38,11 +38,17 @@ __all__, __getattr__, __dir__ = lazy_exports(
         "compensation": (
             "GATES",
             "CompensationLaw",
+            "above_deadband",
             "compensate",
             "backward_difference",
+            "nonnegative",
         ),
-        "compiled": ("compiled_system", "python_function", "LawSystem"),
-        "contact": ("spring_contact_force", "spring_contact_force_rate"),
+        "compiled": ("CompiledLaw", "compiled_system", "python_function", "LawSystem"),
+        "contact": (
+            "critical_damping_n_s_per_m",
+            "spring_contact_force",
+            "spring_contact_force_rate",
+        ),
         "select": ("select", "both"),
         "separation": (
             "DIVERGED_FORCE_RATIO",
@@ -51,6 +57,6 @@ __all__, __getattr__, __dir__ = lazy_exports(
             "check_steps_taken",
         ),
         "spacecraft": ("computer_step",),
-        "table": ("second_order_tick",),
+        "table": ("held_tick", "second_order_matrices", "second_order_tick"),
     },
 )

@@ -37,7 +37,14 @@ from typing import Any
 
 from hybridtable.laws.select import select
 
-__all__ = ["CompensationLaw", "GATES", "compensate", "backward_difference"]
+__all__ = [
+    "CompensationLaw",
+    "GATES",
+    "above_deadband",
+    "compensate",
+    "backward_difference",
+    "nonnegative",
+]
 
 #: How the compensator tells contact.
 GATES: tuple[str, ...] = ("measured_force", "table_position", "none")
@@ -108,6 +115,16 @@ def _times(gain: Any, x: Any) -> Any:
     return gain @ x if getattr(gain, "ndim", 0) >= 2 else gain * x
 
 
+def nonnegative(force: Any) -> Any:
+    """The force clamped at zero: a compensator that never pulls."""
+    return select(force < 0.0, 0.0 * force, force)
+
+
+def above_deadband(reading: Any, deadband_n: float) -> Any:
+    """A force reading, zero where it is at or below the dead band."""
+    return select(reading > deadband_n, reading, 0.0 * reading)
+
+
 def backward_difference(value: Any, previous: Any, period_s: float) -> Any:
     """The rig computer's rate of a sampled signal: ``(x[k] - x[k-1]) / h``."""
     return (value - previous) / period_s
@@ -153,6 +170,6 @@ def compensate(
             corrected = corrected + _times(damping, rate_error)
         f = select(law.corrects_motion(touching), corrected, f)
     if law.clamp_nonnegative:
-        f = select(f < 0.0, 0.0 * f, f)
+        f = nonnegative(f)
     level = measured if gate_force is None else gate_force
     return select(law.gate_open(level), f, 0.0 * measured)
