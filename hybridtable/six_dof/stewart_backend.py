@@ -63,11 +63,9 @@ from hybridtable.errors import DivergenceError, ParameterError, WorkspaceError
 from hybridtable.six_dof.contact import register_docking_devices
 from hybridtable.six_dof.params import DockingLoopParams
 from hybridtable.six_dof.pose import rotation_exp, rotation_log
-from hybridtable.stewart.backend import export_plate_pose
-from hybridtable.stewart.ft_sensor import device_payload, payload_compensated_wrench
+from hybridtable.stewart.backend import DeviceSensorBase, export_plate_pose
 from hybridtable.stewart.geometry import (
     StewartGeometry,
-    rotation_from_quaternion,
     rotation_from_rpy,
     rpy_from_rotation,
 )
@@ -318,7 +316,7 @@ class PoseLegServo(LeafSystem):
         output.SetFromVector(u)
 
 
-class PoseDeviceSensor(LeafSystem):
+class PoseDeviceSensor(DeviceSensorBase):
     """The port's motion and the F/T sensor's wrench, in the target frame W.
 
     The plant's reaction forces and accelerations (unsampled output ports)
@@ -348,22 +346,8 @@ class PoseDeviceSensor(LeafSystem):
     """
 
     def __init__(self, handles: StewartPlant, kinematics: PoseKinematics) -> None:
-        LeafSystem.__init__(self)
-        plant = handles.plant
+        DeviceSensorBase.__init__(self, handles)
         self._k = kinematics
-        self._nq = plant.num_positions()
-        self._iq = handles.plate_position_start
-        self._iv = handles.plate_velocity_start
-        self._payload = device_payload(handles)
-        self._weld = int(handles.sensor_weld.index())
-        self._resolution = handles.params.sensor_resolution_n
-        self._state = self.DeclareVectorInputPort("plant_state", plant.num_multibody_states())
-        self._accel = self.DeclareVectorInputPort(
-            "generalized_acceleration", plant.num_velocities()
-        )
-        self._reaction = self.DeclareAbstractInputPort(
-            "reaction_forces", plant.get_reaction_forces_output_port().Allocate()
-        )
         self.DeclareVectorOutputPort(
             "port_state",
             BasicVector(12),
@@ -373,33 +357,14 @@ class PoseDeviceSensor(LeafSystem):
         self.DeclareVectorOutputPort("step_wrench", BasicVector(6), self._calc_step_wrench)
         self.DeclareVectorOutputPort("weld_wrench", BasicVector(6), self._calc_weld_wrench)
 
-    def _pose_twist(self, x):
-        q = x[self._iq : self._iq + 7]
-        v = x[self._nq + self._iv : self._nq + self._iv + 6]
-        return rotation_from_quaternion(q[:4]), q[4:], v[:3], v[3:]
-
     def _calc_port_state(self, context, output) -> None:
         R, p, w, v = self._pose_twist(self._state.Eval(context))
         output.SetFromVector(self._k.port_state(p, R, v, w))
 
     def contact_wrench(self, context) -> np.ndarray:
-        """The payload-compensated wrench (6, W, unrounded) over the coming step."""
-        R, _, w, _ = self._pose_twist(self._state.Eval(context))
-        a = self._accel.Eval(context)[self._iv : self._iv + 6]
-        dw, dv = a[:3], a[3:]
-        F = self._reaction.Eval(context)[self._weld]
-        # The weld's wrench on the device about its (= the plate's) origin, in
-        # the device frame; the contact's moment about the port origin.
-        return payload_compensated_wrench(
-            self._payload,
-            R,
-            w,
-            dw,
-            dv,
-            F.rotational(),
-            F.translational(),
-            moment_point_m=self._k.port_in_plate_m,
-        )
+        """The payload-compensated wrench (6, W, unrounded) over the coming step:
+        the contact's moment about the port origin."""
+        return self._compensated(context, self._k.port_in_plate_m)[4]
 
     def _calc_step_wrench(self, context, output) -> None:
         res = self._resolution
@@ -407,7 +372,7 @@ class PoseDeviceSensor(LeafSystem):
 
     def _calc_weld_wrench(self, context, output) -> None:
         R = self._pose_twist(self._state.Eval(context))[0]
-        F = self._reaction.Eval(context)[self._weld]
+        F = self._weld_wrench(context)
         output.SetFromVector(np.concatenate([R @ F.rotational(), R @ F.translational()]))
 
 

@@ -47,6 +47,7 @@ from hybridtable.stewart.plant import StewartPlant, add_stewart_plant
 __all__ = [
     "LegServo",
     "DeviceSensor",
+    "DeviceSensorBase",
     "StewartTable",
     "StewartContactReadout",
     "add_stewart_loop",
@@ -134,7 +135,65 @@ class LegServo(LeafSystem):
         output.SetFromVector(u)
 
 
-class DeviceSensor(LeafSystem):
+class DeviceSensorBase(LeafSystem):
+    """The F/T sensor on the active device: the plant's ports it reads, the
+    plate's pose and twist, and the payload-compensated contact wrench
+    (:func:`~hybridtable.stewart.ft_sensor.payload_compensated_wrench`). The
+    1-D :class:`DeviceSensor` reads its axial component, the 6-DoF
+    :class:`~hybridtable.six_dof.stewart_backend.PoseDeviceSensor` all of it.
+
+    Input ``plant_state``, ``generalized_acceleration``, ``reaction_forces``
+        From the plant.
+    """
+
+    def __init__(self, handles: StewartPlant) -> None:
+        LeafSystem.__init__(self)
+        plant = handles.plant
+        self._nq = plant.num_positions()
+        self._iq = handles.plate_position_start
+        self._iv = handles.plate_velocity_start
+        self._payload = device_payload(handles)
+        self._weld = int(handles.sensor_weld.index())
+        self._resolution = handles.params.sensor_resolution_n
+        self._state = self.DeclareVectorInputPort("plant_state", plant.num_multibody_states())
+        self._accel = self.DeclareVectorInputPort(
+            "generalized_acceleration", plant.num_velocities()
+        )
+        self._reaction = self.DeclareAbstractInputPort(
+            "reaction_forces", plant.get_reaction_forces_output_port().Allocate()
+        )
+
+    def _pose_twist(self, x):
+        q = x[self._iq : self._iq + 7]
+        v = x[self._nq + self._iv : self._nq + self._iv + 6]
+        return rotation_from_quaternion(q[:4]), q[4:], v[:3], v[3:]
+
+    def _weld_wrench(self, context):
+        """The weld's reaction on the device (a ``SpatialForce``, device frame)."""
+        return self._reaction.Eval(context)[self._weld]
+
+    def _compensated(self, context, moment_point_m=None):
+        """``(R, w, dw, dv, wrench)``: the plate's rotation, angular velocity
+        and accelerations, and the payload-compensated contact wrench (W, moment
+        about ``moment_point_m`` in the plate frame, default its origin)."""
+        R, _, w, _ = self._pose_twist(self._state.Eval(context))
+        a = self._accel.Eval(context)[self._iv : self._iv + 6]
+        dw, dv = a[:3], a[3:]
+        F = self._weld_wrench(context)
+        wrench = payload_compensated_wrench(
+            self._payload,
+            R,
+            w,
+            dw,
+            dv,
+            F.rotational(),
+            F.translational(),
+            moment_point_m=moment_point_m,
+        )
+        return R, w, dw, dv, wrench
+
+
+class DeviceSensor(DeviceSensorBase):
     """Motion of the active device and the F/T sensor's contact force.
 
     The plant's reaction forces and accelerations (unsampled output ports)
@@ -166,25 +225,11 @@ class DeviceSensor(LeafSystem):
     """
 
     def __init__(self, handles: StewartPlant) -> None:
-        LeafSystem.__init__(self)
-        plant = handles.plant
+        DeviceSensorBase.__init__(self, handles)
         g = handles.geometry
-        self._nq = plant.num_positions()
-        self._iq = handles.plate_position_start
-        self._iv = handles.plate_velocity_start
         self._tip = g.device_tip_center_m
         self._tip_radius = g.device_tip_radius_m
         self._face = handles.contact_face_height_m
-        self._payload = device_payload(handles)
-        self._weld = int(handles.sensor_weld.index())
-        self._resolution = handles.params.sensor_resolution_n
-        self._state = self.DeclareVectorInputPort("plant_state", plant.num_multibody_states())
-        self._accel = self.DeclareVectorInputPort(
-            "generalized_acceleration", plant.num_velocities()
-        )
-        self._reaction = self.DeclareAbstractInputPort(
-            "reaction_forces", plant.get_reaction_forces_output_port().Allocate()
-        )
         self.DeclareVectorOutputPort(
             "position_velocity",
             2,
@@ -193,11 +238,6 @@ class DeviceSensor(LeafSystem):
         )
         self.DeclareVectorOutputPort("step_readings", 2, self._calc_step_readings)
         self.DeclareVectorOutputPort("wrench", 6, self._calc_wrench)
-
-    def _pose_twist(self, x):
-        q = x[self._iq : self._iq + 7]
-        v = x[self._nq + self._iv : self._nq + self._iv + 6]
-        return rotation_from_quaternion(q[:4]), q[4:], v[:3], v[3:]
 
     @staticmethod
     def _z_kinematics(R, w, dw, dv, r_body) -> tuple[float, float, float]:
@@ -219,20 +259,14 @@ class DeviceSensor(LeafSystem):
         output.SetFromVector([p[2] + rz + self._tip_radius - self._face, v[2] + vz])
 
     def _calc_step_readings(self, context, output) -> None:
-        R, _, w, _ = self._pose_twist(self._state.Eval(context))
-        a = self._accel.Eval(context)[self._iv : self._iv + 6]
-        dw, dv = a[:3], a[3:]
-        F = self._reaction.Eval(context)[self._weld]
+        R, w, dw, dv, wrench = self._compensated(context)
         # The contact force on the device along z; compression pushes it down.
-        wrench = payload_compensated_wrench(
-            self._payload, R, w, dw, dv, F.rotational(), F.translational()
-        )
         compression = -wrench[5]
         compression = self._resolution * round(compression / self._resolution)
         output.SetFromVector([compression, self._z_kinematics(R, w, dw, dv, self._tip)[2]])
 
     def _calc_wrench(self, context, output) -> None:
-        F = self._reaction.Eval(context)[self._weld]
+        F = self._weld_wrench(context)
         output.SetFromVector(np.concatenate([F.rotational(), F.translational()]))
 
 
