@@ -224,6 +224,9 @@ class _Continuous:
         self.a = a
         self.b = np.array([0.0, -1.0 / params.spacecraft_mass_kg, 0.0, 0.0])
         self.g_raw = np.array([0.0, 0.0, self.k, self.c, 0.0])  # k p_act + c v_act
+        # The contact and the gate as plain functions (the laws, compiled once).
+        self.contact = _bound(_contact_function(), self.k, self.c)
+        self.gate_open = _bound(_gate_function(law.gate), law.force_deadband_n)
         self.cache: dict[tuple, tuple] = {}
         # The switching functions (functional of z, offset) whose signs set the mode.
         sig = []
@@ -282,9 +285,9 @@ class _Continuous:
         p, v, pa, va, u = z
         contact = False
         if self.undelayed:
-            raw = spring_contact_force(self.k, self.c, pa, va)
+            raw = self.contact(pa, va)
             contact = raw > 0.0
-            gate = contact and self.law.gate_open(raw)
+            gate = contact and self.gate_open(raw)
         if self.by_force and not gate:
             return _OFF
         mdc = self.mdc and self.law.corrects_motion(pa > 0.0)
@@ -346,10 +349,9 @@ def _computer_period(params: HybridLoopParams) -> tuple[float, int]:
 def _run_continuous(params: HybridLoopParams, h: float, n: int, rule: _StopRule):
     """Tick log ``(v, f_act, f_comp)`` of a continuous loop (before each tick's update)."""
     loop = _Continuous(params, h)
-    k_con, c_con, by_force = loop.k, loop.c, loop.by_force
+    by_force = loop.by_force
     lead_f, lead_prev = loop.lead_f, loop.lead_prev
-    contact = _bound(_contact_function(), k_con, c_con)
-    gate_open = _bound(_gate_function(loop.law.gate), loop.law.force_deadband_n)
+    contact, gate_open = loop.contact, loop.gate_open
     undelayed, mode_of, mode_data = loop.undelayed, loop.mode_of, loop.mode_data
     # Held: the force law is fixed over a tick by the held reading (no switch inside).
     held, clamp = not loop.switches, loop.clamp
