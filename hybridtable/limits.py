@@ -1,4 +1,5 @@
-"""The physically plausible range of every parameter and recorded channel, SI units.
+"""The physically plausible range of every parameter and recorded channel, SI
+units, and the default operating point (:data:`TABLE1_DEFAULTS`).
 
 One table (:data:`LIMITS`) read by everything that takes a number from a user:
 the parameter dataclasses (:class:`~hybridtable.loop.params.HybridLoopParams`),
@@ -24,7 +25,7 @@ from dataclasses import dataclass
 
 from hybridtable.errors import ParameterError
 
-__all__ = ["Limit", "LIMITS", "limit_of", "check_plausible", "limit_words"]
+__all__ = ["Limit", "LIMITS", "TABLE1_DEFAULTS", "limit_of", "check_plausible", "limit_words"]
 
 
 @dataclass(frozen=True)
@@ -97,6 +98,19 @@ LIMITS: dict[str, Limit] = {
     "f_mea_n": Limit(-1e9, 1e9, "N"),
     "f_comp_n": Limit(-1e9, 1e9, "N"),
     "v_des_m_per_s": Limit(-1e3, 1e3, "m/s"),
+}
+
+
+#: The value of a loop quantity a user leaves out: the seed paper's Table 1
+#: operating point (Sec. III.A), stated once for the paper's studies, the
+#: command-line defaults, a sweep's base, and a CoR table's unstated conditions.
+TABLE1_DEFAULTS: dict[str, float] = {
+    "contact_stiffness_n_per_m": 1e5,
+    "contact_frequency_hz": 1.0,
+    "initial_velocity_m_per_s": 0.1,
+    "table_response_hz": 25.0,
+    "table_damping_ratio": 0.8,
+    "sensor_delay_s": 0.005,
 }
 
 

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import argparse
 
+from hybridtable.limits import LIMITS, TABLE1_DEFAULTS
+
 __all__ = [
     "LOOP_OPTIONS",
     "add_loop_option",
@@ -20,35 +22,56 @@ __all__ = [
 ]
 
 
-#: The loop options: name -> (default, unit, help). ``None`` defaults are
-#: derived (see the help). The parser's defaults are ``None`` so that an
-#: option given on the command line can be told from its default (a model's
-#: or a recording's own values fill the options not given).
+#: What each loop option is, in words (its unit and range are those of
+#: :data:`hybridtable.limits.LIMITS`; ``(default ...)`` words a derived default).
+_WORDS: dict[str, str] = {
+    "sensor_delay_s": "force-sensor delay",
+    "table_response_hz": "table response frequency (inf: ideal table)",
+    "table_damping_ratio": "table damping ratio",
+    "contact_frequency_hz": "contact natural frequency sqrt(k/m)/2pi (sets the mass)",
+    "contact_stiffness_n_per_m": "contact stiffness k",
+    "contact_damping_n_s_per_m": "contact damping",
+    "initial_velocity_m_per_s": "approach velocity",
+    "initial_gap_m": "gap at t = 0",
+    "lead_time_s": "SDC lead time (default: the sensor delay)",
+    "compensator_stiffness_n_per_m": "stiffness the compensator believes (MDC, SDMDC, smith) "
+    "or starts from (sdmdc-online's prior) (default: the true one)",
+    "force_deadband_n": "readings at or below this are no contact",
+    "sample_rate_hz": "sampled rig computer (default: continuous)",
+    "time_step_s": "continuous-mode step (default: min(2e-4, 1/(5000 f_con)))",
+}
+
+#: The defaults of the options off the Table 1 point: those of
+#: :class:`~hybridtable.loop.params.HybridLoopParams` (``None``: derived), which
+#: a test holds them to (imported lazily, ``--help`` imports no Drake).
+_LOOP_DEFAULTS: dict[str, float | None] = {
+    "contact_damping_n_s_per_m": 0.0,
+    "initial_gap_m": 0.001,
+    "lead_time_s": None,
+    "compensator_stiffness_n_per_m": None,
+    "force_deadband_n": 0.0,
+    "sample_rate_hz": None,
+    "time_step_s": None,
+}
+
+#: The loop options: name -> (default, unit, help): the default from the Table 1
+#: point (:data:`hybridtable.limits.TABLE1_DEFAULTS`) or the loop's, the unit
+#: from :data:`hybridtable.limits.LIMITS`. The parser's defaults are ``None``
+#: so that an option given on the command line can be told from its default (a
+#: model's or a recording's own values fill the options not given).
 LOOP_OPTIONS: dict[str, tuple[object, str, str]] = {
-    "sensor_delay_s": (0.005, "s", "force-sensor delay"),
-    "table_response_hz": (25.0, "Hz", "table response frequency (inf: ideal table)"),
-    "table_damping_ratio": (0.8, "1", "table damping ratio"),
-    "contact_frequency_hz": (1.0, "Hz", "contact natural frequency sqrt(k/m)/2pi (sets the mass)"),
-    "contact_stiffness_n_per_m": (1e5, "N/m", "contact stiffness k"),
-    "contact_damping_n_s_per_m": (0.0, "N s/m", "contact damping"),
-    "initial_velocity_m_per_s": (0.1, "m/s", "approach velocity"),
-    "initial_gap_m": (0.001, "m", "gap at t = 0"),
-    "lead_time_s": (None, "s", "SDC lead time (default: the sensor delay)"),
-    "compensator_stiffness_n_per_m": (
-        None,
-        "N/m",
-        "stiffness the compensator believes (MDC, SDMDC, smith) or starts from "
-        "(sdmdc-online's prior) (default: the true one)",
-    ),
-    "force_deadband_n": (0.0, "N", "readings at or below this are no contact"),
-    "sample_rate_hz": (None, "Hz", "sampled rig computer (default: continuous)"),
-    "time_step_s": (None, "s", "continuous-mode step (default: min(2e-4, 1/(5000 f_con)))"),
+    name: ({**TABLE1_DEFAULTS, **_LOOP_DEFAULTS}[name], LIMITS[name].unit, words)
+    for name, words in _WORDS.items()
 }
 
 
 #: Loop quantities some commands take besides :data:`LOOP_OPTIONS` (same shape).
 EXTRA_OPTIONS: dict[str, tuple[object, str, str]] = {
-    "contact_damping_ratio": (0.0, "1", "contact damping as a ratio c / (2 sqrt(k m))"),
+    "contact_damping_ratio": (
+        0.0,
+        LIMITS["contact_damping_ratio"].unit,
+        "contact damping as a ratio c / (2 sqrt(k m))",
+    ),
 }
 
 

@@ -14,6 +14,7 @@ import numpy as np
 
 from hybridtable.commands._grid import DEFAULT_TABLES, default_delays, parse_list
 from hybridtable.commands._loop_options import LOOP_OPTIONS, add_loop_option
+from hybridtable.limits import TABLE1_DEFAULTS
 
 __all__ = ["register", "run"]
 
@@ -407,7 +408,7 @@ def _operating_point(args: argparse.Namespace, base, model, comps) -> tuple[floa
         raise CommandError("--cor-limit must be a number > 0")
     delay, table = args.operating_delay_s, args.operating_table_hz
     if delay is None:
-        delay = 0.005 if model is None else model.nominal.sensor_delay_s
+        delay = TABLE1_DEFAULTS["sensor_delay_s"] if model is None else model.nominal.sensor_delay_s
         h = base.sample_period_s
         if h is not None and model is None:
             delay = round(delay / h) * h
@@ -422,7 +423,11 @@ def _operating_point(args: argparse.Namespace, base, model, comps) -> tuple[floa
                 f"({base.sample_period_s:g} s)"
             ) from None
     if table is None:
-        table = 25.0 if model is None else model.nominal.table_natural_frequency_hz
+        table = (
+            TABLE1_DEFAULTS["table_response_hz"]
+            if model is None
+            else model.nominal.table_natural_frequency_hz
+        )
     elif not table > 0:
         raise CommandError("--operating-table-hz must be > 0 (inf: ideal table)")
     comp = args.export_compensator

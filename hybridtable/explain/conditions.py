@@ -14,6 +14,7 @@ from dataclasses import asdict, dataclass, fields
 
 from hybridtable._validation import check_nonnegative, check_positive, check_positive_or_inf
 from hybridtable.errors import ParameterError
+from hybridtable.limits import TABLE1_DEFAULTS
 from hybridtable.loop.params import HybridLoopParams, believed
 
 __all__ = ["CONDITION_FIELDS", "PAPER_CONDITIONS", "Conditions"]
@@ -44,13 +45,13 @@ class Conditions:
         The rig computer's rate, Hz; ``None``: a continuous rig computer.
     """
 
-    contact_stiffness_n_per_m: float = 1.0e5
-    contact_frequency_hz: float = 1.0
-    initial_velocity_m_per_s: float = 0.1
-    sensor_delay_s: float = 0.005
+    contact_stiffness_n_per_m: float = TABLE1_DEFAULTS["contact_stiffness_n_per_m"]
+    contact_frequency_hz: float = TABLE1_DEFAULTS["contact_frequency_hz"]
+    initial_velocity_m_per_s: float = TABLE1_DEFAULTS["initial_velocity_m_per_s"]
+    sensor_delay_s: float = TABLE1_DEFAULTS["sensor_delay_s"]
     lead_time_s: float | None = None
-    table_response_hz: float = 25.0
-    table_damping_ratio: float = 0.8
+    table_response_hz: float = TABLE1_DEFAULTS["table_response_hz"]
+    table_damping_ratio: float = TABLE1_DEFAULTS["table_damping_ratio"]
     sample_rate_hz: float | None = None
 
     def __post_init__(self) -> None:

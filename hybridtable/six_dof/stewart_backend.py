@@ -63,7 +63,8 @@ from hybridtable.errors import DivergenceError, ParameterError, WorkspaceError
 from hybridtable.six_dof.contact import register_docking_devices
 from hybridtable.six_dof.params import DockingLoopParams
 from hybridtable.six_dof.pose import rotation_exp, rotation_log
-from hybridtable.stewart.backend import DeviceSensorBase, export_plate_pose
+from hybridtable.stewart.backend import export_plate_pose
+from hybridtable.stewart.ft_sensor import DeviceSensorBase
 from hybridtable.stewart.geometry import (
     StewartGeometry,
     rotation_from_rpy,

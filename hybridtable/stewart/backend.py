@@ -38,8 +38,7 @@ from pydrake.systems.primitives import (
 from hybridtable.errors import WorkspaceError
 from hybridtable.loop.builder import HybridLoop, add_hybrid_loop
 from hybridtable.loop.params import HybridLoopParams
-from hybridtable.stewart.ft_sensor import device_payload, payload_compensated_wrench
-from hybridtable.stewart.geometry import rotation_from_quaternion
+from hybridtable.stewart.ft_sensor import DeviceSensorBase
 from hybridtable.stewart.hunt_crossley import hunt_crossley_dissipation
 from hybridtable.stewart.params import StewartParams, reference_matrices
 from hybridtable.stewart.plant import StewartPlant, add_stewart_plant
@@ -47,7 +46,6 @@ from hybridtable.stewart.plant import StewartPlant, add_stewart_plant
 __all__ = [
     "LegServo",
     "DeviceSensor",
-    "DeviceSensorBase",
     "StewartTable",
     "StewartContactReadout",
     "add_stewart_loop",
@@ -133,64 +131,6 @@ class LegServo(LeafSystem):
         rates = (self._cz + p_ref) / lengths * v_ref
         u = self._kp * (lengths - x[self._iq]) + self._kd * (rates - x[self._iv]) + self._uff
         output.SetFromVector(u)
-
-
-class DeviceSensorBase(LeafSystem):
-    """The F/T sensor on the active device: the plant's ports it reads, the
-    plate's pose and twist, and the payload-compensated contact wrench
-    (:func:`~hybridtable.stewart.ft_sensor.payload_compensated_wrench`). The
-    1-D :class:`DeviceSensor` reads its axial component, the 6-DoF
-    :class:`~hybridtable.six_dof.stewart_backend.PoseDeviceSensor` all of it.
-
-    Input ``plant_state``, ``generalized_acceleration``, ``reaction_forces``
-        From the plant.
-    """
-
-    def __init__(self, handles: StewartPlant) -> None:
-        LeafSystem.__init__(self)
-        plant = handles.plant
-        self._nq = plant.num_positions()
-        self._iq = handles.plate_position_start
-        self._iv = handles.plate_velocity_start
-        self._payload = device_payload(handles)
-        self._weld = int(handles.sensor_weld.index())
-        self._resolution = handles.params.sensor_resolution_n
-        self._state = self.DeclareVectorInputPort("plant_state", plant.num_multibody_states())
-        self._accel = self.DeclareVectorInputPort(
-            "generalized_acceleration", plant.num_velocities()
-        )
-        self._reaction = self.DeclareAbstractInputPort(
-            "reaction_forces", plant.get_reaction_forces_output_port().Allocate()
-        )
-
-    def _pose_twist(self, x):
-        q = x[self._iq : self._iq + 7]
-        v = x[self._nq + self._iv : self._nq + self._iv + 6]
-        return rotation_from_quaternion(q[:4]), q[4:], v[:3], v[3:]
-
-    def _weld_wrench(self, context):
-        """The weld's reaction on the device (a ``SpatialForce``, device frame)."""
-        return self._reaction.Eval(context)[self._weld]
-
-    def _compensated(self, context, moment_point_m=None):
-        """``(R, w, dw, dv, wrench)``: the plate's rotation, angular velocity
-        and accelerations, and the payload-compensated contact wrench (W, moment
-        about ``moment_point_m`` in the plate frame, default its origin)."""
-        R, _, w, _ = self._pose_twist(self._state.Eval(context))
-        a = self._accel.Eval(context)[self._iv : self._iv + 6]
-        dw, dv = a[:3], a[3:]
-        F = self._weld_wrench(context)
-        wrench = payload_compensated_wrench(
-            self._payload,
-            R,
-            w,
-            dw,
-            dv,
-            F.rotational(),
-            F.translational(),
-            moment_point_m=moment_point_m,
-        )
-        return R, w, dw, dv, wrench
 
 
 class DeviceSensor(DeviceSensorBase):

@@ -14,6 +14,7 @@ from typing import Any
 
 from hybridtable._files import read_user_json
 from hybridtable.errors import ParameterError
+from hybridtable.limits import TABLE1_DEFAULTS
 from hybridtable.loop.params import HybridLoopParams
 
 __all__ = [
@@ -25,16 +26,6 @@ __all__ = [
     "table2_params",
     "table2_rows",
 ]
-
-#: The paper's Table 1 operating point (Sec. III.A).
-TABLE1_DEFAULTS: dict[str, float] = {
-    "contact_stiffness_n_per_m": 1e5,
-    "contact_frequency_hz": 1.0,
-    "initial_velocity_m_per_s": 0.1,
-    "table_response_hz": 25.0,
-    "table_damping_ratio": 0.8,
-    "sensor_delay_s": 0.005,
-}
 
 
 def load_tables(path: str | Path | None = None) -> dict[str, Any]:
@@ -72,26 +63,16 @@ def load_tables(path: str | Path | None = None) -> dict[str, Any]:
     return tables
 
 
-def paper_params(
-    compensator: str = "none",
-    sensor_delay_s: float = 0.005,
-    table_response_hz: float = 25.0,
-    table_damping_ratio: float = 0.8,
-    contact_frequency_hz: float = 1.0,
-    contact_stiffness_n_per_m: float = 1e5,
-    initial_velocity_m_per_s: float = 0.1,
-    **kwargs: Any,
-) -> HybridLoopParams:
-    """Loop parameters of a paper-style run (continuous, T_lead = T_fms)."""
+def paper_params(compensator: str = "none", **kwargs: Any) -> HybridLoopParams:
+    """Loop parameters of a paper-style run (continuous, T_lead = T_fms): the
+    Table 1 point (:data:`~hybridtable.limits.TABLE1_DEFAULTS`) with ``kwargs``
+    (any field of :class:`~hybridtable.loop.params.HybridLoopParams`, or
+    ``contact_frequency_hz``, which sets the mass with the stiffness)."""
+    values = {**TABLE1_DEFAULTS, **kwargs}
+    frequency = values.pop("contact_frequency_hz")
+    stiffness = values.pop("contact_stiffness_n_per_m")
     return HybridLoopParams.from_contact_frequency(
-        contact_frequency_hz,
-        contact_stiffness_n_per_m,
-        sensor_delay_s=sensor_delay_s,
-        table_response_hz=table_response_hz,
-        table_damping_ratio=table_damping_ratio,
-        compensator=compensator,
-        initial_velocity_m_per_s=initial_velocity_m_per_s,
-        **kwargs,
+        frequency, stiffness, compensator=compensator, **values
     )
 
 

@@ -32,7 +32,7 @@ from dataclasses import dataclass, fields
 from typing import Any
 
 from hybridtable.errors import ParameterError
-from hybridtable.limits import LIMITS, check_plausible
+from hybridtable.limits import LIMITS, TABLE1_DEFAULTS, check_plausible
 
 __all__ = [
     "Input",
@@ -158,14 +158,7 @@ def effect_values(values: dict[str, Any]) -> dict[str, dict[str, float]]:
 NOISE_INPUTS: tuple[str, ...] = ("force_noise_n", "position_noise_m")
 
 #: Values of the inputs a spec does not give: the paper's Table 1 point.
-DEFAULTS: dict[str, Any] = {
-    "contact_stiffness_n_per_m": 1e5,
-    "contact_frequency_hz": 1.0,
-    "sensor_delay_s": 0.005,
-    "table_response_hz": 25.0,
-    "table_damping_ratio": 0.8,
-    "initial_velocity_m_per_s": 0.1,
-}
+DEFAULTS: dict[str, Any] = dict(TABLE1_DEFAULTS)
 
 #: Pairs of inputs that set the same quantity: a spec gives at most one of each.
 CONFLICTS: tuple[tuple[str, str], ...] = (
