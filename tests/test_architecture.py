@@ -6,7 +6,7 @@ layers of ``docs/architecture.md``::
 
     cli -> commands -> reports -> (analysis, diagnosis, studies)
         -> (measurement, stewart) -> loop -> compensators -> (systems, laws)
-        -> (errors, _validation, limits, data)
+        -> (errors, _validation, limits, _components, data)
 
 A module may import its own layer or any layer below, never one above, and no
 two modules nor two first-level packages may import each other, directly or
