@@ -72,10 +72,22 @@ class Block:
         self.outputs = dict(outputs)
         self.state_system = state_system
 
+    #: The name the block was added under (:func:`add_component`).
+    name: str = ""
+
     def __getattr__(self, name: str) -> Any:
         if name == "component":  # not yet set (copying, unpickling)
             raise AttributeError(name)
+        if hasattr(System, name):  # the component's own diagram is not in the loop
+            raise AttributeError(
+                f"{self.name or 'a block'} is a component added flat: it has no System "
+                f"method {name}(); use its ports (eval_output, input_ports) or add it "
+                "with flat=False"
+            )
         return getattr(self.component, name)
+
+    def get_name(self) -> str:
+        return self.name
 
     def HasInputPort(self, name: str) -> bool:
         return name in self.inputs
@@ -150,7 +162,9 @@ def add_component(
     primitives flat (a :class:`Block`), any other system (or ``flat=False``)
     whole."""
     if flat and isinstance(system, Component):
-        return system._add(builder, name)
+        block = system._add(builder, name)
+        block.name = name
+        return block
     return builder.AddNamedSystem(name, system)
 
 
