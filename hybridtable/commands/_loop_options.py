@@ -117,6 +117,13 @@ def add_loop_arguments(parser: argparse.ArgumentParser) -> None:
 
     g = parser.add_argument_group("loop parameters (defaults: the paper's Table 1 point)")
     g.add_argument(
+        "--scenario",
+        metavar="FILE.toml",
+        help="the rig from a scenario file (sections [spacecraft], [contact], [approach], "
+        "[rig], [table], [compensator], as simulate6's; see hybridtable.loop.scenario); "
+        "the loop options given here override it",
+    )
+    g.add_argument(
         "--compensator",
         default=None,
         metavar="NAME",
@@ -151,12 +158,38 @@ def loop_value(args: argparse.Namespace, name: str):
 
 
 def params_from_args(args: argparse.Namespace):
-    """HybridLoopParams from the options of :func:`add_loop_arguments`."""
+    """HybridLoopParams from the options of :func:`add_loop_arguments`: the
+    ``--scenario`` file's rig, or the Table 1 point, with the options given."""
     from hybridtable.studies.paper import paper_params
 
+    if getattr(args, "scenario", None) is not None:
+        return _scenario_params(args)
     v = {n: loop_value(args, n) for n in ("compensator", *LOOP_OPTIONS)}
     return paper_params(
         **v,
         clamp_nonnegative=args.clamp_nonnegative,
         passivity=getattr(args, "passivity", False),
     )
+
+
+def _scenario_params(args: argparse.Namespace):
+    """The ``--scenario`` file's loop with the loop options given on the command
+    line (a given ``--contact-frequency-hz`` sets the mass with the stiffness)."""
+    import math
+
+    from hybridtable.errors import CommandError, ParameterError
+    from hybridtable.loop.scenario import load_loop_scenario
+
+    try:
+        params = load_loop_scenario(args.scenario)
+        given = {n: getattr(args, n) for n in ("compensator", *LOOP_OPTIONS)}
+        given = {n: v for n, v in given.items() if v is not None}
+        given |= {f: True for f in ("clamp_nonnegative", "passivity") if getattr(args, f, False)}
+        frequency = given.pop("contact_frequency_hz", None)
+        params = params.with_(**given)
+        if frequency is not None:
+            k = params.contact_stiffness_n_per_m
+            params = params.with_(spacecraft_mass_kg=k / (2.0 * math.pi * frequency) ** 2)
+    except ParameterError as err:
+        raise CommandError(f"--scenario: {err}") from None
+    return params

@@ -73,6 +73,10 @@ def run(args: argparse.Namespace) -> int:
 
         if args.plot:
             raise CommandError("--plot is for one simulation (not with --record or --model)")
+        if args.scenario:
+            raise CommandError(
+                "--scenario sets one simulation's rig (not with --record or --model)"
+            )
         if args.table == "stewart" or _stewart_flags_given(args):
             raise CommandError(
                 "--table stewart simulates one contact (not with --record or --model)"

@@ -9,6 +9,8 @@
                                ^--commanded_state-- spacecraft
 
 - :mod:`~hybridtable.loop.params`: :class:`HybridLoopParams`, every parameter of a run;
+- :mod:`~hybridtable.loop.scenario`: a scenario file (TOML) of nested sections,
+  one per component, shared with the 6-DoF loop;
 - :mod:`~hybridtable.loop.builder`: :func:`add_hybrid_loop` wires the systems of
   :mod:`hybridtable.systems` and a compensator of :mod:`hybridtable.compensators`
   along :data:`~hybridtable.loop.wiring.LOOP_WIRING`, the one table of the

@@ -1,5 +1,7 @@
 """A 6-DoF docking scenario file (TOML) -> :class:`DockingLoopParams`.
 
+The sections, their shared keys and rules are the 1-D loop's
+(:mod:`hybridtable.loop.scenario`); the 6-DoF loop adds its own keys.
 Sections and keys (SI units; every key optional unless marked)::
 
     title = "..."                       # free text
@@ -26,13 +28,21 @@ Any other key, a wrong type or a value out of range raises
 from __future__ import annotations
 
 import math
-import tomllib
 from collections.abc import Mapping
 from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
 from hybridtable.errors import ParameterError, SpecError
+from hybridtable.loop.scenario import (
+    keyed,
+    number,
+    read_scenario,
+    section,
+    spacecraft_mass_kg,
+    table_response_hz,
+    top_level,
+)
 from hybridtable.six_dof.params import (
     ApproachParams,
     DockingContactParams,
@@ -82,15 +92,7 @@ def load_scenario(path: str | Path, **overrides: Any) -> DockingLoopParams:
     SpecError
         One line naming the file and the key.
     """
-    from hybridtable._files import read_user_text
-
-    path = Path(path)
-    text = read_user_text(path, SpecError)
-    try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as err:
-        raise SpecError(f"{path}: not valid TOML ({err})") from None
-    return parse_scenario(raw, str(path), **overrides)
+    return parse_scenario(read_scenario(path), str(path), **overrides)
 
 
 def parse_scenario(raw: Mapping[str, Any], source: str = "<scenario>", **overrides: Any):
@@ -104,82 +106,36 @@ def parse_scenario(raw: Mapping[str, Any], source: str = "<scenario>", **overrid
         raise SpecError(f"{source}: {err}") from None
 
 
-def _section(raw: Mapping[str, Any], name: str) -> dict[str, Any]:
-    value = raw.get(name, {})
-    if not isinstance(value, Mapping):
-        raise SpecError(f"[{name}] must be a table (got {value!r})")
-    allowed = SCENARIO_KEYS[name]
-    for key in value:
-        if key not in allowed:
-            raise SpecError(f"[{name}] unknown key {key!r} (known: {', '.join(allowed)})")
-    return dict(value)
-
-
-def _number(section: str, key: str, value: Any) -> Any:
-    if isinstance(value, bool) or not isinstance(value, int | float | list):
-        raise SpecError(f"[{section}] {key} must be a number (got {value!r})")
-    return value
-
-
-def _keyed(section: str, key: str, build):
-    try:
-        return build()
-    except SpecError:
-        raise
-    except ParameterError as err:
-        where = f"[{section}] {key}:" if key else f"[{section}]"
-        raise SpecError(f"{where} {err}") from None
-
-
 def _parse(raw: Mapping[str, Any]) -> DockingLoopParams:
-    for key in raw:
-        if key not in SCENARIO_KEYS[""]:
-            raise SpecError(
-                f"unknown section or key {key!r} (known: {', '.join(SCENARIO_KEYS[''])})"
-            )
-    title = raw.get("title", "")
-    if not isinstance(title, str):
-        raise SpecError(f"title must be text (got {title!r})")
-    sc = _section(raw, "spacecraft")
-    ct = _section(raw, "contact")
-    ap = _section(raw, "approach")
-    rig = _section(raw, "rig")
-    tb = _section(raw, "table")
-    cp = _section(raw, "compensator")
-    for section, values in (("spacecraft", sc), ("contact", ct), ("approach", ap), ("rig", rig)):
+    top_level(raw, SCENARIO_KEYS)
+    sc, ct, ap, rig, tb, cp = (
+        section(raw, name, SCENARIO_KEYS)
+        for name in ("spacecraft", "contact", "approach", "rig", "table", "compensator")
+    )
+    for name, values in (("spacecraft", sc), ("contact", ct), ("approach", ap), ("rig", rig)):
         for key, value in values.items():
             if key not in ("seed", "pad_count"):
-                _number(section, key, value)
+                number(name, key, value)
     if "contact_stiffness_n_per_m" not in ct:
         raise SpecError("[contact] contact_stiffness_n_per_m is required")
-    contact = _keyed("contact", "", lambda: DockingContactParams(**ct))
-    k = contact.contact_stiffness_n_per_m
-    if ("mass_kg" in sc) == ("contact_frequency_hz" in sc):
-        raise SpecError("[spacecraft] give exactly one of mass_kg and contact_frequency_hz")
-    if "contact_frequency_hz" in sc:
-        f = sc.pop("contact_frequency_hz")
-        if isinstance(f, bool) or not isinstance(f, int | float) or not f > 0 or math.isinf(f):
-            raise SpecError(f"[spacecraft] contact_frequency_hz must be a number > 0 (got {f!r})")
-        sc["mass_kg"] = k / (2.0 * math.pi * f) ** 2
-    body = _keyed("spacecraft", "", lambda: RigidBodyParams(**sc))
+    contact = keyed("contact", "", lambda: DockingContactParams(**ct))
+    sc["mass_kg"] = spacecraft_mass_kg(sc, contact.contact_stiffness_n_per_m)
+    body = keyed("spacecraft", "", lambda: RigidBodyParams(**sc))
     if "misalignment_deg" in ap:
         value = ap.pop("misalignment_deg")
         if not isinstance(value, list) or len(value) != 2:
             raise SpecError(f"[approach] misalignment_deg must be [roll, pitch] (got {value!r})")
         ap["misalignment_rad"] = [
-            math.radians(_number("approach", "misalignment_deg", v)) for v in value
+            math.radians(number("approach", "misalignment_deg", v)) for v in value
         ]
-    approach = _keyed("approach", "", lambda: ApproachParams(**ap))
+    approach = keyed("approach", "", lambda: ApproachParams(**ap))
     kwargs: dict[str, Any] = dict(rig)
     if "backend" in tb:
         kwargs["table"] = tb["backend"]
     if "response_hz" in tb:
-        value = tb["response_hz"]
-        if value == "inf":
-            value = math.inf
-        kwargs["table_response_hz"] = _number("table", "response_hz", value)
+        kwargs["table_response_hz"] = table_response_hz(tb)
     if "damping_ratio" in tb:
-        kwargs["table_damping_ratio"] = _number("table", "damping_ratio", tb["damping_ratio"])
+        kwargs["table_damping_ratio"] = number("table", "damping_ratio", tb["damping_ratio"])
     if "stewart" in tb and kwargs.get("table") != "stewart":
         raise SpecError('[table.stewart] needs backend = "stewart"')
     if kwargs.get("table") == "stewart":
@@ -223,7 +179,7 @@ def _stewart(value: Any):
                 raise SpecError(
                     f"[table.stewart.geometry] unknown key {key!r} (known: {', '.join(known)})"
                 )
-        values["geometry"] = _keyed(
+        values["geometry"] = keyed(
             "table.stewart.geometry", "", lambda: StewartGeometry(**geometry)
         )
-    return _keyed("table.stewart", "", lambda: StewartParams(**values))
+    return keyed("table.stewart", "", lambda: StewartParams(**values))
