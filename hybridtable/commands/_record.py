@@ -114,7 +114,7 @@ def run_record(args: argparse.Namespace, model) -> dict:
     from hybridtable.commands._common import check_outputs, write_json
     from hybridtable.diagnosis.model_file import tool_version
     from hybridtable.measurement.recorder import record_run, write_run
-    from hybridtable.measurement.rig import model_mass_kg
+    from hybridtable.measurement.rig import computer_with_model_mass
     from hybridtable.systems.noise import MeasurementNoiseParams
 
     refuse_unsupported(args, "simulate --record")
@@ -164,10 +164,11 @@ def run_record(args: argparse.Namespace, model) -> dict:
     truth_runs = []
     for i, info in enumerate(infos):
         noise = MeasurementNoiseParams(sigma_f, sigma_x, args.seed + i, args.noise_ar1)
-        phys = physics
-        if spec.mass_ratio != 1.0:  # the computer integrates with another mass
-            mass = model_mass_kg(info.spacecraft_mass_kg, spec.mass_ratio)
-            phys = replace(physics, computer={**physics.computer, "spacecraft_mass_kg": mass})
+        # The mass the computer integrates with: the audited one, else the ratio's.
+        computer = computer_with_model_mass(
+            physics.computer, info.spacecraft_mass_kg, spec.mass_ratio
+        )
+        phys = replace(physics, computer=computer)
         run, truth = record_run(info, phys, noise, args.duration_s)
         records.append(run)
         truth_runs.append(

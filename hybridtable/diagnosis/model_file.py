@@ -41,7 +41,7 @@ from hybridtable.diagnosis.effects import Effect, ModelSpec, RigScale
 from hybridtable.diagnosis.registry import build_spec, get_effect
 from hybridtable.errors import ParameterError
 from hybridtable.measurement.phases import cor_from_record
-from hybridtable.measurement.rig import RigPhysics, model_mass_kg
+from hybridtable.measurement.rig import RigPhysics, computer_with_model_mass
 from hybridtable.measurement.run_format import Run, RunInfo
 
 __all__ = [
@@ -213,23 +213,18 @@ class RigModel:
         (:meth:`~hybridtable.diagnosis.effects.ModelSpec.linear_changes`), the
         compensator's beliefs left at their nominal values, and the rig
         computer as the audit found it (its compensator kind only when
-        ``keep_compensator`` is false) integrating with the ``mass_error``
-        ratio times ``params``' mass
-        (:func:`~hybridtable.measurement.rig.model_mass_kg`). Also returns
-        what the linear models leave out, in words.
-
-        With both a ``mass_error`` ratio and an audited mass, the ratio wins
-        here, while the closed loop (:meth:`closed_loop_run` with
-        :meth:`physics`) runs with the audited mass."""
+        ``keep_compensator`` is false) integrating with the mass of
+        :func:`~hybridtable.measurement.rig.computer_with_model_mass` (the
+        audited one, else the ``mass_error`` ratio times ``params``' mass: the
+        closed loop's rule). Also returns what the linear models leave out, in
+        words."""
         spec = self.spec()
         changes, left = spec.linear_changes(params)
-        computer = self.computer_for(None)
+        computer = computer_with_model_mass(
+            self.computer_for(None), params.spacecraft_mass_kg, spec.mass_ratio
+        )
         if keep_compensator:
             computer.pop("compensator", None)
-        if spec.mass_ratio != 1.0:
-            computer["spacecraft_mass_kg"] = model_mass_kg(
-                params.spacecraft_mass_kg, spec.mass_ratio
-            )
         return RigPhysics(changes=changes, computer=computer).apply(params), left
 
     def closed_loop_run(self, run: Run) -> Run:

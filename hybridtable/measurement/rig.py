@@ -40,6 +40,7 @@ __all__ = [
     "RigPhysics",
     "PhysicalPart",
     "rig_params",
+    "computer_with_model_mass",
     "model_mass_kg",
     "run_with_model_mass",
     "add_physical_part",
@@ -188,6 +189,20 @@ def model_mass_kg(stated_mass_kg: float, mass_ratio: float = 1.0) -> float:
     sensor) does not see it: only the closed loop does.
     """
     return stated_mass_kg * mass_ratio
+
+
+def computer_with_model_mass(
+    computer: Mapping[str, Any], stated_mass_kg: float, mass_ratio: float
+) -> dict[str, Any]:
+    """The rig computer's changes with the mass it integrates with, by one
+    rule for every user (the closed loop, the linear models, ``--record``):
+    the mass the audit found (``spacecraft_mass_kg`` already in ``computer``:
+    the runs' own evidence) wins; else ``mass_ratio`` times the stated mass
+    (:func:`model_mass_kg`); else none (the stated one)."""
+    out = dict(computer)
+    if mass_ratio != 1.0 and "spacecraft_mass_kg" not in out:
+        out["spacecraft_mass_kg"] = model_mass_kg(stated_mass_kg, mass_ratio)
+    return out
 
 
 def run_with_model_mass(run: Run, mass_ratio: float) -> Run:

@@ -71,13 +71,15 @@ def model_physics(model, keep_compensator: bool = True):
 def physics_loop_params(params, physics, mass_ratio: float = 1.0):
     """``params`` as a rig with ``physics`` runs them: the physics' parameter
     changes and rig-computer changes, and the spacecraft mass the rig
-    computer integrates with (``params``' mass times ``mass_ratio``)."""
-    from hybridtable.measurement.rig import model_mass_kg
+    computer integrates with (the audited one in ``physics``, else ``params``'
+    mass times ``mass_ratio``:
+    :func:`~hybridtable.measurement.rig.computer_with_model_mass`)."""
+    from hybridtable.measurement.rig import computer_with_model_mass
 
     q = physics.apply(params)  # the beliefs pinned for any compensator (with_physics)
-    if mass_ratio != 1.0:
-        q = q.with_(spacecraft_mass_kg=model_mass_kg(params.spacecraft_mass_kg, mass_ratio))
-    return q
+    computer = computer_with_model_mass(physics.computer, params.spacecraft_mass_kg, mass_ratio)
+    mass = computer.get("spacecraft_mass_kg", q.spacecraft_mass_kg)
+    return q if mass == q.spacecraft_mass_kg else q.with_(spacecraft_mass_kg=mass)
 
 
 def model_loop_params(model, params, physics=None, rig_computer: bool = True):

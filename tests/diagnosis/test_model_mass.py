@@ -53,3 +53,14 @@ def test_closed_loop_and_linear_models_integrate_with_the_same_mass(ratio):
     assert linear.spacecraft_mass_kg == expected
     # The physics alone (the replay) does not see the ratio.
     assert model.physics().apply(rig_params(INFO)).spacecraft_mass_kg == INFO.spacecraft_mass_kg
+
+
+@pytest.mark.parametrize("ratio", [1.0, 1.05])
+def test_an_audited_mass_wins_over_the_ratio_in_every_loop(ratio):
+    from dataclasses import replace
+
+    audited = 700.0
+    model = replace(_model(ratio), computer={"spacecraft_mass_kg": audited})
+    closed = model.physics().apply(rig_params(model.closed_loop_run(RUN).info))
+    linear, _ = model.linear_params(rig_params(INFO))
+    assert closed.spacecraft_mass_kg == linear.spacecraft_mass_kg == audited
