@@ -119,9 +119,9 @@ def add_loop_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--scenario",
         metavar="FILE.toml",
-        help="the rig from a scenario file (sections [spacecraft], [contact], [approach], "
-        "[rig], [table], [compensator], as simulate6's; see hybridtable.loop.scenario); "
-        "the loop options given here override it",
+        help="the rig from a scenario file: simulate6's sections [spacecraft], [contact], "
+        "[approach], [rig], [table], [compensator] (docs/six_dof.md, 'A scenario file'; "
+        "e.g. examples/scenarios/table1_sdmdc.toml); the loop options given override it",
     )
     g.add_argument(
         "--compensator",
