@@ -138,7 +138,8 @@ def add_hybrid_loop(
         the spacecraft, table, sensor and compiled compensator) as their
         primitives, straight into ``builder`` (the handles are then
         :class:`~hybridtable._components.Block` s with the same ports): the
-        simulator steps a flat diagram about twice as fast. ``False`` adds each
+        simulator steps a flat diagram faster (a nested Table 1 run takes 1.3 to
+        1.4 times as long). ``False`` adds each
         as its own diagram (one box a component in a drawing).
     """
     sensor_backend = sensor
