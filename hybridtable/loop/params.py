@@ -12,7 +12,7 @@ from hybridtable._validation import (
     check_positive,
     check_positive_or_inf,
 )
-from hybridtable.compensators.paper import CompensatorParams
+from hybridtable.compensators.paper import CONTACT_GATES, CompensatorParams
 from hybridtable.compensators.registry import compensator_names
 from hybridtable.errors import ParameterError
 from hybridtable.laws.contact import critical_damping_n_s_per_m
@@ -169,6 +169,7 @@ class HybridLoopParams:
             check_positive_or_inf("table_response_hz", self.table_response_hz),
         )
         check_choice("compensator", self.compensator, compensator_names())
+        check_choice("contact_gate", self.contact_gate, CONTACT_GATES)
         check_choice("table_initial_state", self.table_initial_state, TABLE_INITIAL_STATES)
         given = (self.table_initial_position_m, self.table_initial_velocity_m_per_s)
         if self.table_initial_state == "given":

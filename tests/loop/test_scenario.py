@@ -69,6 +69,7 @@ def test_the_1d_and_6dof_loops_read_the_shared_sections_alike():
         ("[compensator]\nname = 'nonesuch'", r"\[compensator\] name: .*SDMDC"),
         ("[compensator]\nstiffness_n_per_m = -1.0", r"\[compensator\] stiffness_n_per_m:"),
         ("[compensator]\npassivity = 1", r"\[compensator\] passivity must be true or false"),
+        ("[compensator]\ncontact_gate = 'nope'", r"\[compensator\] contact_gate: .*table_position"),
         ("[spacecraft]\nmass_kg = 10.0\ncontact_frequency_hz = 1.0", "exactly one"),
         ("[spacecraft]\ncontact_frequency_hz = 1e-9", r"\[spacecraft\]: spacecraft_mass_kg"),
         ("nonsense = 3", "unknown section or key 'nonsense'"),
