@@ -129,18 +129,15 @@ class Component(Diagram):
 
     def _build(self, name: str) -> None:
         builder = DiagramBuilder()
-        self._block = self._add(builder, name)
-        for name, ports in self._block.inputs.items():
+        block = self._block = self._add(builder, name)
+        for port_name, ports in block.inputs.items():
             if not ports:  # read by no primitive: still a port of the diagram
-                size = self._input_sizes[name]
-                ports = (
-                    builder.AddNamedSystem(f"{name}_unread", PassThrough(size)).get_input_port(),
-                )
-            builder.ExportInput(ports[0], name)
-            for port in ports[1:]:
-                builder.ConnectInput(name, port)
-        for name, port in self._block.outputs.items():
-            builder.ExportOutput(port, name)
+                unread = PassThrough(self._input_sizes[port_name])
+                unread = builder.AddNamedSystem(f"{port_name}_unread", unread)
+                block.inputs[port_name] = (unread.get_input_port(),)
+            export_input(builder, block, port_name, port_name)
+        for port_name, port in block.outputs.items():
+            builder.ExportOutput(port, port_name)
         builder.BuildInto(self)
 
     def _add(self, builder: DiagramBuilder, name: str) -> Block:

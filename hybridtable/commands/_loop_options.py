@@ -175,9 +175,8 @@ def params_from_args(args: argparse.Namespace):
 def _scenario_params(args: argparse.Namespace):
     """The ``--scenario`` file's loop with the loop options given on the command
     line (a given ``--contact-frequency-hz`` sets the mass with the stiffness)."""
-    import math
-
     from hybridtable.errors import CommandError, ParameterError
+    from hybridtable.laws.contact import mass_for_contact_frequency_kg
     from hybridtable.loop.scenario import load_loop_scenario
 
     try:
@@ -189,7 +188,8 @@ def _scenario_params(args: argparse.Namespace):
         params = params.with_(**given)
         if frequency is not None:
             k = params.contact_stiffness_n_per_m
-            params = params.with_(spacecraft_mass_kg=k / (2.0 * math.pi * frequency) ** 2)
+            mass = mass_for_contact_frequency_kg(k, frequency)
+            params = params.with_(spacecraft_mass_kg=mass)
     except ParameterError as err:
         raise CommandError(f"--scenario: {err}") from None
     return params

@@ -17,6 +17,7 @@ from dataclasses import replace
 from typing import Any
 
 from hybridtable.errors import CommandError
+from hybridtable.laws.contact import mass_for_contact_frequency_kg
 
 __all__ = [
     "RECORD_SAMPLE_RATE_HZ",
@@ -100,7 +101,7 @@ def rig_info_from_args(
             "--contact-frequency-hz",
             _number(args, "contact_frequency_hz", None, d("contact_frequency_hz")),
         )
-        mass = k / (2.0 * math.pi * f) ** 2
+        mass = mass_for_contact_frequency_kg(k, f)
     else:
         mass = base.spacecraft_mass_kg
     delay = check_nonnegative(

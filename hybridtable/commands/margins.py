@@ -14,6 +14,7 @@ import numpy as np
 
 from hybridtable.commands._grid import DEFAULT_TABLES, default_delays, parse_list
 from hybridtable.commands._loop_options import LOOP_OPTIONS, add_loop_option
+from hybridtable.laws.contact import mass_for_contact_frequency_kg
 from hybridtable.limits import TABLE1_DEFAULTS
 
 __all__ = ["register", "run"]
@@ -177,7 +178,7 @@ def _model_base(args: argparse.Namespace, model):
             from hybridtable.errors import CommandError
 
             raise CommandError("--contact-frequency-hz must be > 0")
-        changes["spacecraft_mass_kg"] = k / (2.0 * math.pi * args.contact_frequency_hz) ** 2
+        changes["spacecraft_mass_kg"] = mass_for_contact_frequency_kg(k, args.contact_frequency_hz)
     for name in ("table_damping_ratio", "initial_velocity_m_per_s", "lead_time_s"):
         if getattr(args, name) is not None:
             changes[name] = getattr(args, name)

@@ -14,6 +14,7 @@ from dataclasses import asdict, dataclass, fields
 
 from hybridtable._validation import check_nonnegative, check_positive, check_positive_or_inf
 from hybridtable.errors import ParameterError
+from hybridtable.laws.contact import mass_for_contact_frequency_kg
 from hybridtable.limits import TABLE1_DEFAULTS
 from hybridtable.loop.params import HybridLoopParams, believed
 
@@ -88,7 +89,9 @@ class Conditions:
     @property
     def spacecraft_mass_kg(self) -> float:
         """The spacecraft model's mass that gives the stated frequency, kg."""
-        return self.contact_stiffness_n_per_m / (2.0 * math.pi * self.contact_frequency_hz) ** 2
+        return mass_for_contact_frequency_kg(
+            self.contact_stiffness_n_per_m, self.contact_frequency_hz
+        )
 
     @property
     def table_lag_s(self) -> float:

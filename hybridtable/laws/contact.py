@@ -14,7 +14,19 @@ from typing import Any
 
 from hybridtable.laws.select import both, select
 
-__all__ = ["critical_damping_n_s_per_m", "spring_contact_force", "spring_contact_force_rate"]
+__all__ = [
+    "critical_damping_n_s_per_m",
+    "mass_for_contact_frequency_kg",
+    "spring_contact_force",
+    "spring_contact_force_rate",
+]
+
+
+def mass_for_contact_frequency_kg(stiffness_n_per_m: float, frequency_hz: float) -> float:
+    """The mass [kg] on which the contact's spring rings at ``frequency_hz``:
+    ``f = sqrt(k / m) / (2 pi)``, so ``m = k / (2 pi f)^2`` (how the paper
+    states its runs)."""
+    return stiffness_n_per_m / (2.0 * math.pi * frequency_hz) ** 2
 
 
 def critical_damping_n_s_per_m(stiffness_n_per_m: float, mass_kg: float) -> float:

@@ -15,7 +15,7 @@ from hybridtable._validation import (
 from hybridtable.compensators.paper import CONTACT_GATES, CompensatorParams
 from hybridtable.compensators.registry import compensator_names
 from hybridtable.errors import ParameterError
-from hybridtable.laws.contact import critical_damping_n_s_per_m
+from hybridtable.laws.contact import critical_damping_n_s_per_m, mass_for_contact_frequency_kg
 from hybridtable.limits import check_plausible, limit_of, limit_words
 from hybridtable.systems.contact import ContactParams
 from hybridtable.systems.sensor import SensorParams
@@ -216,7 +216,7 @@ class HybridLoopParams:
         k = check_positive("contact_stiffness_n_per_m", contact_stiffness_n_per_m)
         check_plausible("contact_frequency_hz", f)
         check_plausible("contact_stiffness_n_per_m", k)
-        m = k / (2.0 * math.pi * f) ** 2
+        m = mass_for_contact_frequency_kg(k, f)
         if not limit_of("spacecraft_mass_kg").contains(m):
             raise ParameterError(
                 f"contact_frequency_hz = {f:g} Hz with contact_stiffness_n_per_m = {k:g} N/m "

@@ -33,6 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from hybridtable.errors import ParameterError, SpecError
+from hybridtable.laws.contact import mass_for_contact_frequency_kg
 from hybridtable.limits import TABLE1_DEFAULTS
 from hybridtable.loop.params import HybridLoopParams
 
@@ -135,7 +136,7 @@ def spacecraft_mass_kg(spacecraft: dict[str, Any], stiffness_n_per_m: float) -> 
     f = spacecraft.pop("contact_frequency_hz")
     if isinstance(f, bool) or not isinstance(f, int | float) or not f > 0 or math.isinf(f):
         raise SpecError(f"[spacecraft] contact_frequency_hz must be a number > 0 (got {f!r})")
-    return stiffness_n_per_m / (2.0 * math.pi * f) ** 2
+    return mass_for_contact_frequency_kg(stiffness_n_per_m, f)
 
 
 def table_response_hz(table: Mapping[str, Any]) -> float:
@@ -190,12 +191,12 @@ _FIELDS: dict[tuple[str, str], str] = {
 def _parse_loop(raw: Mapping[str, Any]) -> HybridLoopParams:
     keys = LOOP_SCENARIO_KEYS
     top_level(raw, keys)
-    sections = {name: section(raw, name, keys) for name in keys if name not in ("", "title")}
+    sections = {name: section(raw, name, keys) for name in keys if name}
+    # What the Table 1 point gives besides the contact and the mass (required).
+    defaulted = ("sensor_delay_s", "table_response_hz", "table_damping_ratio")
     values: dict[str, Any] = {
-        name: TABLE1_DEFAULTS[name]
-        for name in ("sensor_delay_s", "table_response_hz", "table_damping_ratio")
+        name: TABLE1_DEFAULTS[name] for name in (*defaulted, "initial_velocity_m_per_s")
     }
-    values["initial_velocity_m_per_s"] = TABLE1_DEFAULTS["initial_velocity_m_per_s"]
     for (name, key), field in _FIELDS.items():
         if key not in sections[name]:
             continue
