@@ -43,6 +43,7 @@ LAYERS: dict[str, int] = {
     "stewart": 4,
     "analysis": 5,
     "diagnosis": 5,
+    "effects": 5,
     "studies": 5,
     "six_dof": 5,
     "explain": 5,
@@ -221,7 +222,7 @@ def test_the_core_loop_imports_no_plugin_and_no_command():
 
 
 #: Modules that import a *user's* module by name: ``--plugin MODULE:ATTR``.
-USER_MODULE_LOADERS = {"hybridtable.diagnosis.registry"}
+USER_MODULE_LOADERS = {"hybridtable.effects.registry"}
 
 
 def test_no_hidden_imports_of_our_own_modules():

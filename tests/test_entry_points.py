@@ -14,8 +14,8 @@ import textwrap
 import pytest
 
 from hybridtable.compensators import registry as compensators
-from hybridtable.diagnosis import registry as effects
-from hybridtable.diagnosis.library import BUILTIN_EFFECTS
+from hybridtable.effects import registry as effects
+from hybridtable.effects.library import BUILTIN_EFFECTS
 from hybridtable.errors import ParameterError
 from hybridtable.loop.simulation import simulate
 from hybridtable.studies.paper import table1_params
@@ -26,7 +26,7 @@ PLUGIN = '''
 from dataclasses import replace
 
 from hybridtable.compensators.paper import Compensator
-from hybridtable.diagnosis.library.force_bias import EFFECT as _FORCE_BIAS
+from hybridtable.effects.library.force_bias import EFFECT as _FORCE_BIAS
 
 CALLS = []
 

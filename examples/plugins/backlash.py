@@ -20,7 +20,7 @@ import math
 import numpy as np
 from pydrake.systems.framework import LeafSystem
 
-from hybridtable.diagnosis.effects import Effect, EffectParameter, Signature
+from hybridtable.effects.effect import Effect, EffectParameter, Signature
 from hybridtable.systems.blocks import ChainedOutput
 
 __all__ = ["Backlash", "BacklashTable", "EFFECT"]

@@ -37,8 +37,8 @@ def add_plugin_argument(parser: argparse.ArgumentParser) -> None:
         action="append",
         default=[],
         help="register the effect (or list of effects) ATTR of a module or a .py file "
-        "not installed as a package, e.g. --plugin ./backlash.py:EFFECT (repeatable); "
-        "installed packages register theirs through the entry-point group "
+        "not installed as a package, e.g. --plugin ./backlash.py:EFFECT (repeatable; "
+        "default: none); installed packages register theirs through the entry-point group "
         "hybridtable.effects",
     )
 
@@ -77,7 +77,7 @@ def add_save_model_arguments(parser: argparse.ArgumentParser) -> None:
 
 def load_plugins(args: argparse.Namespace) -> None:
     """Register the effects of every ``--plugin`` (before any effect is named)."""
-    from hybridtable.diagnosis.registry import load_plugin
+    from hybridtable.effects.registry import load_plugin
 
     for text in getattr(args, "plugin", None) or ():
         load_plugin(text)
@@ -85,7 +85,7 @@ def load_plugins(args: argparse.Namespace) -> None:
 
 def parse_added(args: argparse.Namespace):
     """The ``--add`` effects as ``[(Effect, given values), ...]`` (checked)."""
-    from hybridtable.diagnosis.registry import parse_effect_specs
+    from hybridtable.effects.registry import parse_effect_specs
 
     return parse_effect_specs(getattr(args, "add", None) or ())
 

@@ -142,7 +142,7 @@ def run_record(args: argparse.Namespace, model) -> dict:
     )
     if args.force_deadband_n is None and base is None:
         infos = [replace(i, force_deadband_n=5.0 * sigma_f) for i in infos]
-    from hybridtable.diagnosis.effects import RigScale
+    from hybridtable.effects.spec import RigScale
 
     physics, spec, effects = rig_physics(
         args, model, model.scale if model is not None else RigScale.from_info(infos[0], v_max)
@@ -186,7 +186,7 @@ def run_record(args: argparse.Namespace, model) -> dict:
             progress.update()
     if progress is not None:
         progress.close()
-    from hybridtable.diagnosis.registry import get_effect
+    from hybridtable.effects.registry import get_effect
 
     units = {name: {p.name: p.unit for p in get_effect(name).parameters} for name, _ in effects}
     truth_doc = {

@@ -169,11 +169,11 @@ def rig_physics(args: argparse.Namespace, model, scale=None):
     the model's).
 
     Returns the :class:`~hybridtable.measurement.rig.RigPhysics`, the
-    :class:`~hybridtable.diagnosis.effects.ModelSpec`, and the effects as
+    :class:`~hybridtable.effects.effect.ModelSpec`, and the effects as
     ``[(name, values), ...]``.
     """
     from hybridtable.commands._model_options import parse_added
-    from hybridtable.diagnosis.registry import build_spec
+    from hybridtable.effects.registry import build_spec
 
     added = parse_added(args)
     for effect, values in added:

@@ -7,7 +7,7 @@ import sys
 
 __all__ = ["BUILTIN_EFFECT_NAMES", "register", "run", "diagnosis_json"]
 
-#: The built-in effects, named in ``--help`` without importing the library
+#: The built-in effects diagnose tries, named in ``--help`` without importing the library
 #: (Drake) at start-up; ``tests/commands`` checks it against the library.
 BUILTIN_EFFECT_NAMES: tuple[str, ...] = (
     "contact_damping",
@@ -51,7 +51,9 @@ def register(sub) -> None:
     p.add_argument(
         "--effects",
         metavar="NAME[,NAME...]",
-        help="candidate effects (default: every registered effect)",
+        help="candidate effects, any that hybridtable effects lists (default: those it marks "
+        "as tried by diagnose: the eleven built-ins of recorded runs, and the effects of "
+        "installed packages and --plugin)",
     )
     p.add_argument(
         "--max-effects",
@@ -93,7 +95,7 @@ def run(args: argparse.Namespace) -> int:
     )
     from hybridtable.commands._model_options import load_plugins, write_model
     from hybridtable.diagnosis.diagnose import diagnose
-    from hybridtable.diagnosis.registry import get_effect
+    from hybridtable.effects.registry import get_effect
     from hybridtable.errors import CommandError
     from hybridtable.measurement.comparison import check_comparable
     from hybridtable.reports.diagnose import (

@@ -5,7 +5,7 @@ Lists every effect that ``diagnose``, ``compare --add`` and ``simulate --add``
 know: the built-ins, those of installed packages (entry-point group
 ``hybridtable.effects``) and those of ``--plugin MODULE:ATTR``. Bounds that
 depend on the rig (callables of a
-:class:`~hybridtable.diagnosis.effects.RigScale`) are evaluated at a
+:class:`~hybridtable.effects.effect.RigScale`) are evaluated at a
 reference rig: the paper's Table 1 point (sampled at 1 kHz) by default, or the
 rig of the recorded runs of ``--rig RUN``.
 """
@@ -13,6 +13,8 @@ rig of the recorded runs of ``--rig RUN``.
 from __future__ import annotations
 
 import argparse
+
+from hybridtable.errors import ParameterError
 
 __all__ = ["SOURCES", "register", "run", "paper_scale", "effect_json", "format_effects"]
 
@@ -57,9 +59,9 @@ def register(sub) -> None:
 
 
 def paper_scale():
-    """The :class:`~hybridtable.diagnosis.effects.RigScale` of the paper's Table 1
+    """The :class:`~hybridtable.effects.effect.RigScale` of the paper's Table 1
     point, sampled at :data:`PAPER_SAMPLE_PERIOD_S`."""
-    from hybridtable.diagnosis.effects import RigScale
+    from hybridtable.effects.spec import RigScale
     from hybridtable.studies.paper import table1_params
 
     return RigScale.from_params(table1_params("none"), PAPER_SAMPLE_PERIOD_S)
@@ -109,6 +111,8 @@ def effect_json(effect, source: str, scale, where: str) -> dict:
         "description": effect.description,
         "parameters": params,
         "stage": effect.stage,
+        "default_for": list(effect.default_for),
+        "cor_engine": cor_engine(effect, scale),
         "signature": {
             "channels": list(sig.channels),
             "phases": list(sig.phases),
@@ -119,6 +123,27 @@ def effect_json(effect, source: str, scale, where: str) -> dict:
         "separation_hint": effect.separation_hint,
         "bounds_at": _scale_json(scale, where),
     }
+
+
+def cor_engine(effect, scale) -> str:
+    """How ``explain`` runs a loop with ``effect`` for a CoR
+    (:func:`~hybridtable.explain.model.loop_of`): ``"fast engine"`` when every
+    change is one of the loop's parameters, else ``"Drake diagram"`` (the
+    systems that carry it); on the paper's Table 1 conditions with a 1 kHz rig
+    computer, every parameter one typical change from its null."""
+    from hybridtable.explain.conditions import Conditions
+    from hybridtable.explain.model import EffectAt, loop_of
+
+    values = {}
+    for p in effect.parameters:
+        lo, hi = p.bounds(scale)
+        values[p.name] = min(max(p.value_at(1.0, scale), lo), hi)
+    case = ("SDMDC", Conditions(sample_rate_hz=1.0 / PAPER_SAMPLE_PERIOD_S))
+    try:
+        _, systems = loop_of(case, (EffectAt(effect, scale),), values)
+    except ParameterError as err:
+        return f"cannot: {err}"
+    return "fast engine" if systems is None else "Drake diagram"
 
 
 def _number(x: float | None, rig: bool) -> str:
@@ -157,14 +182,18 @@ def format_effects(items: list[dict]) -> str:
         )
     lines.append("")
     header = (
-        f"{'effect':<22}{'source':<13}{'stage':<13}description\n"
+        f"{'effect':<28}{'source':<12}{'stage':<12}{'tried by':<18}{'CoR by':<15}description\n"
         f"  {'parameter':<30}{'unit':<8}{'lower':>12}{'upper':>12}{'typical':>12}"
         f"{'null':>12}  description"
     )
     lines.append(header)
     lines.append("-" * 104)
     for e in items:
-        lines.append(f"{e['name']:<22}{e['source']:<13}{e['stage']:<13}{e['description']}")
+        tried = ", ".join(e["default_for"]) or "when named"
+        lines.append(
+            f"{e['name']:<28}{e['source']:<12}{e['stage']:<12}{tried:<18}{e['cor_engine']:<15}"
+            f"{e['description']}"
+        )
         for p in e["parameters"]:
             rig = set(p["rig_dependent"])
             lines.append(
@@ -177,7 +206,9 @@ def format_effects(items: list[dict]) -> str:
     lines.append("")
     lines.append(
         "typical: the fit's unit step; null: the value at which the effect vanishes "
-        "(- : none). Use an effect with --add NAME[:param=value,...]."
+        "(- : none). tried by: the commands that try the effect unless told which "
+        "(diagnose --effects, explain --effects name any effect); CoR by: how explain runs "
+        "the loop with it. Use an effect with --add NAME[:param=value,...]."
     )
     return "\n".join(lines)
 
@@ -186,9 +217,9 @@ def _sources(plugin_effects) -> dict[str, str]:
     """Effect name -> where it comes from (:data:`SOURCES`)."""
     from importlib.metadata import entry_points
 
-    from hybridtable.diagnosis.effects import Effect
-    from hybridtable.diagnosis.library import BUILTIN_EFFECTS
-    from hybridtable.diagnosis.registry import EFFECTS, ENTRY_POINT_GROUP
+    from hybridtable.effects.effect import Effect
+    from hybridtable.effects.library import BUILTIN_EFFECTS
+    from hybridtable.effects.registry import EFFECTS, ENTRY_POINT_GROUP
 
     out = {e.name: "built-in" for e in BUILTIN_EFFECTS if EFFECTS.get(e.name) is e}
     for ep in entry_points(group=ENTRY_POINT_GROUP):
@@ -205,8 +236,8 @@ def _sources(plugin_effects) -> dict[str, str]:
 
 def run(args: argparse.Namespace) -> int:
     from hybridtable.commands._common import check_outputs, input_paths, write_json
-    from hybridtable.diagnosis.effects import RigScale
-    from hybridtable.diagnosis.registry import effect_names, get_effect, load_plugin
+    from hybridtable.effects.registry import effect_names, get_effect, load_plugin
+    from hybridtable.effects.spec import RigScale
 
     effect_names()  # registers the entry points' effects before the plug-ins
     plugin_effects = [e for text in args.plugin for e in load_plugin(text)]

@@ -33,6 +33,7 @@ _PAPER = {
 
 def register(sub) -> None:
     from hybridtable.commands._common import integer_type, number_type
+    from hybridtable.commands._model_options import add_plugin_argument
 
     p = sub.add_parser(
         "explain",
@@ -40,9 +41,11 @@ def register(sub) -> None:
         description="Read a table of measured CoRs (CSV: a row per run or per compensator; "
         "columns compensator (none, SDC, MDC, SDMDC) and cor, optional cor_std and the "
         "conditions below, SI units; an empty cell: not stated). Fit the stated loop and "
-        "every model of 1 to --max-effects effects (contact_frequency_error, extra_delay, "
-        "lead_time_error, table_response, table_damping, stiffness_error, contact_damping, "
-        "contact_damping_ratio, and registered plug-ins) by least squares in ln CoR, with the "
+        "every model of 1 to --max-effects effects (by default contact_damping, extra_delay, "
+        "contact_frequency_error, lead_time_error, table_response, table_damping, "
+        "compensator_stiffness_error, contact_damping_ratio, and the effects of installed "
+        "packages and --plugin; any effect that hybridtable effects lists with --effects) by "
+        "least squares in ln CoR, with the "
         "cor_std, the scatter of repeated rows or the rounding as the noise; rank them by BIC; "
         "state what the table determines (SVD of its sensitivities) and what it cannot "
         "resolve; flag the interaction of the four compensators and trends with stiffness or "
@@ -84,8 +87,12 @@ def register(sub) -> None:
     p.add_argument(
         "--effects",
         metavar="NAME[,NAME...]",
-        help="the candidate effects (default: all registered)",
+        help="the candidate effects (default: those hybridtable effects marks as explain's "
+        "default, plug-ins included); an effect the fast engine cannot carry (a nonlinear "
+        "law, a filter, a user's system) runs through the Drake diagram, about 0.1 s a row "
+        "and evaluation",
     )
+    add_plugin_argument(p)
     p.add_argument(
         "--jobs",
         type=integer_type(1, 64),
@@ -110,9 +117,10 @@ def run(args: argparse.Namespace) -> int:
         figure_suffixes,
         write_json,
     )
+    from hybridtable.commands._model_options import load_plugins
+    from hybridtable.effects.registry import get_effect
     from hybridtable.errors import CommandError, ParameterError
     from hybridtable.explain.explain import explain_table
-    from hybridtable.explain.registry import get_cor_effect
     from hybridtable.explain.table import read_cor_table
     from hybridtable.reports.explain import format_explanation, plot_explanation
 
@@ -124,9 +132,10 @@ def run(args: argparse.Namespace) -> int:
     if args.cor_std is not None:
         table = table.with_cor_std(args.cor_std)
     effects = None
+    load_plugins(args)
     if args.effects:
         try:
-            effects = [get_cor_effect(n.strip()) for n in args.effects.split(",") if n.strip()]
+            effects = [get_effect(n.strip()) for n in args.effects.split(",") if n.strip()]
         except ParameterError as err:
             raise CommandError(f"--effects: {err}") from None
     quiet = args.json == "-"

@@ -305,7 +305,7 @@ def _show_stewart(args: argparse.Namespace, run_, drawing: dict, out) -> None:
 def _simulate_with_effects(args: argparse.Namespace, params):
     """The paper's loop with the ``--add`` effects (every parameter given)."""
     from hybridtable.commands._simulate_rig import rig_physics
-    from hybridtable.diagnosis.effects import RigScale
+    from hybridtable.effects.spec import RigScale
     from hybridtable.errors import CommandError
     from hybridtable.loop.builder import build_hybrid_loop
     from hybridtable.loop.simulation import run_loop

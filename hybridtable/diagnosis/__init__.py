@@ -1,9 +1,9 @@
 """Which physical effect is the rig model missing (``hybridtable diagnose``).
 
-- :mod:`~hybridtable.diagnosis.effects`: what an effect is (:class:`Effect`,
+- :mod:`~hybridtable.effects.effect`: what an effect is (:class:`Effect`,
   its parameters and bounds, the :class:`ModelSpec` it changes);
-- :mod:`~hybridtable.diagnosis.library`: the built-in effects;
-  :mod:`~hybridtable.diagnosis.registry`: name -> effect;
+- :mod:`~hybridtable.effects.library`: the built-in effects;
+  :mod:`~hybridtable.effects.registry`: name -> effect;
 - :mod:`~hybridtable.diagnosis.evaluate`: a model against the runs, residuals
   prewhitened with each run's noise model;
 - :mod:`~hybridtable.diagnosis.fit`: least-squares fits, BIC, leave-one-run-out;
@@ -34,16 +34,14 @@ __all__, __getattr__, __dir__ = lazy_exports(
             "ModelSpec",
             "RigScale",
             "Signature",
-        ),
-        "fit": ("fit_effect", "fit_given"),
-        "model_file": ("FittedEffect", "RigModel", "model_from_diagnosis"),
-        "model_reader": ("load_model",),
-        "registry": (
             "effect_names",
             "get_effect",
             "load_plugin",
             "parse_effect_spec",
             "register_effect",
         ),
+        "fit": ("fit_effect", "fit_given"),
+        "model_file": ("FittedEffect", "RigModel", "model_from_diagnosis"),
+        "model_reader": ("load_model",),
     },
 )

@@ -13,9 +13,10 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from hybridtable.diagnosis.effects import Effect, RigScale
 from hybridtable.diagnosis.fit import fit_given
 from hybridtable.diagnosis.model_file import FittedEffect, RigModel
+from hybridtable.effects.effect import Effect
+from hybridtable.effects.spec import RigScale
 from hybridtable.errors import ParameterError
 from hybridtable.measurement.comparison import RunComparison, compare_run, pool_noise_floors
 from hybridtable.measurement.run_format import Run
@@ -39,7 +40,7 @@ def model_with_effects(
         Recorded runs of one rig.
     added : sequence of (Effect, dict)
         Effects and the values given (SI units), e.g. from
-        :func:`~hybridtable.diagnosis.registry.parse_effect_specs`.
+        :func:`~hybridtable.effects.registry.parse_effect_specs`.
     base : RigModel, optional
         A model whose effects and rig computer are kept.
     notify : callable, optional

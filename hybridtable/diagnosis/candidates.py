@@ -9,7 +9,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hybridtable.diagnosis.effects import Effect, ModelSpec, RigScale
 from hybridtable.diagnosis.evaluate import Evaluation, Evaluator, RunData
 from hybridtable.diagnosis.fit import (
     Fit,
@@ -22,7 +21,6 @@ from hybridtable.diagnosis.fit import (
     starts_for,
 )
 from hybridtable.diagnosis.goodness import FALSE_ALARM_RATE, GoodnessOfFit
-from hybridtable.diagnosis.registry import EFFECTS, get_effect
 from hybridtable.diagnosis.settings import (
     BIC_THRESHOLD,
     EXPLAINED_MAX_ERROR,
@@ -31,6 +29,9 @@ from hybridtable.diagnosis.settings import (
     TIE_BIC,
     Z_THRESHOLD,
 )
+from hybridtable.effects.effect import Effect
+from hybridtable.effects.registry import EFFECTS, get_effect
+from hybridtable.effects.spec import ModelSpec, RigScale
 from hybridtable.measurement.audit_findings import Audit
 
 __all__ = [

@@ -10,9 +10,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from hybridtable.diagnosis.effects import ModelSpec
 from hybridtable.diagnosis.evaluate import Evaluator
 from hybridtable.diagnosis.settings import BIC_THRESHOLD, CHANNELS
+from hybridtable.effects.spec import ModelSpec
 from hybridtable.errors import MeasurementError, SimulationError
 from hybridtable.measurement.replay import replay_command
 from hybridtable.measurement.rig import rig_params, simulate_rig

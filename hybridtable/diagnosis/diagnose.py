@@ -68,7 +68,6 @@ from hybridtable.diagnosis.candidates import (
     rank_candidates,
 )
 from hybridtable.diagnosis.design import separating_run
-from hybridtable.diagnosis.effects import ModelSpec, RigScale
 from hybridtable.diagnosis.evaluate import Evaluator, prepare_runs
 from hybridtable.diagnosis.fit import (
     Fit,
@@ -79,10 +78,11 @@ from hybridtable.diagnosis.fit import (
     residual_probe,
 )
 from hybridtable.diagnosis.goodness import goodness_of_fit
-from hybridtable.diagnosis.registry import effect_names, get_effect
 from hybridtable.diagnosis.search import pairs_and_swaps
 from hybridtable.diagnosis.settings import EXPLAINED_MAX_ERROR, FIT_ACCURACY
 from hybridtable.diagnosis.workers import pool_map
+from hybridtable.effects.registry import default_effects, get_effect
+from hybridtable.effects.spec import ModelSpec, RigScale
 from hybridtable.measurement.audit import audit_runs
 from hybridtable.measurement.run_format import Run
 
@@ -230,7 +230,7 @@ def diagnose(
     data = prepare_runs(runs)
     audit = audit_runs(runs)
     scale = RigScale.from_runs(runs)
-    names = list(effects) if effects is not None else list(effect_names())
+    names = list(effects) if effects is not None else list(default_effects("diagnose"))
     for n in names:
         get_effect(n)
     if workers is None:

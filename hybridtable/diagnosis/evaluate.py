@@ -10,7 +10,6 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from hybridtable.diagnosis.effects import ModelSpec, RigScale
 from hybridtable.diagnosis.settings import (
     CHANNELS,
     CLOSED_LOOP_FLOOR,
@@ -18,6 +17,7 @@ from hybridtable.diagnosis.settings import (
     FIT_ACCURACY,
     NUMERICAL_FLOOR,
 )
+from hybridtable.effects.spec import ModelSpec, RigScale
 from hybridtable.errors import MeasurementError, SimulationError
 from hybridtable.measurement.noise_model import NoiseModel, estimate_noise, whiten
 from hybridtable.measurement.phases import delayed_labels, phase_labels, settle_ticks
@@ -129,7 +129,7 @@ class Evaluation:
 
 
 class Evaluator:
-    """Predicts runs with a :class:`~hybridtable.diagnosis.effects.ModelSpec`.
+    """Predicts runs with a :class:`~hybridtable.effects.effect.ModelSpec`.
 
     ``stage="replay"``: the replay's ``f_mea`` and ``p_act``, whitened with
     the runs' noise. ``stage="closed_loop"``: the closed loop's ``v_des``,

@@ -11,10 +11,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from hybridtable.diagnosis.effects import Effect, ModelSpec, RigScale
 from hybridtable.diagnosis.evaluate import Evaluation, Evaluator, RunData, prepare_runs
-from hybridtable.diagnosis.registry import build_spec, get_effect
 from hybridtable.diagnosis.settings import CHANNELS, FIT_ACCURACY
+from hybridtable.effects.effect import Effect
+from hybridtable.effects.registry import build_spec, get_effect
+from hybridtable.effects.spec import ModelSpec, RigScale
 from hybridtable.errors import ParameterError
 from hybridtable.measurement.run_format import Run
 

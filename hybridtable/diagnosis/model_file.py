@@ -37,8 +37,9 @@ from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
-from hybridtable.diagnosis.effects import Effect, ModelSpec, RigScale
-from hybridtable.diagnosis.registry import build_spec, get_effect
+from hybridtable.effects.effect import Effect
+from hybridtable.effects.registry import build_spec, get_effect
+from hybridtable.effects.spec import ModelSpec, RigScale
 from hybridtable.errors import ParameterError
 from hybridtable.measurement.phases import cor_from_record
 from hybridtable.measurement.rig import RigPhysics, computer_with_model_mass
@@ -186,7 +187,7 @@ class RigModel:
         return tuple(e.name for e in self.effects)
 
     def spec(self) -> ModelSpec:
-        """The :class:`~hybridtable.diagnosis.effects.ModelSpec` of the effects."""
+        """The :class:`~hybridtable.effects.effect.ModelSpec` of the effects."""
         return build_spec([(e.effect, dict(e.values)) for e in self.effects], self.scale)
 
     def computer_for(self, run_id: str | None = None) -> dict[str, Any]:
@@ -210,7 +211,7 @@ class RigModel:
     def linear_params(self, params: Any, keep_compensator: bool = True) -> tuple[Any, list[str]]:
         """``params`` (a :class:`~hybridtable.loop.params.HybridLoopParams`)
         with the model's physics as the linear models see it
-        (:meth:`~hybridtable.diagnosis.effects.ModelSpec.linear_changes`), the
+        (:meth:`~hybridtable.effects.effect.ModelSpec.linear_changes`), the
         compensator's beliefs left at their nominal values, and the rig
         computer as the audit found it (its compensator kind only when
         ``keep_compensator`` is false) integrating with the mass of
@@ -225,7 +226,7 @@ class RigModel:
         )
         if keep_compensator:
             computer.pop("compensator", None)
-        return RigPhysics(changes=changes, computer=computer).apply(params), left
+        return RigPhysics(changes=changes, computer=computer, loop=spec.loop).apply(params), left
 
     def closed_loop_run(self, run: Run) -> Run:
         """``run`` with the spacecraft mass the model's computer integrates with

@@ -17,7 +17,6 @@ from pathlib import Path
 from typing import Any
 
 from hybridtable._files import read_user_json
-from hybridtable.diagnosis.effects import RigScale
 from hybridtable.diagnosis.model_file import (
     MODEL_FORMAT,
     FittedEffect,
@@ -25,7 +24,8 @@ from hybridtable.diagnosis.model_file import (
     RigModel,
     tool_version,
 )
-from hybridtable.diagnosis.registry import get_effect
+from hybridtable.effects.registry import get_effect
+from hybridtable.effects.spec import RigScale
 from hybridtable.errors import MeasurementError, ParameterError
 from hybridtable.measurement.rig import COMPUTER_PARAMS
 from hybridtable.measurement.run_format import RunInfo

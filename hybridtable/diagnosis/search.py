@@ -48,9 +48,9 @@ from hybridtable.diagnosis.fit import (
     pooled_error,
     residual_probe,
 )
-from hybridtable.diagnosis.registry import get_effect
 from hybridtable.diagnosis.settings import BIC_THRESHOLD, PAIR_POOL
 from hybridtable.diagnosis.workers import pool_map
+from hybridtable.effects.registry import get_effect
 
 __all__ = ["PAIR_NFEV", "grid_values", "drop_one", "pairs_and_swaps"]
 

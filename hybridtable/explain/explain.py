@@ -23,11 +23,13 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.stats import f as f_dist
 
-from hybridtable.explain.effects import CorEffect
+from hybridtable.effects.effect import Effect
+from hybridtable.effects.registry import default_effects, get_effect
+from hybridtable.errors import ParameterError
 from hybridtable.explain.fit import ModelFit, fit_models
 from hybridtable.explain.identify import Identifiability, identifiability
+from hybridtable.explain.model import EffectAt, loop_of, table_scale
 from hybridtable.explain.patterns import WINDOW_LN, interactions, readings, trends
-from hybridtable.explain.registry import cor_effect_names, get_cor_effect
 from hybridtable.explain.separate import LOOKALIKE_BIC, lookalikes, separating_runs
 from hybridtable.explain.table import CorTable
 
@@ -61,6 +63,7 @@ class Explanation:
     nothing_missing: bool
     verdict: str
     unexplained: list[str] = field(default_factory=list)
+    cannot_run: dict[str, str] = field(default_factory=dict)
 
     @property
     def best(self) -> ModelFit:
@@ -96,7 +99,8 @@ class Explanation:
             "not_fitted": [
                 {"effects": list(n), "why": "as many parameters as the table has rows, or more"}
                 for n in self.not_fitted
-            ],
+            ]
+            + [{"effects": [n], "why": why} for n, why in self.cannot_run.items()],
             "identifiable": ident["identifiable"],
             "unresolved": ident["unresolved"],
             "undetermined": ident["undetermined"],
@@ -154,7 +158,7 @@ def _value_words(fit: ModelFit) -> str:
 
 def explain_table(
     table: CorTable,
-    effects: Sequence[CorEffect] | None = None,
+    effects: Sequence[Effect] | None = None,
     max_effects: int = 3,
     model_error_ln: float = MODEL_ERROR_LN,
     progress: Callable[[str], None] | None = None,
@@ -166,8 +170,11 @@ def explain_table(
     ----------
     table : CorTable
         The measured CoRs and their stated conditions.
-    effects : sequence of CorEffect, optional
-        The library (default: every registered CoR effect).
+    effects : sequence of Effect, optional
+        The candidates (default: the registered effects ``explain`` tries,
+        :func:`~hybridtable.effects.registry.default_effects`). One that cannot
+        run on the table's loop (e.g. a sensor chain on a continuous rig
+        computer) is left out, and :attr:`Explanation.cannot_run` says why.
     max_effects : int
         The most effects in one model (1-3).
     model_error_ln : float
@@ -177,13 +184,14 @@ def explain_table(
     jobs : int
         Processes that fit models in parallel (1: in this process).
     """
-    effects = (
-        list(effects) if effects is not None else [get_cor_effect(n) for n in cor_effect_names()]
-    )
+    if effects is None:
+        effects = [get_effect(n) for n in default_effects("explain")]
     std, source = table.noise()
     y = table.ln_cor
     sigma = np.sqrt((std / np.exp(y)) ** 2 + model_error_ln**2)
     cases = [(r.compensator, r.conditions) for r in table.rows]
+    rig = table_scale(cases)
+    effects, cannot_run = _runnable([EffectAt(e, rig) for e in effects], cases)
     fits, not_fitted = fit_models(
         effects, cases, y, sigma, max_effects, progress=progress, jobs=jobs
     )
@@ -221,7 +229,7 @@ def explain_table(
         explained and nominal.p_value >= ALPHA and nominal.bic - best.bic <= LOOKALIKE_BIC
     )
     if not nothing:
-        separations = separating_runs(fits, first, float(np.median(sigma)))
+        separations = separating_runs(fits, first, float(np.median(sigma)), effects)
     if nothing:
         verdict = (
             f"Nothing is missing: the stated loop gives every CoR within the noise "
@@ -279,4 +287,23 @@ def explain_table(
         nothing_missing=nothing,
         verdict=verdict,
         unexplained=unexplained,
+        cannot_run=cannot_run,
     )
+
+
+def _runnable(
+    effects: Sequence[EffectAt], cases: Sequence[tuple]
+) -> tuple[list[EffectAt], dict[str, str]]:
+    """The effects whose loop can be built for every row at their start values,
+    and why the others cannot."""
+    keep, why = [], {}
+    for e in effects:
+        start = {p.name: p.null for p in e.parameters}
+        try:
+            for case in cases:
+                loop_of(case, (e,), start)
+        except ParameterError as err:
+            why[e.name] = str(err)
+        else:
+            keep.append(e)
+    return keep, why

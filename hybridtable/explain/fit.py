@@ -28,8 +28,7 @@ import numpy as np
 from scipy.optimize import least_squares, lsq_linear
 from scipy.stats import chi2 as chi2_dist
 
-from hybridtable.explain.effects import CorEffect
-from hybridtable.explain.model import Case, CorModel
+from hybridtable.explain.model import Case, CorModel, EffectAt
 
 __all__ = ["ModelFit", "fit_model", "fit_models", "rank_fits"]
 
@@ -151,7 +150,7 @@ def _finish(model: CorModel, cases, y, sigma, u: np.ndarray) -> ModelFit:
 
 
 def fit_model(
-    effects: Sequence[CorEffect],
+    effects: Sequence[EffectAt],
     cases: Sequence[Case],
     y: np.ndarray,
     sigma: np.ndarray,
@@ -175,15 +174,8 @@ def fit_model(
         return float(np.sum(residual(u) ** 2))
 
     # starts: the given ones, the null point, and the best points of a grid over the range
-    # (a linear parameter whose null is a bound, e.g. damping >= 0, gets a geometric grid:
-    # its plausible sizes span decades)
     points = {1: 13, 2: 7}.get(n_par, 4)
-    axes = [
-        a + (b - a) * np.concatenate([[0.0], np.geomspace(1e-3, 1.0, points - 1)])
-        if not p.log and p.null == p.lower
-        else np.linspace(a, b, points)
-        for p, a, b in zip(model.parameters, lo, hi, strict=True)
-    ]
+    axes = [_axis(p, a, b, points) for p, a, b in zip(model.parameters, lo, hi, strict=True)]
     grid = [np.array(g) for g in itertools.product(*axes)]
     grid.sort(key=cost)
     candidates = [*[np.clip(s, lo, hi) for s in starts], grid[0]]
@@ -209,8 +201,17 @@ def fit_model(
     return _finish(model, cases, y, sigma, best.x)
 
 
+def _axis(p, a: float, b: float, points: int) -> np.ndarray:
+    """Grid points of one coordinate over ``[a, b]`` (``u = 0``: the null value):
+    geometric from a linear parameter's null at its lower bound (e.g. damping
+    >= 0: its plausible sizes span decades), else even."""
+    if not p.log and a == 0.0 and b > 0.0:
+        return a + (b - a) * np.concatenate([[0.0], np.geomspace(1e-3, 1.0, points - 1)])
+    return np.linspace(a, b, points)
+
+
 def _screen(
-    effects: Sequence[CorEffect],
+    effects: Sequence[EffectAt],
     size: int,
     jac: np.ndarray,
     index: dict[str, list[int]],
@@ -219,7 +220,7 @@ def _screen(
     sigma: np.ndarray,
     lo: np.ndarray,
     hi: np.ndarray,
-) -> list[tuple[float, tuple[CorEffect, ...]]]:
+) -> list[tuple[float, tuple[EffectAt, ...]]]:
     out = []
     for combo in itertools.combinations(effects, size):
         cols = [j for e in combo for j in index[e.name]]
@@ -232,7 +233,7 @@ def _screen(
 
 
 def fit_models(
-    effects: Sequence[CorEffect],
+    effects: Sequence[EffectAt],
     cases: Sequence[Case],
     y: np.ndarray,
     sigma: np.ndarray,

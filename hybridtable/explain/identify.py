@@ -23,8 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hybridtable.explain.effects import CorEffect, CorParameter
-from hybridtable.explain.model import Case, CorModel, loop_of
+from hybridtable.effects.effect import ParameterAt
+from hybridtable.explain.model import Case, CorModel, EffectAt, loop_of
 
 __all__ = ["Quantity", "Identifiability", "identifiability"]
 
@@ -42,9 +42,9 @@ class Quantity:
     ----------
     name : str
         The quantity in words (``"delay"``).
-    effect : CorEffect
+    effect : EffectAt
         The effect whose parameter moves it.
-    parameter : CorParameter
+    parameter : ParameterAt
         That parameter.
     reference : float
         Its size on the table (the stated value, s or Hz, or the ratio 1), or 0
@@ -52,8 +52,8 @@ class Quantity:
     """
 
     name: str
-    effect: CorEffect
-    parameter: CorParameter
+    effect: EffectAt
+    parameter: ParameterAt
     reference: float
 
     @property
@@ -72,7 +72,7 @@ class Quantity:
 
 
 def _reference(name: str, cases: Sequence[Case], effects, at) -> float:
-    loops = [loop_of(c, effects, at) for c in cases]
+    loops = [loop_of(c, effects, at)[0] for c in cases]
     if name == "delay":
         return float(np.mean([p.sensor_delay_s for p in loops]))
     if name == "T_lead":
@@ -81,7 +81,7 @@ def _reference(name: str, cases: Sequence[Case], effects, at) -> float:
 
 
 def quantities(
-    effects: Sequence[CorEffect], cases: Sequence[Case], at: dict[str, float] | None = None
+    effects: Sequence[EffectAt], cases: Sequence[Case], at: dict[str, float] | None = None
 ) -> list[Quantity]:
     """One :class:`Quantity` per distinct ``quantity`` of the effects' parameters (first
     wins), sized at the parameter values ``at`` (default: null)."""
@@ -150,7 +150,7 @@ SCALED_TIMES = ("delay", "T_lead", "table lag")
 
 
 def identifiability(
-    effects: Sequence[CorEffect],
+    effects: Sequence[EffectAt],
     cases: Sequence[Case],
     sigma: np.ndarray,
     at: dict[str, float] | None = None,
@@ -159,7 +159,7 @@ def identifiability(
 
     Parameters
     ----------
-    effects : sequence of CorEffect
+    effects : sequence of EffectAt
         The library.
     cases : sequence of (compensator, Conditions)
         The table's rows.
@@ -169,6 +169,8 @@ def identifiability(
         Parameter -> value of the point to linearize at (default: every effect null).
     """
     qs = quantities(effects, cases, at)
+    if not qs:  # no effect names the loop quantity it moves
+        return Identifiability([], [], [], [], [])
     model = CorModel(effects)
     u = model.coordinates(at or {})
     # one column per quantity: its parameter's column, per unit of the quantity

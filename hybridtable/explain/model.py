@@ -1,49 +1,129 @@
-"""The CoR a rig gives under a set of effects: the loop's fast engine, one run per row.
+"""The CoR a rig gives under a set of effects: one run of the loop per row.
 
 ln CoR of a row is the loop its conditions state
-(:meth:`~hybridtable.explain.conditions.Conditions.loop_params`), changed by
-each effect in turn, run by :func:`hybridtable.loop.fast.simulate_fast` (the
-Drake diagram's CoR to its integrator's error, in milliseconds). On a sampled
-rig computer the delay is a whole number of ticks; a delay between two (an
-extra delay being fitted) takes ln CoR interpolated linearly between them. A
-loop that diverges or never lets go gets :data:`FAILED_LN_COR`, so a fit is
-pushed away from it.
+(:meth:`~hybridtable.explain.conditions.Conditions.loop_params`) under the
+effects' :class:`~hybridtable.effects.spec.ModelSpec`
+(:meth:`~hybridtable.effects.spec.ModelSpec.realize`). Where every change is
+one of the loop's parameters, :func:`hybridtable.loop.fast.simulate_fast` runs
+it (the Drake diagram's CoR to its integrator's error, in milliseconds); on a
+sampled rig computer the delay is then a whole number of ticks, and a delay
+between two (an extra delay being fitted) takes ln CoR interpolated linearly
+between them. Any other change (a nonlinear contact law, a filter, a mode, a
+user's system) runs through the Drake diagram with the systems that carry it
+(about 0.1 s a row). A loop that diverges or never lets go gets
+:data:`FAILED_LN_COR`, so a fit is pushed away from it.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from functools import lru_cache
+from dataclasses import dataclass
+from functools import cached_property, lru_cache
 
 import numpy as np
 
+from hybridtable.effects.effect import Effect, ParameterAt
+from hybridtable.effects.registry import build_spec
+from hybridtable.effects.spec import ModelSpec, RigScale
 from hybridtable.errors import ParameterError, SimulationError
 from hybridtable.explain.conditions import Conditions
-from hybridtable.explain.effects import CorEffect, CorParameter
+from hybridtable.loop.builder import build_hybrid_loop
 from hybridtable.loop.fast import simulate_fast
 from hybridtable.loop.params import HybridLoopParams
+from hybridtable.loop.simulation import run_loop
+from hybridtable.measurement.rig import RigPhysics
 
-__all__ = ["FAILED_LN_COR", "Case", "loop_of", "ln_cor", "CorModel"]
+__all__ = ["FAILED_LN_COR", "Case", "EffectAt", "table_scale", "loop_of", "ln_cor", "CorModel"]
 
 #: ln CoR given to a loop that diverges or does not let go (CoR e^1.5 = 4.5).
 FAILED_LN_COR = 1.5
+
+#: The period an effect's scale takes for a continuous rig computer (s): a delay's
+#: typical change is then half of it, 1 ms; finer steps fall into the continuous
+#: engine's ln CoR jitter (~5e-5: its delay line's period moves with the delay),
+#: which the fits' and the sensitivities' finite differences would read.
+CONTINUOUS_REFERENCE_PERIOD_S = 2e-3
 
 #: A row to predict: (compensator, stated conditions).
 Case = tuple[str, Conditions]
 
 
+@dataclass(frozen=True)
+class EffectAt:
+    """An :class:`~hybridtable.effects.effect.Effect` as a CoR table fits it: its
+    parameters' numbers at the table's scale (:func:`table_scale`)."""
+
+    effect: Effect
+    rig: RigScale
+
+    @property
+    def name(self) -> str:
+        return self.effect.name
+
+    @property
+    def description(self) -> str:
+        return self.effect.description
+
+    @cached_property
+    def parameters(self) -> tuple[ParameterAt, ...]:
+        return tuple(p.at(self.rig) for p in self.effect.parameters)
+
+    def spec(self, values: Mapping[str, float], base: ModelSpec | None = None) -> ModelSpec:
+        """``base`` (default nominal) with the effect at ``values`` (missing: null);
+        at its null values the effect vanishes, and ``base`` is returned as it is
+        (the loop then runs on the fast engine where ``base`` does)."""
+        own = {p.name: values.get(p.name, p.null) for p in self.parameters}
+        nulls = self.effect.null_values(self.rig)
+        if nulls is not None and all(own[n] == v for n, v in nulls.items()):
+            return base or ModelSpec()
+        return build_spec([(self.effect, own)], self.rig, base)
+
+
+def table_scale(cases: Sequence[Case]) -> RigScale:
+    """The scale the effects' bounds are taken at: the first row's loop at the
+    table's fastest approach, with the rig computer's period; a continuous
+    computer has no tick, and takes :data:`CONTINUOUS_REFERENCE_PERIOD_S`."""
+    params = cases[0][1].loop_params(cases[0][0])
+    v = max(c.initial_velocity_m_per_s for _, c in cases)
+    period = params.sample_period_s or CONTINUOUS_REFERENCE_PERIOD_S
+    return RigScale.from_params(params.with_(initial_velocity_m_per_s=v), period)
+
+
 def loop_of(
-    case: Case, effects: Sequence[CorEffect], values: Mapping[str, float]
-) -> HybridLoopParams:
-    """The true loop of ``case`` under ``effects`` with parameter ``values``, with a
-    continuous rig computer: an effect may move the delay between two ticks of the
-    conditions' ``sample_rate_hz``, which :func:`ln_cor` then interpolates."""
+    case: Case, effects: Sequence[EffectAt], values: Mapping[str, float]
+) -> tuple[HybridLoopParams, RigPhysics | None]:
+    """The true loop of ``case`` under ``effects`` with parameter ``values``.
+
+    Returns its parameters and, when a change is not one of them, the systems
+    that carry it (:meth:`~hybridtable.effects.spec.ModelSpec.realize`). Without
+    such systems the rig computer is continuous: an effect may move the delay
+    between two ticks of the conditions' ``sample_rate_hz``, which
+    :func:`ln_cor` then interpolates; with them, the loop is the conditions'.
+    """
     compensator, conditions = case
-    params = conditions.loop_params(compensator).with_(sample_rate_hz=None)
+    spec = ModelSpec()
     for effect in effects:
-        params = effect.apply(conditions, params, values)
-    return params
+        spec = effect.spec(values, spec)
+    stated = conditions.loop_params(compensator)
+    if stated.sample_rate_hz is not None:
+        try:
+            params, physics = spec.realize(stated.with_(sample_rate_hz=None))
+        except ParameterError:  # systems that need the rig computer's own ticks
+            return spec.realize(stated)
+        return (params, None) if physics is None else spec.realize(stated)
+    return spec.realize(stated)
+
+
+def _ln_cor_systems(params: HybridLoopParams, physics: RigPhysics) -> float:
+    systems = {}
+    for part in ("table", "contact", "sensor"):
+        if getattr(physics, part) is not None:
+            systems[part] = getattr(physics, f"make_{part}")(params)
+    try:
+        return math.log(run_loop(build_hybrid_loop(params, **systems)).metrics.cor)
+    except (SimulationError, ValueError, ZeroDivisionError):
+        return FAILED_LN_COR
 
 
 @lru_cache(maxsize=200_000)
@@ -67,9 +147,17 @@ def _ln_cor_sampled(params: HybridLoopParams, sample_rate_hz: float) -> float:
     return (1.0 - frac) * a + frac * b
 
 
-def ln_cor(params: HybridLoopParams, sample_rate_hz: float | None = None) -> float:
+def ln_cor(
+    params: HybridLoopParams,
+    sample_rate_hz: float | None = None,
+    physics: RigPhysics | None = None,
+) -> float:
     """ln CoR of one loop (:data:`FAILED_LN_COR` if it diverges or never lets go),
-    on a rig computer at ``sample_rate_hz`` (None: ``params``' own)."""
+    on a rig computer at ``sample_rate_hz`` (None: ``params``' own); with
+    ``physics``, through the Drake diagram with its systems (``params``' own
+    computer)."""
+    if physics is not None:
+        return _ln_cor_systems(params, physics)
     rate = sample_rate_hz or params.sample_rate_hz
     if rate is not None:
         return _ln_cor_sampled(params.with_(sample_rate_hz=None), rate)
@@ -81,21 +169,22 @@ class CorModel:
 
     Parameters
     ----------
-    effects : sequence of CorEffect
+    effects : sequence of EffectAt
         The effects, applied in this order.
 
     Notes
     -----
     The parameters are handled in the fit's coordinates ``u`` (``u = 0``: every
     effect null; one unit: one ``scale`` of the parameter, see
-    :class:`~hybridtable.explain.effects.CorParameter`).
+    :class:`~hybridtable.effects.effect.ParameterAt`).
     """
 
-    def __init__(self, effects: Sequence[CorEffect]) -> None:
+    def __init__(self, effects: Sequence[EffectAt]) -> None:
         self.effects = tuple(effects)
-        self.parameters: tuple[CorParameter, ...] = tuple(
+        self.parameters: tuple[ParameterAt, ...] = tuple(
             p for e in self.effects for p in e.parameters
         )
+        self._systems: dict[tuple, float] = {}
 
     @property
     def names(self) -> list[str]:
@@ -122,9 +211,16 @@ class CorModel:
     def predict(self, cases: Sequence[Case], u: Sequence[float]) -> np.ndarray:
         """ln CoR of each case at coordinates ``u``."""
         values = self.values(u)
-        return np.array(
-            [ln_cor(loop_of(c, self.effects, values), c[1].sample_rate_hz) for c in cases]
-        )
+        return np.array([self._ln_cor(c, values) for c in cases])
+
+    def _ln_cor(self, case: Case, values: dict[str, float]) -> float:
+        params, physics = loop_of(case, self.effects, values)
+        if physics is None:
+            return ln_cor(params, case[1].sample_rate_hz)
+        key = (case, tuple(values.items()))  # the diagram's systems are new each time
+        if key not in self._systems:
+            self._systems[key] = ln_cor(params, physics=physics)
+        return self._systems[key]
 
     def jacobian(
         self,

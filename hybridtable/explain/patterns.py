@@ -26,8 +26,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from hybridtable.explain.effects import CorEffect
-from hybridtable.explain.model import Case, CorModel
+from hybridtable.explain.model import Case, CorModel, EffectAt
 
 __all__ = ["FLAG_SIGMA", "WINDOW_LN", "interactions", "readings", "trends"]
 
@@ -57,7 +56,7 @@ def _interaction(m: dict[str, float]) -> float:
 
 
 def _reach(
-    effects: Sequence[CorEffect],
+    effects: Sequence[EffectAt],
     cases: Sequence[Case],
     window: tuple[float, float],
     points: int = 13,
@@ -83,7 +82,7 @@ def interactions(
     y: np.ndarray,
     sigma: np.ndarray,
     predicted: np.ndarray,
-    effects: Sequence[CorEffect],
+    effects: Sequence[EffectAt],
     single: dict[str, np.ndarray] | None = None,
 ) -> list[dict]:
     """The interaction of every complete set of four compensators.
@@ -204,7 +203,7 @@ def trends(
     y: np.ndarray,
     sigma: np.ndarray,
     predicted: np.ndarray,
-    effects: Sequence[CorEffect],
+    effects: Sequence[EffectAt],
 ) -> list[dict]:
     """Rows at the same compensator and contact frequency whose CoR moves with a condition.
 

@@ -18,8 +18,7 @@ import numpy as np
 
 from hybridtable.explain.conditions import Conditions
 from hybridtable.explain.fit import ModelFit
-from hybridtable.explain.model import Case, CorModel
-from hybridtable.explain.registry import get_cor_effect
+from hybridtable.explain.model import Case, CorModel, EffectAt
 
 __all__ = ["LOOKALIKE_BIC", "lookalikes", "separating_runs"]
 
@@ -62,12 +61,15 @@ def _candidates(first: Conditions) -> list[tuple[str, Case]]:
     return out
 
 
-def _predict(fit: ModelFit, case: Case) -> float:
-    model = CorModel([get_cor_effect(n) for n in fit.effects])
+def _predict(fit: ModelFit, case: Case, effects: Sequence[EffectAt]) -> float:
+    by_name = {e.name: e for e in effects}
+    model = CorModel([by_name[n] for n in fit.effects])
     return float(model.predict([case], model.coordinates(fit.values))[0])
 
 
-def separating_runs(fits: Sequence[ModelFit], first: Conditions, sigma_ln: float) -> list[dict]:
+def separating_runs(
+    fits: Sequence[ModelFit], first: Conditions, sigma_ln: float, effects: Sequence[EffectAt]
+) -> list[dict]:
     """For each look-alike of the best fit: the candidate run that separates them most.
 
     Parameters
@@ -78,6 +80,8 @@ def separating_runs(fits: Sequence[ModelFit], first: Conditions, sigma_ln: float
         The conditions candidate runs start from.
     sigma_ln : float
         The noise of one new run, in ln CoR.
+    effects : sequence of EffectAt
+        The effects the fits are made of.
     """
     alike = lookalikes(fits)
     if len(alike) < 2:
@@ -88,7 +92,7 @@ def separating_runs(fits: Sequence[ModelFit], first: Conditions, sigma_ln: float
     for other in alike[1:4]:
         scored = []
         for words, case in candidates:
-            a, b = _predict(best, case), _predict(other, case)
+            a, b = _predict(best, case, effects), _predict(other, case, effects)
             scored.append((abs(a - b) / sigma_ln, words, a, b))
         sep, words, a, b = max(scored, key=lambda t: t[0])
         out.append(

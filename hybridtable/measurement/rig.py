@@ -95,6 +95,12 @@ class RigPhysics:
         physics only; the compensator keeps the run's nominal values.
     name : str
         A label for reports.
+    computer : mapping, optional
+        Changes of the rig computer (names in :data:`COMPUTER_PARAMS`).
+    loop : tuple of callable, optional
+        Changes of the loop's parameters ``change(params) -> params``, applied
+        in order after the others (an effect's
+        :attr:`~hybridtable.effects.spec.ModelSpec.loop`).
     """
 
     table: SystemFactory | None = None
@@ -103,6 +109,7 @@ class RigPhysics:
     changes: Mapping[str, Any] = field(default_factory=dict)
     name: str = "nominal"
     computer: Mapping[str, Any] = field(default_factory=dict)
+    loop: tuple[Callable[[HybridLoopParams], HybridLoopParams], ...] = ()
 
     def __post_init__(self) -> None:
         bad = [k for k in self.changes if k not in PHYSICS_PARAMS]
@@ -122,10 +129,14 @@ class RigPhysics:
         """``params`` with :attr:`changes` applied, the compensator believing
         what it did before them
         (:meth:`~hybridtable.loop.params.HybridLoopParams.with_physics`), then
-        :attr:`computer`."""
-        if not self.changes and not self.computer:
+        :attr:`computer`, then each change of :attr:`loop` in order."""
+        if not self.changes and not self.computer and not self.loop:
             return params
-        return params.with_physics(**dict(self.changes)).with_(**dict(self.computer))
+        if self.changes or self.computer:
+            params = params.with_physics(**dict(self.changes)).with_(**dict(self.computer))
+        for change in self.loop:
+            params = change(params)
+        return params
 
     def make_table(self, params: HybridLoopParams) -> System:
         return self.table(params) if self.table else SecondOrderTable(params.table())

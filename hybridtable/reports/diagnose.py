@@ -20,7 +20,7 @@ import numpy as np  # noqa: E402
 from hybridtable.diagnosis.candidates import Candidate, Diagnosis
 from hybridtable.diagnosis.evaluate import RunData  # noqa: E402
 from hybridtable.diagnosis.goodness import WINDOW_ERROR_FLOOR  # noqa: E402
-from hybridtable.diagnosis.registry import get_effect  # noqa: E402
+from hybridtable.effects.registry import get_effect  # noqa: E402
 from hybridtable.measurement.phases import PHASES, contact_mask, loop_energy  # noqa: E402
 from hybridtable.reports.compare import figure_stem  # noqa: E402
 from hybridtable.reports.figure_text import literal  # noqa: E402

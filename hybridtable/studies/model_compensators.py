@@ -14,7 +14,7 @@ Every registered compensator runs on it, with and without the passivity
 guard, against a reference at the same approach velocity: an ideal rig
 (continuous loop, no sensor delay, ideal table, no compensation) with the
 model's *contact* only (the ``contact`` part of the
-:class:`~hybridtable.diagnosis.effects.ModelSpec` and its contact wrappers).
+:class:`~hybridtable.effects.effect.ModelSpec` and its contact wrappers).
 A damped contact's own CoR is below 1, and the best compensator reproduces
 it, not 1.
 
@@ -185,7 +185,7 @@ def reference_params(info):
 def reference_physics(model):
     """The model's contact alone (its ``ModelSpec.contact`` and contact
     wrappers) as a :class:`~hybridtable.measurement.rig.RigPhysics`."""
-    from hybridtable.diagnosis.effects import ModelSpec
+    from hybridtable.effects.spec import ModelSpec
 
     spec = model.spec()
     contact_only = ModelSpec(

@@ -134,7 +134,7 @@ def input_of(name: str) -> Input | None:
     effect_name, dot, parameter = name.partition(".")
     if not dot:
         return None
-    from hybridtable.diagnosis.registry import effect_names, get_effect
+    from hybridtable.effects.registry import effect_names, get_effect
 
     if effect_name not in effect_names():
         return None

@@ -123,8 +123,8 @@ def _simulate_effects(model, params, added: dict[str, dict[str, float]]):
     each effect's values checked against its bounds at this rig's scale."""
     from dataclasses import replace
 
-    from hybridtable.diagnosis.effects import RigScale
-    from hybridtable.diagnosis.registry import build_spec, get_effect
+    from hybridtable.effects.registry import build_spec, get_effect
+    from hybridtable.effects.spec import RigScale
     from hybridtable.studies.model_compensators import simulate_physics
 
     if params.sample_rate_hz is None:

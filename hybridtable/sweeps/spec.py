@@ -279,7 +279,7 @@ def _values_of(spec: SweepSpec, name: str) -> set[Any]:
 def _check_effects(where: dict[str, str]) -> None:
     """Every parameter of an effect given, and no two effects changing the
     same part of the rig."""
-    from hybridtable.diagnosis.registry import get_effect
+    from hybridtable.effects.registry import get_effect
 
     given: dict[str, set[str]] = {}
     for name in where:

@@ -68,7 +68,7 @@ def test_model_errors_and_options_that_do_not_apply(model, tmp_path, capsys):
         assert "not with --model" in capsys.readouterr().err
     plugin = tmp_path / "lab.py"
     plugin.write_text(PLUGIN)
-    from hybridtable.diagnosis.registry import unregister_effect
+    from hybridtable.effects.registry import unregister_effect
 
     try:
         args = ["compensators", "--model", str(user), "--plugin", f"{plugin}:EFFECT"]

@@ -23,7 +23,7 @@ COMPENSATORS = ("none", "SDC", "MDC", "SDMDC")
 #: A user's effect (``--plugin FILE.py:EFFECT``): viscous contact damping
 #: under another name.
 PLUGIN = """
-from hybridtable.diagnosis.effects import Effect, EffectParameter, Signature
+from hybridtable.effects.effect import Effect, EffectParameter, Signature
 
 EFFECT = Effect(
     name="lab_damping",
@@ -121,7 +121,7 @@ def test_a_bad_or_unregistered_model_gets_one_line_and_exit_2(margins, tmp_path,
     # With the user's effect loaded, the model is the damped one under another name.
     plugin = tmp_path / "lab.py"
     plugin.write_text(PLUGIN)
-    from hybridtable.diagnosis.registry import unregister_effect
+    from hybridtable.effects.registry import unregister_effect
 
     try:
         args = ["margins", "--model", str(user), "--plugin", f"{plugin}:EFFECT"]

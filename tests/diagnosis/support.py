@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pydrake.systems.primitives import MatrixGain
 
-from hybridtable.diagnosis.effects import Effect, EffectParameter, Signature
+from hybridtable.effects.effect import Effect, EffectParameter, Signature
 from hybridtable.systems.blocks import chain_output
 
 __all__ = ["sensor_gain_effect"]

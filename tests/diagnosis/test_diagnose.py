@@ -19,7 +19,7 @@ from hybridtable.cli import main
 from hybridtable.diagnosis.diagnose import diagnose
 from hybridtable.diagnosis.evaluate import prepare_runs
 from hybridtable.diagnosis.fit import fit_effect
-from hybridtable.diagnosis.registry import register_effect, unregister_effect
+from hybridtable.effects.registry import register_effect, unregister_effect
 from hybridtable.measurement.noise_model import NoiseModel, estimate_noise, whiten
 from hybridtable.measurement.run_format import Run, RunInfo
 from tests.diagnosis.support import sensor_gain_effect

@@ -7,8 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hybridtable.diagnosis.effects import ModelSpec, RigScale
-from hybridtable.diagnosis.registry import (
+from hybridtable.effects.registry import (
     EFFECTS,
     build_spec,
     effect_names,
@@ -17,6 +16,7 @@ from hybridtable.diagnosis.registry import (
     register_effect,
     unregister_effect,
 )
+from hybridtable.effects.spec import ModelSpec, RigScale
 from hybridtable.errors import ParameterError
 from hybridtable.measurement.replay import replay
 from hybridtable.measurement.rig import RigPhysics

@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hybridtable.diagnosis.effects import ModelSpec, RigScale
 from hybridtable.diagnosis.evaluate import Evaluation, Evaluator, prepare_runs
 from hybridtable.diagnosis.goodness import FALSE_ALARM_RATE, goodness_of_fit
+from hybridtable.effects.spec import ModelSpec, RigScale
 from tests.generators.effectsim import make_runs
 
 

@@ -14,10 +14,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hybridtable.diagnosis import library
-from hybridtable.diagnosis.effects import Effect, RigScale
-from hybridtable.diagnosis.library import BUILTIN_EFFECTS, builtin_effects
-from hybridtable.diagnosis.registry import EFFECTS, build_spec, effect_names
+from hybridtable.effects import library
+from hybridtable.effects.effect import Effect
+from hybridtable.effects.library import BUILTIN_EFFECTS, builtin_effects
+from hybridtable.effects.registry import EFFECTS, build_spec, default_effects, effect_names
+from hybridtable.effects.spec import RigScale
 from hybridtable.measurement.replay import replay
 from hybridtable.measurement.rig import simulate_rig
 from hybridtable.measurement.run_reader import read_run
@@ -30,11 +31,11 @@ LIBRARY = Path(library.__file__).parent
 MODULES = sorted(p.stem for p in LIBRARY.glob("*.py") if p.stem not in ("_common", "__init__"))
 
 #: What an effect module may import from this package (imports point down).
-ALLOWED = {"hybridtable.diagnosis.effects", "hybridtable.diagnosis.library._common"}
+ALLOWED = {"hybridtable.effects.effect", "hybridtable.effects.library._common"}
 
 
 def _module(name: str):
-    return importlib.import_module(f"hybridtable.diagnosis.library.{name}")
+    return importlib.import_module(f"hybridtable.effects.library.{name}")
 
 
 @pytest.mark.parametrize("name", MODULES)
@@ -61,7 +62,10 @@ def test_builtin_effects_list_each_module_once_in_registration_order():
     assert effect_names()[: len(names)] == names
     assert all(EFFECTS[e.name] is e for e in BUILTIN_EFFECTS)
     # Registration order decides ties of the ranking: damping before the look-alikes.
-    assert names[:2] == ("contact_damping", "hunt_crossley") and names[-1] == "mass_error"
+    assert names[:2] == ("contact_damping", "hunt_crossley")
+    # diagnose's eleven first (mass_error last), then the effects on a CoR table's conditions
+    assert default_effects("diagnose")[-1] == "mass_error"
+    assert names[: len(default_effects("diagnose"))] == default_effects("diagnose")
     listed = builtin_effects()
     assert listed == list(BUILTIN_EFFECTS)
     listed.pop()

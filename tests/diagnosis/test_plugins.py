@@ -24,11 +24,11 @@ import numpy as np
 import pytest
 from pydrake.systems.framework import DiagramBuilder
 
-from hybridtable.diagnosis import registry
 from hybridtable.diagnosis.diagnose import diagnose
-from hybridtable.diagnosis.effects import ModelSpec, RigScale
 from hybridtable.diagnosis.fit import fit_effect
-from hybridtable.diagnosis.library import BUILTIN_EFFECTS
+from hybridtable.effects import registry
+from hybridtable.effects.library import BUILTIN_EFFECTS
+from hybridtable.effects.spec import ModelSpec, RigScale
 from hybridtable.errors import ParameterError
 from hybridtable.measurement.recorder import record_run, write_run
 from hybridtable.measurement.replay import replay

@@ -25,9 +25,10 @@ import math
 import numpy as np
 import pytest
 
+from hybridtable.effects.registry import default_effects, get_effect
 from hybridtable.explain.conditions import Conditions
 from hybridtable.explain.identify import DETERMINED_STD, identifiability
-from hybridtable.explain.registry import cor_effect_names, get_cor_effect
+from hybridtable.explain.model import EffectAt, table_scale
 
 COMPENSATORS = ("none", "SDC", "MDC", "SDMDC")
 #: A 4-decimal table's rounding and the model's own error, in ln CoR (CoR ~ 1).
@@ -38,8 +39,9 @@ INVARIANCE = {"f_con": 1.0, "delay": -1.0, "T_lead": -1.0, "table lag": -1.0}
 
 
 def _analyse(conditions):
-    effects = [get_cor_effect(n) for n in cor_effect_names()]
     cases = [(c, cond) for cond in conditions for c in COMPENSATORS]
+    rig = table_scale(cases)
+    effects = [EffectAt(get_effect(n), rig) for n in default_effects("explain")]
     return identifiability(effects, cases, np.full(len(cases), SIGMA_LN))
 
 

@@ -8,9 +8,10 @@ from __future__ import annotations
 
 import pytest
 
+from hybridtable.effects.registry import get_effect
+from hybridtable.effects.spec import ModelSpec
 from hybridtable.errors import ParameterError
 from hybridtable.explain.conditions import Conditions
-from hybridtable.explain.library import builtin_cor_effects
 from hybridtable.loop.params import BELIEFS, HybridLoopParams
 from hybridtable.measurement.rig import RigPhysics
 
@@ -39,8 +40,21 @@ PHYSICS_CHANGES = {
 }
 
 
+class _OnTheLoop:
+    """An effect of the one library applied to a loop's parameters, as a CoR row's loop."""
+
+    def __init__(self, name: str) -> None:
+        self.effect = get_effect(name)
+
+    def apply(self, conditions, params, values):
+        spec = self.effect.apply(ModelSpec(), values, None)
+        out, systems = spec.realize(params)
+        assert systems is None
+        return out
+
+
 def _effect(name: str):
-    return next(e for e in builtin_cor_effects() if e.name == name)
+    return _OnTheLoop(name)
 
 
 def test_untold_beliefs_are_the_true_values():
@@ -116,7 +130,7 @@ def test_a_cor_effect_on_the_physics_keeps_the_beliefs(effect, values, changed):
 def test_cor_effects_on_the_beliefs_start_from_the_resolved_ones():
     lead = _effect("lead_time_error").apply(Conditions(), UNTOLD, {"lead_error_s": 0.001})
     assert lead.lead_time_s == pytest.approx(0.006, rel=1e-12)
-    stiff = _effect("stiffness_error").apply(
+    stiff = _effect("compensator_stiffness_error").apply(
         Conditions(), UNTOLD, {"compensator_stiffness_ratio": 0.5}
     )
     assert stiff.compensator_stiffness_n_per_m == 5.0e4

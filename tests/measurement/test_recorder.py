@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from hybridtable.diagnosis.effects import ModelSpec
+from hybridtable.effects.spec import ModelSpec
 from hybridtable.errors import CommandError, ParameterError
 from hybridtable.measurement.audit import audit_runs
 from hybridtable.measurement.recorder import record_run, write_run

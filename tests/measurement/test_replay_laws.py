@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hybridtable.diagnosis.effects import ModelSpec
+from hybridtable.effects.spec import ModelSpec
 from hybridtable.measurement import replay as replay_module
 from hybridtable.measurement.rig import RigPhysics
 from hybridtable.measurement.run_reader import read_runs

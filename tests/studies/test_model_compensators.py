@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from hybridtable.diagnosis.effects import ModelSpec
 from hybridtable.diagnosis.model_file import FittedEffect, RigModel
+from hybridtable.effects.spec import ModelSpec
 from hybridtable.measurement.recorder import record_run, write_run
 from hybridtable.measurement.run_format import RunInfo
 from hybridtable.measurement.run_reader import read_runs

@@ -1,7 +1,7 @@
 """What the built-in effects share: residual channels, contact phases, the
 stiffness parameter, the bounds of a structural mode and extra fit starts.
 
-Every quantity is in SI units; a :class:`~hybridtable.diagnosis.effects.RigScale`
+Every quantity is in SI units; a :class:`~hybridtable.effects.effect.RigScale`
 gives the nominal magnitudes of the rig the bounds are relative to.
 """
 
@@ -12,7 +12,9 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from hybridtable.diagnosis.effects import EffectParameter, RigScale
+from hybridtable.effects.effect import EffectParameter
+from hybridtable.effects.spec import RigScale
+from hybridtable.laws.contact import critical_damping_n_s_per_m
 
 __all__ = [
     "F_MEA",
@@ -26,6 +28,8 @@ __all__ = [
     "lag_starts",
     "mode_lower",
     "mode_upper",
+    "ratio_parameter",
+    "critical_damping_n_s_per_m",
 ]
 
 
@@ -174,3 +178,13 @@ def mode_upper(scale: RigScale) -> float:
     """Highest frequency of a structural mode, Hz: 0.45 / h, just below the
     Nyquist frequency of the sample period ``h`` (s)."""
     return 0.45 / scale.sample_period_s
+
+
+def ratio_parameter(
+    name: str, description: str, lower: float, upper: float, quantity: str
+) -> EffectParameter:
+    """A ratio to the stated value (unit 1), null 1, fitted in its logarithm with
+    a typical change of 0.1 (10 %), moving the loop ``quantity`` (in words)."""
+    return EffectParameter(
+        name, "1", description, lower, upper, 0.1, 1.0, log=True, quantity=quantity
+    )

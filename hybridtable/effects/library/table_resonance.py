@@ -19,8 +19,8 @@ from __future__ import annotations
 
 import math
 
-from hybridtable.diagnosis.effects import Effect, EffectParameter, Signature
-from hybridtable.diagnosis.library._common import (
+from hybridtable.effects.effect import Effect, EffectParameter, Signature
+from hybridtable.effects.library._common import (
     F_MEA,
     P_ACT,
     mode_lower,
@@ -31,7 +31,7 @@ from hybridtable.diagnosis.library._common import (
 __all__ = ["EFFECT"]
 
 
-#: The effect ``table_resonance`` (registered by :mod:`hybridtable.diagnosis.registry`).
+#: The effect ``table_resonance`` (registered by :mod:`hybridtable.effects.registry`).
 EFFECT = Effect(
     name="table_resonance",
     description="a lightly damped structural mode between the table's servo and its contact device",
@@ -67,4 +67,5 @@ EFFECT = Effect(
     touches=("table.mode",),
     starts=resonance_starts,
     separation_hint="a run with a sharper start (a larger approach velocity)",
+    default_for=("diagnose",),  # a CoR table tries it when named (--effects)
 )

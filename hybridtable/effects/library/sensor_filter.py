@@ -13,13 +13,13 @@ the reading lags and the touch is rounded, with a tail after the release.
 
 from __future__ import annotations
 
-from hybridtable.diagnosis.effects import Effect, EffectParameter, Signature
-from hybridtable.diagnosis.library._common import F_MEA, lag_starts, lag_upper
+from hybridtable.effects.effect import Effect, EffectParameter, Signature
+from hybridtable.effects.library._common import F_MEA, lag_starts, lag_upper
 
 __all__ = ["EFFECT"]
 
 
-#: The effect ``sensor_filter`` (registered by :mod:`hybridtable.diagnosis.registry`).
+#: The effect ``sensor_filter`` (registered by :mod:`hybridtable.effects.registry`).
 EFFECT = Effect(
     name="sensor_filter",
     description="first-order low pass of the force-measurement chain",
@@ -44,4 +44,5 @@ EFFECT = Effect(
     starts=lag_starts,
     separation_hint="a faster or shorter contact (a larger approach velocity or a "
     "smaller spacecraft mass): a low pass rounds the touch, a delay only shifts it",
+    default_for=("diagnose",),  # a CoR table tries it when named (--effects)
 )

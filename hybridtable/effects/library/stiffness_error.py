@@ -12,13 +12,13 @@ is higher (stiffer) or lower, and shorter or longer.
 
 from __future__ import annotations
 
-from hybridtable.diagnosis.effects import Effect, Signature
-from hybridtable.diagnosis.library._common import CONTACT, F_MEA, stiffness_parameter
+from hybridtable.effects.effect import Effect, Signature
+from hybridtable.effects.library._common import CONTACT, F_MEA, stiffness_parameter
 
 __all__ = ["EFFECT"]
 
 
-#: The effect ``stiffness_error`` (registered by :mod:`hybridtable.diagnosis.registry`).
+#: The effect ``stiffness_error`` (registered by :mod:`hybridtable.effects.registry`).
 EFFECT = Effect(
     name="stiffness_error",
     description="the contact stiffness differs from the nominal one",
@@ -33,4 +33,5 @@ EFFECT = Effect(
     separation_hint="a run with another contact spring, or a measurement of the "
     "contact point's position (a series compliance and a softer contact act as "
     "the same effective stiffness)",
+    default_for=("diagnose",),  # a CoR table tries it when named (--effects)
 )

@@ -15,13 +15,13 @@ at the touch and negative at the release.
 
 from __future__ import annotations
 
-from hybridtable.diagnosis.effects import Effect, EffectParameter, Signature
-from hybridtable.diagnosis.library._common import CONTACT, F_MEA, delay_starts, lag_upper
+from hybridtable.effects.effect import Effect, EffectParameter, Signature
+from hybridtable.effects.library._common import CONTACT, F_MEA, delay_starts, lag_upper
 
 __all__ = ["EFFECT"]
 
 
-#: The effect ``extra_delay`` (registered by :mod:`hybridtable.diagnosis.registry`).
+#: The effect ``extra_delay`` (registered by :mod:`hybridtable.effects.registry`).
 EFFECT = Effect(
     name="extra_delay",
     description="the force sensor's delay differs from the nominal one (any fraction of a tick)",
@@ -34,6 +34,7 @@ EFFECT = Effect(
             upper=lambda s: lag_upper(s, 5.0),
             scale=lambda s: 0.5 * s.sample_period_s,
             null=0.0,
+            quantity="delay",
         ),
     ),
     signature=Signature(

@@ -15,13 +15,13 @@ effective contact, never a stiffer one.
 
 from __future__ import annotations
 
-from hybridtable.diagnosis.effects import Effect, EffectParameter, Signature
-from hybridtable.diagnosis.library._common import CONTACT, F_MEA
+from hybridtable.effects.effect import Effect, EffectParameter, Signature
+from hybridtable.effects.library._common import CONTACT, F_MEA
 
 __all__ = ["EFFECT"]
 
 
-#: The effect ``series_compliance`` (registered by :mod:`hybridtable.diagnosis.registry`).
+#: The effect ``series_compliance`` (registered by :mod:`hybridtable.effects.registry`).
 EFFECT = Effect(
     name="series_compliance",
     description="a compliance s of the structure between the table's position sensor "
@@ -48,4 +48,5 @@ EFFECT = Effect(
     touches=("contact.series",),
     separation_hint="a run with another contact spring, or a measurement of the "
     "contact point's position",
+    default_for=("diagnose",),  # a CoR table tries it when named (--effects)
 )

@@ -12,13 +12,13 @@ compression, restitution, free flight), also without contact.
 
 from __future__ import annotations
 
-from hybridtable.diagnosis.effects import Effect, EffectParameter, Signature
-from hybridtable.diagnosis.library._common import F_MEA
+from hybridtable.effects.effect import Effect, EffectParameter, Signature
+from hybridtable.effects.library._common import F_MEA
 
 __all__ = ["EFFECT"]
 
 
-#: The effect ``force_bias`` (registered by :mod:`hybridtable.diagnosis.registry`).
+#: The effect ``force_bias`` (registered by :mod:`hybridtable.effects.registry`).
 EFFECT = Effect(
     name="force_bias",
     description="an offset in the force reading",
@@ -41,4 +41,5 @@ EFFECT = Effect(
     apply=lambda spec, v, s: spec.with_sensor(bias_n=v["bias_n"]),
     touches=("sensor.bias",),
     separation_hint="a longer record without contact",
+    default_for=("diagnose",),  # a CoR table tries it when named (--effects)
 )

@@ -15,13 +15,13 @@ the deflection.
 
 from __future__ import annotations
 
-from hybridtable.diagnosis.effects import Effect, EffectParameter, Signature
-from hybridtable.diagnosis.library._common import CONTACT, F_MEA
+from hybridtable.effects.effect import Effect, EffectParameter, Signature
+from hybridtable.effects.library._common import CONTACT, F_MEA
 
 __all__ = ["EFFECT"]
 
 
-#: The effect ``hunt_crossley`` (registered by :mod:`hybridtable.diagnosis.registry`).
+#: The effect ``hunt_crossley`` (registered by :mod:`hybridtable.effects.registry`).
 EFFECT = Effect(
     name="hunt_crossley",
     description="Hunt-Crossley damping, proportional to the deflection: f = k d (1 + alpha v)",
@@ -46,4 +46,5 @@ EFFECT = Effect(
     touches=("contact.hunt_crossley",),
     separation_hint="a faster approach (the touch is steeper: a jump for viscous "
     "damping, none for Hunt-Crossley)",
+    default_for=("diagnose",),  # a CoR table tries it when named (--effects)
 )

@@ -1,9 +1,13 @@
-"""The registry of candidate effects: name -> :class:`~hybridtable.diagnosis.effects.Effect`.
+"""The one registry of effects: name -> :class:`~hybridtable.effects.effect.Effect`,
+for ``diagnose``, ``compare --add`` and ``explain`` alike.
 
-The built-in effects come from :mod:`hybridtable.diagnosis.library` (one module
+The built-in effects come from :mod:`hybridtable.effects.library` (one module
 each, imported statically), registered in its order. Other packages add
 theirs through the entry-point group ``hybridtable.effects`` (loaded on first
-use), a script through :func:`register_effect`.
+use), a script through :func:`register_effect`, a command through
+``--plugin``. The old group of CoR effects, ``hybridtable.cor_effects``, and
+:func:`register_cor_effect` still load old
+:class:`~hybridtable.effects.legacy.CorEffect` s, with a deprecation warning.
 """
 
 from __future__ import annotations
@@ -11,17 +15,23 @@ from __future__ import annotations
 import importlib
 import importlib.util
 import sys
+import warnings
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 
-from hybridtable.diagnosis.effects import Effect, ModelSpec, RigScale
-from hybridtable.diagnosis.library import builtin_effects
+from hybridtable.effects.effect import FRONT_ENDS, Effect
+from hybridtable.effects.legacy import CorEffect, as_effect
+from hybridtable.effects.library import builtin_effects
+from hybridtable.effects.spec import ModelSpec, RigScale
 from hybridtable.errors import ParameterError
 
 __all__ = [
     "EFFECTS",
     "ENTRY_POINT_GROUP",
+    "OLD_ENTRY_POINT_GROUP",
     "register_effect",
+    "register_cor_effect",
+    "default_effects",
     "unregister_effect",
     "effect_names",
     "get_effect",
@@ -36,8 +46,11 @@ __all__ = [
 EFFECTS: dict[str, Effect] = {}
 
 #: Entry-point group of effects that other packages provide: each entry point
-#: loads an :class:`~hybridtable.diagnosis.effects.Effect`.
+#: loads an :class:`~hybridtable.effects.effect.Effect`.
 ENTRY_POINT_GROUP = "hybridtable.effects"
+
+#: The old entry-point group of ``explain``'s CoR effects (loaded, deprecated).
+OLD_ENTRY_POINT_GROUP = "hybridtable.cor_effects"
 
 _entry_points_loaded = False
 
@@ -76,12 +89,20 @@ def _load_entry_points() -> None:
     _entry_points_loaded = True
     from importlib.metadata import entry_points  # 25 ms: only when names are asked for
 
-    for ep in entry_points(group=ENTRY_POINT_GROUP):
+    found = [(ep, ENTRY_POINT_GROUP) for ep in entry_points(group=ENTRY_POINT_GROUP)]
+    found += [(ep, OLD_ENTRY_POINT_GROUP) for ep in entry_points(group=OLD_ENTRY_POINT_GROUP)]
+    for ep, group in found:
         effect = ep.load()
-        if not isinstance(effect, Effect):
-            raise ParameterError(
-                f"entry point {ep.name} = {ep.value} of {ENTRY_POINT_GROUP} is not an Effect"
+        if group == OLD_ENTRY_POINT_GROUP:
+            warnings.warn(
+                f"entry point {ep.name} of {OLD_ENTRY_POINT_GROUP} is deprecated: give the "
+                f"effect as an Effect in {ENTRY_POINT_GROUP}",
+                DeprecationWarning,
+                stacklevel=2,
             )
+            effect = as_effect(effect) if isinstance(effect, CorEffect | Effect) else effect
+        if not isinstance(effect, Effect):
+            raise ParameterError(f"entry point {ep.name} = {ep.value} of {group} is not an Effect")
         if effect.name in EFFECTS:
             raise ParameterError(
                 f"effect {effect.name!r} of entry point {ep.name} = {ep.value} "
@@ -105,6 +126,27 @@ def register_effect(effect: Effect, replace_existing: bool = False) -> Effect:
         raise ParameterError(f"effect {effect.name!r} is already registered")
     EFFECTS[effect.name] = effect
     return effect
+
+
+def register_cor_effect(effect: CorEffect | Effect, *, replace: bool = False) -> Effect:
+    """Register an old CoR effect (deprecated: write an
+    :class:`~hybridtable.effects.effect.Effect` and call :func:`register_effect`)."""
+    warnings.warn(
+        "register_cor_effect and CorEffect are deprecated: write an Effect "
+        "(hybridtable.effects) and register it with register_effect",
+        DeprecationWarning,
+        stacklevel=2,
+    )
+    return register_effect(as_effect(effect), replace_existing=replace)
+
+
+def default_effects(front_end: str) -> tuple[str, ...]:
+    """The registered effects that ``front_end`` (``"diagnose"`` or ``"explain"``)
+    tries when the user names none, in registration order
+    (:attr:`~hybridtable.effects.effect.Effect.default_for`)."""
+    if front_end not in FRONT_ENDS:
+        raise ParameterError(f"front end must be one of {', '.join(FRONT_ENDS)}")
+    return tuple(n for n in effect_names() if front_end in EFFECTS[n].default_for)
 
 
 def unregister_effect(name: str) -> None:
@@ -225,7 +267,7 @@ def load_plugin(text: str) -> list[Effect]:
 
     ``MODULE`` is an importable module (``my_lab.effects``) or the path of a
     Python file (``./backlash.py``); ``ATTR`` names an
-    :class:`~hybridtable.diagnosis.effects.Effect` or a list or tuple of them.
+    :class:`~hybridtable.effects.effect.Effect` or a list or tuple of them.
     Loading the same plug-in twice registers it once; so does a file whose
     code an installed package's entry point already registered (the package
     installed from it).
@@ -246,8 +288,17 @@ def load_plugin(text: str) -> list[Effect]:
     except AttributeError:
         raise ParameterError(f"--plugin {text}: {where} has no attribute {attr!r}") from None
     items = (
-        list(found) if isinstance(found, Iterable) and not isinstance(found, Effect) else [found]
+        list(found)
+        if isinstance(found, Iterable) and not isinstance(found, Effect | CorEffect)
+        else [found]
     )
+    if any(isinstance(e, CorEffect) for e in items):
+        warnings.warn(
+            f"--plugin {text}: CorEffect is deprecated; write an Effect (hybridtable.effects)",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        items = [as_effect(e) if isinstance(e, CorEffect) else e for e in items]
     if not items or not all(isinstance(e, Effect) for e in items):
         raise ParameterError(
             f"--plugin {text}: {attr} is not an Effect or a list of them "

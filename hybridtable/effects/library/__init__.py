@@ -3,7 +3,7 @@
 Each module of this package (apart from ``_common``, the shared helpers) is
 named after its effect and defines one ``EFFECT = Effect(...)``: its
 parameters with units, bounds and null values, what it changes in the
-:class:`~hybridtable.diagnosis.effects.ModelSpec`, and its signature in the
+:class:`~hybridtable.effects.effect.ModelSpec`, and its signature in the
 residuals. :data:`BUILTIN_EFFECTS` lists them in registration order, which
 matters: a tie of the ranking goes to the effect registered first.
 
@@ -14,28 +14,34 @@ To add an effect:
 2. add one line here: import the module and append its ``EFFECT`` to
    :data:`BUILTIN_EFFECTS`.
 
-An effect module imports only :mod:`hybridtable.diagnosis.effects`,
-:mod:`hybridtable.diagnosis.library._common`, the standard library and numpy;
+An effect module imports only :mod:`hybridtable.effects.effect`,
+:mod:`hybridtable.effects.library._common`, the standard library and numpy;
 never the registry. A package outside this repository provides effects
 through the entry-point group ``hybridtable.effects`` instead
-(:mod:`hybridtable.diagnosis.registry`).
+(:mod:`hybridtable.effects.registry`).
 """
 
 from __future__ import annotations
 
-from hybridtable.diagnosis.effects import Effect
-from hybridtable.diagnosis.library import (
+from hybridtable.effects.effect import Effect
+from hybridtable.effects.library import (
+    compensator_stiffness_error,
     contact_damping,
+    contact_damping_ratio,
+    contact_frequency_error,
     coulomb_friction,
     extra_delay,
     force_bias,
     hunt_crossley,
+    lead_time_error,
     mass_error,
     nonlinear_stiffness,
     sensor_filter,
     series_compliance,
     stiffness_error,
+    table_damping,
     table_resonance,
+    table_response,
 )
 
 __all__ = ["BUILTIN_EFFECTS", "builtin_effects"]
@@ -54,6 +60,12 @@ BUILTIN_EFFECTS: tuple[Effect, ...] = (
     table_resonance.EFFECT,
     force_bias.EFFECT,
     mass_error.EFFECT,
+    contact_frequency_error.EFFECT,
+    lead_time_error.EFFECT,
+    table_response.EFFECT,
+    table_damping.EFFECT,
+    compensator_stiffness_error.EFFECT,
+    contact_damping_ratio.EFFECT,
 )
 
 

@@ -16,13 +16,13 @@ compression and restitution.
 
 from __future__ import annotations
 
-from hybridtable.diagnosis.effects import Effect, EffectParameter, Signature
-from hybridtable.diagnosis.library._common import CONTACT, F_MEA, stiffness_parameter
+from hybridtable.effects.effect import Effect, EffectParameter, Signature
+from hybridtable.effects.library._common import CONTACT, F_MEA, stiffness_parameter
 
 __all__ = ["EFFECT"]
 
 
-#: The effect ``nonlinear_stiffness`` (registered by :mod:`hybridtable.diagnosis.registry`).
+#: The effect ``nonlinear_stiffness`` (registered by :mod:`hybridtable.effects.registry`).
 EFFECT = Effect(
     name="nonlinear_stiffness",
     description="power-law contact: f = k_ref d_ref (d / d_ref)^n, d_ref the peak "
@@ -53,4 +53,5 @@ EFFECT = Effect(
     touches=("contact.stiffness",),
     separation_hint="runs at two approach velocities (the secant stiffness changes "
     "with the peak deflection only for a power law)",
+    default_for=("diagnose",),  # a CoR table tries it when named (--effects)
 )

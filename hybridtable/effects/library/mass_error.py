@@ -17,13 +17,13 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from hybridtable.diagnosis.effects import Effect, EffectParameter, Signature
-from hybridtable.diagnosis.library._common import CONTACT, V_DES
+from hybridtable.effects.effect import Effect, EffectParameter, Signature
+from hybridtable.effects.library._common import CONTACT, V_DES
 
 __all__ = ["EFFECT"]
 
 
-#: The effect ``mass_error`` (registered by :mod:`hybridtable.diagnosis.registry`).
+#: The effect ``mass_error`` (registered by :mod:`hybridtable.effects.registry`).
 EFFECT = Effect(
     name="mass_error",
     description="the spacecraft model integrates with another mass than the run's "
@@ -49,4 +49,5 @@ EFFECT = Effect(
     stage="closed_loop",
     touches=("spacecraft.mass",),
     separation_hint="none needed: the closed loop tells the mass from the physics",
+    default_for=("diagnose",),  # a CoR table tries it when named (--effects)
 )

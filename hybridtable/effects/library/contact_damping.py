@@ -19,13 +19,13 @@ line to ``hybridtable/diagnosis/library/__init__.py``.
 
 from __future__ import annotations
 
-from hybridtable.diagnosis.effects import Effect, EffectParameter, Signature
-from hybridtable.diagnosis.library._common import CONTACT, F_MEA
+from hybridtable.effects.effect import Effect, EffectParameter, Signature
+from hybridtable.effects.library._common import CONTACT, F_MEA
 
 __all__ = ["EFFECT"]
 
 
-#: The effect ``contact_damping`` (registered by :mod:`hybridtable.diagnosis.registry`).
+#: The effect ``contact_damping`` (registered by :mod:`hybridtable.effects.registry`).
 EFFECT = Effect(
     name="contact_damping",
     description="viscous damping in the contact: f = k d + c v",
@@ -38,6 +38,7 @@ EFFECT = Effect(
             upper=lambda s: s.critical_damping_n_s_per_m,
             scale=lambda s: 0.01 * s.critical_damping_n_s_per_m,
             null=0.0,
+            quantity="damping",
         ),
     ),
     signature=Signature(

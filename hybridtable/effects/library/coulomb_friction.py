@@ -15,13 +15,13 @@ releases early.
 
 from __future__ import annotations
 
-from hybridtable.diagnosis.effects import Effect, EffectParameter, Signature
-from hybridtable.diagnosis.library._common import CONTACT, F_MEA
+from hybridtable.effects.effect import Effect, EffectParameter, Signature
+from hybridtable.effects.library._common import CONTACT, F_MEA
 
 __all__ = ["EFFECT"]
 
 
-#: The effect ``coulomb_friction`` (registered by :mod:`hybridtable.diagnosis.registry`).
+#: The effect ``coulomb_friction`` (registered by :mod:`hybridtable.effects.registry`).
 EFFECT = Effect(
     name="coulomb_friction",
     description="a constant force F against the deflection rate while in contact "
@@ -49,4 +49,5 @@ EFFECT = Effect(
     touches=("contact.friction",),
     separation_hint="a run at another approach velocity (friction does not grow "
     "with it, damping does)",
+    default_for=("diagnose",),  # a CoR table tries it when named (--effects)
 )
