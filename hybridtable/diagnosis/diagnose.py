@@ -80,9 +80,9 @@ from hybridtable.diagnosis.fit import (
 from hybridtable.diagnosis.goodness import goodness_of_fit
 from hybridtable.diagnosis.search import pairs_and_swaps
 from hybridtable.diagnosis.settings import EXPLAINED_MAX_ERROR, FIT_ACCURACY
-from hybridtable.diagnosis.workers import pool_map
 from hybridtable.effects.registry import default_effects, get_effect
 from hybridtable.effects.spec import ModelSpec, RigScale
+from hybridtable.effects.workers import pool_map
 from hybridtable.measurement.audit import audit_runs
 from hybridtable.measurement.run_format import Run
 

@@ -49,8 +49,8 @@ from hybridtable.diagnosis.fit import (
     residual_probe,
 )
 from hybridtable.diagnosis.settings import BIC_THRESHOLD, PAIR_POOL
-from hybridtable.diagnosis.workers import pool_map
 from hybridtable.effects.registry import get_effect
+from hybridtable.effects.workers import pool_map
 
 __all__ = ["PAIR_NFEV", "grid_values", "drop_one", "pairs_and_swaps"]
 

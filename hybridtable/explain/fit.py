@@ -16,18 +16,16 @@ started from their single effects' fits.
 
 from __future__ import annotations
 
-import contextlib
 import itertools
 import math
-import multiprocessing
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import least_squares, lsq_linear
 from scipy.stats import chi2 as chi2_dist
 
+from hybridtable.effects.workers import pool_map
 from hybridtable.explain.model import Case, CorModel, EffectAt
 
 __all__ = ["ModelFit", "fit_model", "fit_models", "rank_fits"]
@@ -244,7 +242,9 @@ def fit_models(
 ) -> tuple[list[ModelFit], list[tuple[str, ...]]]:
     """Fit the stated loop, every single effect, and the promising pairs and triples.
 
-    ``jobs`` > 1 fits the models in that many forked processes.
+    ``jobs`` > 1 fits the models in that many forked processes
+    (:func:`~hybridtable.effects.workers.pool_map`: the effects stay in this
+    process's memory, which the workers inherit).
 
     Returns
     -------
@@ -259,8 +259,9 @@ def fit_models(
     too_many: list[tuple[str, ...]] = []
     singles = [e for e in effects if len(e.parameters) < n]
     too_many += [(e.name,) for e in effects if len(e.parameters) >= n]
-    with _pool(jobs) as run:
-        fits = run([((), ())] + [((e,), ()) for e in singles], cases, y, sigma, note)
+    _STATE.update(effects={e.name: e for e in effects}, cases=cases, y=y, sigma=sigma)
+    try:
+        fits = _run([((), ())] + [((e.name,), ()) for e in singles], jobs, note)
         single = {f.effects[0]: f for f in fits[1:]}
         everything = CorModel(effects)
         index, j = {}, 0
@@ -297,43 +298,31 @@ def fit_models(
                         for e in combo
                     ]
                 )
-                work.append((combo, (start,)))
-        fits += run(work, cases, y, sigma, note)
+                work.append((names, (start,)))
+        fits += _run(work, jobs, note)
+    finally:
+        _STATE.clear()
     return rank_fits(fits), sorted(set(too_many))
 
 
-def _fit_job(args) -> ModelFit:
-    effects, starts, cases, y, sigma = args
-    return fit_model(effects, cases, y, sigma, starts)
+#: What the fitting jobs share (set by :func:`fit_models`; forked workers inherit it).
+_STATE: dict = {}
 
 
-@contextlib.contextmanager
-def _pool(jobs: int):
-    """A function that fits a list of (effects, starts) jobs, in ``jobs`` processes
-    (forked, so that plug-in effects registered in this process are there too)."""
-    if jobs <= 1 or "fork" not in multiprocessing.get_all_start_methods():
+def _fit_job(job) -> ModelFit:
+    names, starts = job
+    effects = [_STATE["effects"][n] for n in names]
+    return fit_model(effects, _STATE["cases"], _STATE["y"], _STATE["sigma"], starts)
 
-        def serial(work, cases, y, sigma, note):
-            out = []
-            for effects, starts in work:
-                note(" + ".join(e.name for e in effects) or "the stated loop")
-                out.append(fit_model(effects, cases, y, sigma, starts))
-            return out
 
-        yield serial
-        return
-    ctx = multiprocessing.get_context("fork")
-    with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as pool:
-
-        def parallel(work, cases, y, sigma, note):
-            futures = [pool.submit(_fit_job, (e, s, cases, y, sigma)) for e, s in work]
-            out = []
-            for (effects, _), fut in zip(work, futures, strict=True):
-                out.append(fut.result())
-                note(" + ".join(e.name for e in effects) or "the stated loop")
-            return out
-
-        yield parallel
+def _run(work, jobs: int, note: Callable[[str], None]) -> list[ModelFit]:
+    """Fit the (effect names, starts) of ``work``, in ``jobs`` forked processes."""
+    return pool_map(
+        _fit_job,
+        work,
+        jobs,
+        on_done=lambda job, _fit: note(" + ".join(job[0]) or "the stated loop"),
+    )
 
 
 def rank_fits(fits: list[ModelFit]) -> list[ModelFit]:
