@@ -26,6 +26,7 @@ from typing import Any
 
 from hybridtable.errors import ParameterError
 from hybridtable.laws.contact import critical_damping_n_s_per_m
+from hybridtable.limits import LIMITS
 from hybridtable.loop.params import HybridLoopParams
 from hybridtable.measurement.rig import RigPhysics, model_mass_kg, run_with_model_mass
 from hybridtable.measurement.run_format import Run
@@ -286,14 +287,16 @@ class ModelSpec:
         self, params: HybridLoopParams, exact: bool
     ) -> tuple[dict[str, float], list[str]]:
         """The sensor's fields as a change of the sensor delay, and, in words,
-        what that leaves out (``exact``: an offset too, and the delay held at
-        zero or more)."""
+        what that leaves out (``exact``: an offset too, and a delay below the
+        smallest plausible one, :data:`~hybridtable.limits.LIMITS`, held at 0)."""
         changes: dict[str, float] = {}
         left: list[str] = []
         sensor = dict(self.sensor)
         if sensor.get("extra_delay_s"):
             delay = params.sensor_delay_s + float(sensor["extra_delay_s"])
-            changes["sensor_delay_s"] = max(delay, 0.0) if exact else delay
+            if exact:  # held at zero, as is one below the smallest a rig states
+                delay = delay if delay >= LIMITS["sensor_delay_s"].smallest_nonzero else 0.0
+            changes["sensor_delay_s"] = delay
         if sensor.get("time_constant_s"):
             left.append(f"the sensor's low pass ({sensor['time_constant_s']:g} s)")
         if exact and sensor.get("bias_n"):

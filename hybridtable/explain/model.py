@@ -214,7 +214,10 @@ class CorModel:
         return np.array([self._ln_cor(c, values) for c in cases])
 
     def _ln_cor(self, case: Case, values: dict[str, float]) -> float:
-        params, physics = loop_of(case, self.effects, values)
+        try:
+            params, physics = loop_of(case, self.effects, values)
+        except ParameterError:  # e.g. a lead just above zero, below any a rig states
+            return FAILED_LN_COR
         if physics is None:
             return ln_cor(params, case[1].sample_rate_hz)
         key = (case, tuple(values.items()))  # the diagram's systems are new each time

@@ -29,6 +29,7 @@ __all__ = [
     "mode_lower",
     "mode_upper",
     "ratio_parameter",
+    "scale_loop_field",
     "critical_damping_n_s_per_m",
 ]
 
@@ -188,3 +189,14 @@ def ratio_parameter(
     return EffectParameter(
         name, "1", description, lower, upper, 0.1, 1.0, log=True, quantity=quantity
     )
+
+
+def scale_loop_field(field: str, parameter: str):
+    """The ``apply`` of an effect that multiplies the loop's ``field`` (a field of
+    :class:`~hybridtable.loop.params.HybridLoopParams`) by its ``parameter``."""
+
+    def apply(spec, values, scale):
+        ratio = values[parameter]
+        return spec.with_loop(lambda p: p.with_(**{field: getattr(p, field) * ratio}))
+
+    return apply

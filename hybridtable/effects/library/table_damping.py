@@ -13,14 +13,15 @@ overshoot. ``explain`` tries it by default; ``diagnose`` when named.
 from __future__ import annotations
 
 from hybridtable.effects.effect import Effect, Signature
-from hybridtable.effects.library._common import CONTACT, F_MEA, P_ACT, ratio_parameter
+from hybridtable.effects.library._common import (
+    CONTACT,
+    F_MEA,
+    P_ACT,
+    ratio_parameter,
+    scale_loop_field,
+)
 
 __all__ = ["EFFECT"]
-
-
-def _apply(spec, v, s):
-    factor = v["table_damping_factor"]
-    return spec.with_loop(lambda p: p.with_(table_damping_ratio=p.table_damping_ratio * factor))
 
 
 #: The effect ``table_damping``.
@@ -33,7 +34,7 @@ EFFECT = Effect(
         ),
     ),
     Signature((P_ACT, F_MEA), CONTACT, "the table's lag and overshoot change"),
-    _apply,
+    scale_loop_field("table_damping_ratio", "table_damping_factor"),
     touches=("table.damping",),
     default_for=("explain",),
 )

@@ -15,14 +15,15 @@ default; ``diagnose`` when named (``--effects table_response``).
 from __future__ import annotations
 
 from hybridtable.effects.effect import Effect, Signature
-from hybridtable.effects.library._common import CONTACT, F_MEA, P_ACT, ratio_parameter
+from hybridtable.effects.library._common import (
+    CONTACT,
+    F_MEA,
+    P_ACT,
+    ratio_parameter,
+    scale_loop_field,
+)
 
 __all__ = ["EFFECT"]
-
-
-def _apply(spec, v, s):
-    ratio = v["table_response_ratio"]
-    return spec.with_loop(lambda p: p.with_(table_response_hz=p.table_response_hz * ratio))
 
 
 #: The effect ``table_response``.
@@ -39,7 +40,7 @@ EFFECT = Effect(
         ),
     ),
     Signature((P_ACT, F_MEA), CONTACT, "the table's position lags the command by 1/ratio"),
-    _apply,
+    scale_loop_field("table_response_hz", "table_response_ratio"),
     touches=("table.response",),
     default_for=("explain",),
 )
