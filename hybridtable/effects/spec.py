@@ -351,7 +351,7 @@ class ModelSpec:
         engine (:func:`~hybridtable.loop.fast.simulate_fast`) runs the model.
 
         The contact's stiffness and damping and the sensor's delay (held at zero
-        or more) change the physics, unknown to the compensator
+        below the smallest a rig states) change the physics, unknown to the compensator
         (:meth:`~hybridtable.loop.params.HybridLoopParams.with_physics`); the
         computer integrates with ``mass_ratio`` times the stated mass; then
         :attr:`loop` applies in order.
