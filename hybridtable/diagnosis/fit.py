@@ -107,7 +107,7 @@ def fit_effects(
         vals = {n: dict(v) for n, v in origin.items()}
         for (n, p), x in zip(free, u, strict=True):
             lo, hi = p.bounds(scale)
-            vals[n][p.name] = float(np.clip(origin[n][p.name] + x * p.typical(scale), lo, hi))
+            vals[n][p.name] = float(np.clip(p.value_at(x, scale, origin[n][p.name]), lo, hi))
         return vals
 
     def evaluate(vals) -> dict[int, Evaluation]:
@@ -138,8 +138,10 @@ def fit_effects(
     if not free:
         return Fit(list(names), origin, stage, indices, evs0, 0, nfev)
 
-    lo = np.array([(p.bounds(scale)[0] - origin[n][p.name]) / p.typical(scale) for n, p in free])
-    hi = np.array([(p.bounds(scale)[1] - origin[n][p.name]) / p.typical(scale) for n, p in free])
+    # in each parameter's coordinate: steps of its typical change from the origin
+    # (of the logarithm's, for a log parameter)
+    lo = np.array([p.coordinate(p.bounds(scale)[0], scale, origin[n][p.name]) for n, p in free])
+    hi = np.array([p.coordinate(p.bounds(scale)[1], scale, origin[n][p.name]) for n, p in free])
     cache: dict[bytes, dict[int, Evaluation]] = {np.zeros(len(free)).tobytes(): evs0}
 
     def fun(u: np.ndarray) -> np.ndarray:
@@ -370,8 +372,8 @@ def parameter_std(
     jac = np.empty((r0.size, len(free)))
     for j, (n, p) in enumerate(free):
         lo, hi = p.bounds(scale)
-        step = 1e-2 * p.typical(scale)
         x = fit.values[n][p.name]
+        step = 1e-2 * p.typical(scale) * (abs(x) if p.log else 1.0)  # log: a relative step
         up, down = min(x + step, hi), max(x - step, lo)
         if up <= down:
             return out

@@ -120,16 +120,18 @@ class EffectParameter:
         lo, hi = self.bounds(scale)
         return 0.5 * (lo + hi)
 
-    def value_at(self, u: float, scale: RigScale) -> float:
+    def value_at(self, u: float, scale: RigScale, origin: float | None = None) -> float:
         """The value at the fit's coordinate ``u``: ``origin + u typical``, or
-        ``origin e^(u typical)`` for a log parameter (``origin``: the null
-        value, else the start)."""
-        origin, step = self._origin(scale), self.typical(scale)
+        ``origin e^(u typical)`` for a log parameter (``origin``: default the
+        null value, else the start)."""
+        origin = self._origin(scale) if origin is None else origin
+        step = self.typical(scale)
         return origin * math.exp(u * step) if self.log else origin + u * step
 
-    def coordinate(self, value: float, scale: RigScale) -> float:
+    def coordinate(self, value: float, scale: RigScale, origin: float | None = None) -> float:
         """The fit's coordinate of ``value`` (inverse of :meth:`value_at`)."""
-        origin, step = self._origin(scale), self.typical(scale)
+        origin = self._origin(scale) if origin is None else origin
+        step = self.typical(scale)
         return math.log(value / origin) / step if self.log else (value - origin) / step
 
     def _origin(self, scale: RigScale) -> float:
