@@ -134,13 +134,10 @@ def cor_engine(effect, scale) -> str:
     from hybridtable.explain.conditions import Conditions
     from hybridtable.explain.model import EffectAt, loop_of
 
-    values = {}
-    for p in effect.parameters:
-        lo, hi = p.bounds(scale)
-        values[p.name] = min(max(p.value_at(1.0, scale), lo), hi)
+    at = EffectAt(effect, scale)
     case = ("SDMDC", Conditions(sample_rate_hz=1.0 / PAPER_SAMPLE_PERIOD_S))
     try:
-        _, systems = loop_of(case, (EffectAt(effect, scale),), values)
+        _, systems = loop_of(case, (at,), at.probe_values())
     except ParameterError as err:
         return f"cannot: {err}"
     return "fast engine" if systems is None else "Drake diagram"

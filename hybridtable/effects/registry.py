@@ -74,8 +74,9 @@ def _same_source(a: Path | None, b: Path | None) -> bool:
 
 
 def _load_entry_points() -> None:
-    """Register the effects of installed packages (entry-point group
-    :data:`ENTRY_POINT_GROUP`), once; a name already taken is refused.
+    """Register the effects of installed packages (entry-point groups
+    :data:`ENTRY_POINT_GROUP` and, deprecated, :data:`OLD_ENTRY_POINT_GROUP`),
+    once; a name already taken is refused.
 
     Raises
     ------
@@ -115,7 +116,8 @@ def _load_entry_points() -> None:
 
 
 def register_effect(effect: Effect, replace_existing: bool = False) -> Effect:
-    """Add ``effect`` to :data:`EFFECTS` (diagnose fits every registered effect).
+    """Add ``effect`` to :data:`EFFECTS` (the commands of its ``default_for`` try it
+    unless told which effects to try).
 
     Raises
     ------

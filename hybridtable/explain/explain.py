@@ -294,14 +294,15 @@ def explain_table(
 def _runnable(
     effects: Sequence[EffectAt], cases: Sequence[tuple]
 ) -> tuple[list[EffectAt], dict[str, str]]:
-    """The effects whose loop can be built for every row at their start values,
-    and why the others cannot."""
+    """The effects whose loop can be built for every row where they act
+    (:meth:`~hybridtable.explain.model.EffectAt.probe_values`; at their null
+    values they vanish, and any loop is built), and why the others cannot."""
     keep, why = [], {}
     for e in effects:
-        start = {p.name: p.null for p in e.parameters}
+        probe = e.probe_values()
         try:
             for case in cases:
-                loop_of(case, (e,), start)
+                loop_of(case, (e,), probe)
         except ParameterError as err:
             why[e.name] = str(err)
         else:

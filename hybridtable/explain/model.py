@@ -69,6 +69,11 @@ class EffectAt:
     def parameters(self) -> tuple[ParameterAt, ...]:
         return tuple(p.at(self.rig) for p in self.effect.parameters)
 
+    def probe_values(self) -> dict[str, float]:
+        """Every parameter one typical change from its null, within its bounds: a
+        point where the effect acts (at its null values it vanishes)."""
+        return {p.name: min(max(p.to_unit(1.0), p.lower), p.upper) for p in self.parameters}
+
     def spec(self, values: Mapping[str, float], base: ModelSpec | None = None) -> ModelSpec:
         """``base`` (default nominal) with the effect at ``values`` (missing: null);
         at its null values the effect vanishes, and ``base`` is returned as it is
