@@ -6,14 +6,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from hybridtable.diagnosis.evaluate import Evaluation, Evaluator, RunData, prepare_runs
 from hybridtable.diagnosis.settings import CHANNELS, FIT_ACCURACY
 from hybridtable.effects.effect import Effect
+from hybridtable.effects.fitting import Coordinates, LeastSquares, fit_values, standard_errors
 from hybridtable.effects.registry import build_spec, get_effect
 from hybridtable.effects.spec import ModelSpec, RigScale
 from hybridtable.errors import ParameterError
@@ -67,6 +67,42 @@ def model_spec(
     return build_spec([(get_effect(n), values[n]) for n in names], scale)
 
 
+#: The optimizer's settings for replays of recorded runs (each evaluation replays
+#: every run: few, coarse steps).
+REPLAY_LEAST_SQUARES = LeastSquares(
+    method="dogbox", diff_step=1e-2, ftol=1e-5, xtol=1e-4, gtol=1e-8, max_nfev=20
+)
+
+
+def _key(values: Mapping[str, Mapping[str, float]]) -> tuple:
+    return tuple((n, tuple(v.items())) for n, v in values.items())
+
+
+def _space(
+    ev: Evaluator,
+    names: Sequence[str],
+    origin: Mapping[str, Mapping[str, float]],
+    fixed: Mapping[str, Mapping[str, float]],
+) -> Coordinates:
+    free = tuple(
+        (n, p) for n in names for p in get_effect(n).parameters if p.name not in fixed.get(n, {})
+    )
+    return Coordinates(free, ev.scale, origin)
+
+
+def _residual(ev: Evaluator, names, indices, stage, memo: dict):
+    """Values -> the runs' whitened residuals, the evaluations kept in ``memo``."""
+
+    def residual(values) -> np.ndarray:
+        key = _key(values)
+        if key not in memo:
+            spec = model_spec(names, values, ev.scale)
+            memo[key] = {i: ev.evaluate(spec, i, stage) for i in indices}
+        return np.concatenate([w for i in indices for w in memo[key][i].whitened.values()])
+
+    return residual
+
+
 def fit_effects(
     ev: Evaluator,
     names: Sequence[str],
@@ -77,7 +113,8 @@ def fit_effects(
     stage: str = "replay",
     max_nfev: int = 20,
 ) -> Fit:
-    """Fit the effects ``names`` jointly to the runs ``indices``.
+    """Fit the effects ``names`` jointly to the runs ``indices``
+    (:func:`~hybridtable.effects.fitting.fit_values` from the best start).
 
     Parameters
     ----------
@@ -89,90 +126,25 @@ def fit_effects(
         Further starting points (partial: missing values from ``start``);
         the fit starts from the one with the least whitened squared error.
     """
-    scale = ev.scale
     indices = list(range(len(ev.data))) if indices is None else list(indices)
-    effects = [get_effect(n) for n in names]
     fixed = {k: dict(v) for k, v in (fixed or {}).items()}
-    base = {e.name: e.start(scale) for e in effects}
+    origin = {n: get_effect(n).start(ev.scale) for n in names}
     for n, vals in (start or {}).items():
-        if n in base:
-            base[n].update(vals)
+        if n in origin:
+            origin[n].update(vals)
     for n, vals in fixed.items():
-        base[n].update(vals)
-    free = [
-        (e.name, p) for e in effects for p in e.parameters if p.name not in fixed.get(e.name, {})
-    ]
-
-    def values_of(u: np.ndarray, origin: Mapping[str, Mapping[str, float]]):
-        vals = {n: dict(v) for n, v in origin.items()}
-        for (n, p), x in zip(free, u, strict=True):
-            lo, hi = p.bounds(scale)
-            vals[n][p.name] = float(np.clip(p.value_at(x, scale, origin[n][p.name]), lo, hi))
-        return vals
-
-    def evaluate(vals) -> dict[int, Evaluation]:
-        spec = model_spec(names, vals, scale)
-        return {i: ev.evaluate(spec, i, stage) for i in indices}
-
-    def stack(evs: dict[int, Evaluation]) -> np.ndarray:
-        return np.concatenate([w for i in indices for w in evs[i].whitened.values()])
-
-    # Pick the best starting point.
-    origin = {n: dict(v) for n, v in base.items()}
-    candidates = [origin]
-    for s in starts:
-        cand = {n: dict(v) for n, v in origin.items()}
-        for n, vals in s.items():
-            if n in cand:
-                cand[n].update({k: v for k, v in vals.items() if k not in fixed.get(n, {})})
-        candidates.append(cand)
-    best = None
-    for cand in candidates:
-        evs = evaluate(cand)
-        r = stack(evs)
-        cost = float(r @ r)
-        if best is None or cost < best[0]:
-            best = (cost, cand, evs)
-    _, origin, evs0 = best
-    nfev = len(candidates)
-    if not free:
-        return Fit(list(names), origin, stage, indices, evs0, 0, nfev)
-
-    # in each parameter's coordinate: steps of its typical change from the origin
-    # (of the logarithm's, for a log parameter)
-    lo = np.array([p.coordinate(p.bounds(scale)[0], scale, origin[n][p.name]) for n, p in free])
-    hi = np.array([p.coordinate(p.bounds(scale)[1], scale, origin[n][p.name]) for n, p in free])
-    cache: dict[bytes, dict[int, Evaluation]] = {np.zeros(len(free)).tobytes(): evs0}
-
-    def fun(u: np.ndarray) -> np.ndarray:
-        key = u.tobytes()
-        if key not in cache:
-            cache[key] = evaluate(values_of(u, origin))
-        return stack(cache[key])
-
-    x0 = np.clip(np.zeros(len(free)), lo, hi)
-    try:
-        sol = least_squares(
-            fun,
-            x0,
-            bounds=(lo, hi),
-            method="dogbox",
-            diff_step=1e-2,
-            x_scale=1.0,
-            ftol=1e-5,
-            xtol=1e-4,
-            gtol=1e-8,
-            max_nfev=max_nfev,
-        )
-        u, success, nfev = sol.x, bool(sol.status > 0), nfev + sol.nfev
-    except ValueError:  # e.g. non-finite residuals
-        u, success = np.zeros(len(free)), False
-    vals = values_of(u, origin)
-    evs = cache.get(u.tobytes()) or evaluate(vals)
-    # Never worse than the best start.
-    if float(stack(evs) @ stack(evs)) > float(stack(evs0) @ stack(evs0)):
-        vals, evs = origin, evs0
-    return Fit(list(names), vals, stage, indices, evs, len(free), nfev, success)
+        origin[n].update(vals)
+    space = _space(ev, names, origin, fixed)
+    memo: dict = {}
+    sol = fit_values(
+        _residual(ev, names, indices, stage, memo),
+        space,
+        starts,
+        replace(REPLAY_LEAST_SQUARES, max_nfev=max_nfev),
+        held=fixed,
+    )
+    evs = memo[_key(sol.values)]
+    return Fit(list(names), sol.values, stage, indices, evs, len(space.free), sol.nfev, sol.success)
 
 
 # -- criteria ------------------------------------------------------------------
@@ -343,53 +315,15 @@ def fit_given(
 def parameter_std(
     ev: Evaluator, fit: Fit, fixed: Mapping[str, Mapping[str, float]] | None = None
 ) -> dict[str, dict[str, float | None]]:
-    """Standard errors of a fit's free parameters, SI units.
-
-    The linearized least-squares covariance ``s^2 (J^T J)^-1`` of the whitened
-    residuals (``J`` by central differences of a hundredth of each
-    parameter's typical change, one-sided at a bound), with
-    ``s^2 = max(1, RSS / (N - p))``: the residuals are in noise units, and a
-    misfit larger than the noise widens the errors rather than narrowing
-    them. ``None`` for a parameter held fixed, and for all when the
-    parameters are not identifiable (a singular ``J^T J``).
-    """
-    fixed = fixed or {}
-    scale = ev.scale
-    names = list(fit.effects)
-    free = [
-        (n, p) for n in names for p in get_effect(n).parameters if p.name not in fixed.get(n, {})
-    ]
-    out: dict[str, dict[str, float | None]] = {n: dict.fromkeys(fit.values[n]) for n in names}
-    if not free:
-        return out
-
-    def stack(vals) -> np.ndarray:
-        spec = model_spec(names, vals, scale)
-        evs = [ev.evaluate(spec, i, fit.stage) for i in fit.indices]
-        return np.concatenate([w for e in evs for w in e.whitened.values()])
-
+    """Standard errors of a fit's free parameters, SI units
+    (:func:`~hybridtable.effects.fitting.standard_errors` of the whitened
+    residuals, ``J`` by central differences of a hundredth of each parameter's
+    typical change, one-sided at a bound). ``None`` for a parameter held
+    fixed, and for all when the parameters are not identifiable."""
+    space = _space(ev, fit.effects, fit.values, fixed or {})
+    residual = _residual(ev, fit.effects, fit.indices, fit.stage, {})
     r0 = np.concatenate([w for i in fit.indices for w in fit.evaluations[i].whitened.values()])
-    jac = np.empty((r0.size, len(free)))
-    for j, (n, p) in enumerate(free):
-        lo, hi = p.bounds(scale)
-        x = fit.values[n][p.name]
-        step = 1e-2 * p.typical(scale) * (abs(x) if p.log else 1.0)  # log: a relative step
-        up, down = min(x + step, hi), max(x - step, lo)
-        if up <= down:
-            return out
-        vals_up = {k: dict(v) for k, v in fit.values.items()}
-        vals_dn = {k: dict(v) for k, v in fit.values.items()}
-        vals_up[n][p.name], vals_dn[n][p.name] = up, down
-        jac[:, j] = (stack(vals_up) - stack(vals_dn)) / (up - down)
-    dof = max(r0.size - len(free), 1)
-    s2 = max(1.0, float(r0 @ r0) / dof)
-    jtj = jac.T @ jac
-    if not np.all(np.isfinite(jtj)) or np.linalg.cond(jtj) > 1e14:
-        return out
-    cov = s2 * np.linalg.inv(jtj)
-    for j, (n, p) in enumerate(free):
-        out[n][p.name] = math.sqrt(max(float(cov[j, j]), 0.0))
-    return out
+    return standard_errors(residual, space, r0, step=1e-2)
 
 
 def starts_for(effect: Effect, scale: RigScale, residuals) -> list[dict[str, dict[str, float]]]:

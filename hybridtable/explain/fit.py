@@ -22,11 +22,18 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import least_squares, lsq_linear
+from scipy.optimize import lsq_linear
 from scipy.stats import chi2 as chi2_dist
 
+from hybridtable.effects.fitting import (
+    Coordinates,
+    LeastSquares,
+    Values,
+    fit_values,
+    standard_errors,
+)
 from hybridtable.effects.workers import pool_map
-from hybridtable.explain.model import Case, CorModel, EffectAt
+from hybridtable.explain.model import JACOBIAN_STEP, Case, CorModel, EffectAt
 
 __all__ = ["ModelFit", "fit_model", "fit_models", "rank_fits"]
 
@@ -113,30 +120,59 @@ class ModelFit:
         }
 
 
-def _finish(model: CorModel, cases, y, sigma, u: np.ndarray) -> ModelFit:
-    pred = model.predict(cases, u)
+#: The optimizer's settings for ln CoR rows: a row costs milliseconds on the fast
+#: engine (more, finer steps, each start off the bounds); coordinates about the
+#: null point, so that the difference step grows away from it (a delay's ln CoR is
+#: interpolated between ticks, and rough at fine scales: centred on a start far
+#: from the null, the Table 3 fits with an extra delay end 40 times worse in chi2).
+COR_LEAST_SQUARES = LeastSquares(
+    method="trf",
+    diff_step=1e-3,
+    ftol=1e-8,
+    xtol=1e-5,
+    max_nfev=25,
+    per_parameter=True,
+    margin=0.1,
+    centred=False,
+)
+
+
+def _space(model: CorModel, values: dict[str, float] | None = None) -> Coordinates:
+    """The fit's coordinates of ``model`` about ``values`` (default: each null)."""
+    values = values or {}
+    origin = {
+        e.name: {p.name: values.get(p.name, p.null) for p in e.parameters} for e in model.effects
+    }
+    free = tuple((e.name, p.parameter) for e in model.effects for p in e.parameters)
+    rig = model.effects[0].rig if model.effects else None
+    return Coordinates(free, rig, origin)
+
+
+def _flat(values: Values) -> dict[str, float]:
+    return {k: x for v in values.values() for k, x in v.items()}
+
+
+def _finish(model: CorModel, cases, y, sigma, values: dict[str, float]) -> ModelFit:
+    pred = model.predict_values(cases, values)
     z = (pred - y) / sigma
-    values = model.values(u)
-    std: dict[str, float] = {}
+    u = model.coordinates(values)
     lo, hi = model.bounds()
     at_bound = tuple(
         p.name
         for p, x, a, b in zip(model.parameters, u, lo, hi, strict=True)
         if min(x - a, b - x) < 1e-3
     )
-    if model.parameters:
-        jac = model.jacobian(cases, u) / sigma[:, None]
-        try:
-            cov = np.linalg.inv(jac.T @ jac)
-            su = np.sqrt(np.maximum(np.diag(cov), 0.0))
-        except np.linalg.LinAlgError:
-            su = np.full(len(u), np.inf)
-        for p, x, s in zip(model.parameters, u, su, strict=True):
-            # the value's std: d value / d u times the coordinate's std
-            std[p.name] = float(abs(p.to_unit(x + 1e-6) - p.to_unit(x)) / 1e-6 * s)
+    std = _flat(
+        standard_errors(
+            lambda v: (model.predict_values(cases, _flat(v)) - y) / sigma,
+            _space(model, values),
+            z,
+            step=JACOBIAN_STEP,
+        )
+    )
     return ModelFit(
         effects=tuple(model.names),
-        values=values,
+        values=dict(values),
         std=std,
         predicted_cor=np.exp(pred),
         measured_cor=np.exp(y),
@@ -152,51 +188,36 @@ def fit_model(
     cases: Sequence[Case],
     y: np.ndarray,
     sigma: np.ndarray,
-    starts: Sequence[np.ndarray] = (),
+    starts: Sequence[dict[str, float]] = (),
 ) -> ModelFit:
-    """Fit ``effects`` to ln CoR ``y`` (noise ``sigma``) of ``cases``, from ``starts``.
-
-    Every start (and ``u = 0``, and for one parameter a grid over its range) is
-    tried; the lowest chi2 wins.
+    """Fit ``effects`` to ln CoR ``y`` (noise ``sigma``) of ``cases``
+    (:func:`~hybridtable.effects.fitting.fit_values`): the best of the null
+    point and the ``starts`` (parameter -> value), and the best point of a grid
+    over the range, are polished; the lowest chi2 wins.
     """
     model = CorModel(effects)
     n_par = len(model.parameters)
     if n_par == 0:
-        return _finish(model, cases, y, sigma, np.zeros(0))
+        return _finish(model, cases, y, sigma, {})
     lo, hi = model.bounds()
-
-    def residual(u):
-        return (model.predict(cases, u) - y) / sigma
-
-    def cost(u):
-        return float(np.sum(residual(u) ** 2))
-
-    # starts: the given ones, the null point, and the best points of a grid over the range
     points = {1: 13, 2: 7}.get(n_par, 4)
     axes = [_axis(p, a, b, points) for p, a, b in zip(model.parameters, lo, hi, strict=True)]
-    grid = [np.array(g) for g in itertools.product(*axes)]
-    grid.sort(key=cost)
-    candidates = [*[np.clip(s, lo, hi) for s in starts], grid[0]]
-    if not starts:
-        candidates.insert(0, np.zeros(n_par))
-    best = None
-    for u0 in candidates:
-        # off the bounds by a margin: least_squares' xtol is relative to |u|, so a start
-        # 1e-9 from a bound at 0 would stop at once
-        margin = np.maximum(0.1, 1e-3 * (hi - lo))
-        u0 = np.clip(u0, lo + margin, hi - margin)
-        sol = least_squares(
-            residual,
-            u0,
-            bounds=(lo, hi),
-            diff_step=1e-3,
-            xtol=1e-5,
-            ftol=1e-8,
-            max_nfev=25 * n_par,
-        )
-        if best is None or sol.cost < best.cost:
-            best = sol
-    return _finish(model, cases, y, sigma, best.x)
+    grid = [model.values(np.array(g)) for g in itertools.product(*axes)]
+    sol = fit_values(
+        lambda v: (model.predict_values(cases, _flat(v)) - y) / sigma,
+        _space(model),
+        [_nested(model, s) for s in starts],
+        COR_LEAST_SQUARES,
+        grid=[_nested(model, g) for g in grid],
+    )
+    return _finish(model, cases, y, sigma, _flat(sol.values))
+
+
+def _nested(model: CorModel, values: dict[str, float]) -> Values:
+    return {
+        e.name: {p.name: values[p.name] for p in e.parameters if p.name in values}
+        for e in model.effects
+    }
 
 
 def _axis(p, a: float, b: float, points: int) -> np.ndarray:
@@ -290,14 +311,12 @@ def fit_models(
                 if sum(len(e.parameters) for e in combo) >= n:
                     too_many.append(names)
                     continue
-                start = np.concatenate(
-                    [
-                        CorModel((e,)).coordinates(single[e.name].values)
-                        if e.name in single
-                        else np.zeros(len(e.parameters))
-                        for e in combo
-                    ]
-                )
+                start = {
+                    k: x
+                    for e in combo
+                    if e.name in single
+                    for k, x in single[e.name].values.items()
+                }
                 work.append((names, (start,)))
         fits += _run(work, jobs, note)
     finally:

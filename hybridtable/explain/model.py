@@ -24,6 +24,7 @@ from functools import cached_property, lru_cache
 import numpy as np
 
 from hybridtable.effects.effect import Effect, ParameterAt
+from hybridtable.effects.fitting import Coordinates, jacobian
 from hybridtable.effects.registry import build_spec
 from hybridtable.effects.spec import ModelSpec, RigScale
 from hybridtable.errors import ParameterError, SimulationError
@@ -34,7 +35,16 @@ from hybridtable.loop.params import HybridLoopParams
 from hybridtable.loop.simulation import run_loop
 from hybridtable.measurement.rig import RigPhysics
 
-__all__ = ["FAILED_LN_COR", "Case", "EffectAt", "table_scale", "loop_of", "ln_cor", "CorModel"]
+__all__ = [
+    "FAILED_LN_COR",
+    "JACOBIAN_STEP",
+    "Case",
+    "EffectAt",
+    "table_scale",
+    "loop_of",
+    "ln_cor",
+    "CorModel",
+]
 
 #: ln CoR given to a loop that diverges or does not let go (CoR e^1.5 = 4.5).
 FAILED_LN_COR = 1.5
@@ -44,6 +54,10 @@ FAILED_LN_COR = 1.5
 #: engine's ln CoR jitter (~5e-5: its delay line's period moves with the delay),
 #: which the fits' and the sensitivities' finite differences would read.
 CONTINUOUS_REFERENCE_PERIOD_S = 2e-3
+
+#: Step of the sensitivities d ln CoR / d u (coordinate units: a twentieth of a
+#: typical change).
+JACOBIAN_STEP = 0.05
 
 #: A row to predict: (compensator, stated conditions).
 Case = tuple[str, Conditions]
@@ -215,8 +229,11 @@ class CorModel:
 
     def predict(self, cases: Sequence[Case], u: Sequence[float]) -> np.ndarray:
         """ln CoR of each case at coordinates ``u``."""
-        values = self.values(u)
-        return np.array([self._ln_cor(c, values) for c in cases])
+        return self.predict_values(cases, self.values(u))
+
+    def predict_values(self, cases: Sequence[Case], values: Mapping[str, float]) -> np.ndarray:
+        """ln CoR of each case at parameter ``values`` (missing: null)."""
+        return np.array([self._ln_cor(c, dict(values)) for c in cases])
 
     def _ln_cor(self, case: Case, values: dict[str, float]) -> float:
         try:
@@ -234,17 +251,22 @@ class CorModel:
         self,
         cases: Sequence[Case],
         u: Sequence[float],
-        step: float = 0.05,
+        step: float = JACOBIAN_STEP,
         columns: Sequence[int] | None = None,
     ) -> np.ndarray:
-        """d ln CoR / d u of each case (central differences, one-sided at a bound),
-        for the coordinates ``columns`` (default: all)."""
-        u = np.asarray(u, float)
-        lo, hi = self.bounds()
-        cols = []
-        for j in range(len(u)) if columns is None else columns:
-            up, dn = u.copy(), u.copy()
-            up[j] = min(u[j] + step, hi[j])
-            dn[j] = max(u[j] - step, lo[j])
-            cols.append((self.predict(cases, up) - self.predict(cases, dn)) / (up[j] - dn[j]))
-        return np.column_stack(cols) if cols else np.zeros((len(cases), 0))
+        """d ln CoR / d u of each case for the coordinates ``columns`` (default:
+        all): :func:`~hybridtable.effects.fitting.jacobian` about ``u``; a
+        parameter with no room to move gets a column of zeros."""
+        values = self.values(u)
+        cols = range(len(self.parameters)) if columns is None else columns
+        out = np.zeros((len(cases), len(cols)))
+        for k, j in enumerate(cols):
+            e = next(e for e in self.effects if self.parameters[j] in e.parameters)
+            p = self.parameters[j]
+            space = Coordinates(((e.name, p.parameter),), e.rig, {e.name: {p.name: values[p.name]}})
+            col = jacobian(
+                lambda v, n=e.name: self.predict_values(cases, values | v[n]), space, step
+            )
+            if col is not None:
+                out[:, k] = col[:, 0]
+        return out
