@@ -31,6 +31,7 @@ from hybridtable.diagnosis.settings import (
 )
 from hybridtable.effects.effect import Effect
 from hybridtable.effects.registry import EFFECTS, get_effect
+from hybridtable.effects.selection import lookalikes
 from hybridtable.effects.spec import ModelSpec, RigScale
 from hybridtable.measurement.audit_findings import Audit
 
@@ -366,14 +367,14 @@ def judge(ev: Evaluator, base_fit: Fit, c: Candidate) -> None:
 
 def mark_lookalikes(candidates: list[Candidate]) -> None:
     """Name, on each accepted candidate, the other accepted ones whose ``delta_bic`` is within
-    :data:`~hybridtable.diagnosis.settings.INDISTINGUISHABLE_BIC` (the data cannot tell them apart)."""
+    :data:`~hybridtable.diagnosis.settings.INDISTINGUISHABLE_BIC`
+    (:func:`~hybridtable.effects.selection.lookalikes`: the data cannot tell them apart)."""
     sig = [c for c in candidates if c.accepted]
     for c in sig:
-        c.indistinguishable_from = [
-            o.effect
-            for o in sig
-            if o is not c and abs(o.delta_bic - c.delta_bic) < INDISTINGUISHABLE_BIC
-        ]
+        alike = lookalikes(
+            c, sig, INDISTINGUISHABLE_BIC, lambda x: x.delta_bic, lambda x: [x.effect]
+        )
+        c.indistinguishable_from = [o.effect for o in alike]
 
 
 def _cor_of(v_des: np.ndarray, f_comp: np.ndarray, v0: float) -> float:

@@ -12,6 +12,7 @@ import numpy as np
 
 from hybridtable.diagnosis.evaluate import Evaluator
 from hybridtable.diagnosis.settings import BIC_THRESHOLD, CHANNELS
+from hybridtable.effects.selection import most_separating
 from hybridtable.effects.spec import ModelSpec
 from hybridtable.errors import MeasurementError, SimulationError
 from hybridtable.measurement.replay import replay_command
@@ -89,37 +90,36 @@ def separating_run(
             continue
         recorded += distance(a, b) ** 2
     recorded = math.sqrt(recorded)
-    best = None
-    for label, changes_of in DESIGNS:
-        changes = changes_of(runs)
+
+    def predicted(design) -> float | None:
+        label, changes = design
         try:
-            design = _design_run(runs[0], changes)
-            physics_a = spec_a.physics()
-            cl = simulate_rig(spec_a.closed_loop_run(design), physics_a, accuracy=ev.accuracy)
-            params = rig_params(design.info)
+            run = _design_run(runs[0], changes)
+            cl = simulate_rig(spec_a.closed_loop_run(run), spec_a.physics(), accuracy=ev.accuracy)
+            params = rig_params(run.info)
             preds = []
             for spec in (spec_a, spec_b):
                 rep = replay_command(
-                    params,
-                    cl.p_des_m,
-                    cl.v_des_m_per_s,
-                    spec.physics(),
-                    accuracy=ev.accuracy,
+                    params, cl.p_des_m, cl.v_des_m_per_s, spec.physics(), accuracy=ev.accuracy
                 )
                 preds.append({"f_mea_n": rep.f_mea_n, "p_act_m": rep.p_act_m})
         except (SimulationError, MeasurementError, ValueError):
-            continue
+            return None
         ev.simulations += 3
-        dist = distance(*preds)
-        if best is None or dist > best["distance"]:
-            best = {
-                "run": label,
-                "changes": changes,
-                "distance": dist,
-                "recorded_distance": recorded,
-                # One such run would tell them apart at the BIC threshold.
-                "separates": dist * dist > BIC_THRESHOLD,
-                # Independent runs add their squared distances.
-                "runs_needed": (math.ceil(BIC_THRESHOLD / (dist * dist)) if dist > 0.0 else None),
-            }
-    return best
+        return distance(*preds)
+
+    best = most_separating(
+        [(label, changes_of(runs)) for label, changes_of in DESIGNS], predicted, BIC_THRESHOLD
+    )
+    if best is None:
+        return None
+    return {
+        "run": best.design[0],
+        "changes": best.design[1],
+        "distance": best.distance,
+        "recorded_distance": recorded,
+        # One such run would tell them apart at the BIC threshold.
+        "separates": best.separates,
+        # Independent runs add their squared distances.
+        "runs_needed": best.runs_needed,
+    }

@@ -12,9 +12,11 @@ import numpy as np
 
 from hybridtable.diagnosis.evaluate import Evaluation, Evaluator, RunData, prepare_runs
 from hybridtable.diagnosis.settings import CHANNELS, FIT_ACCURACY
+from hybridtable.effects import selection
 from hybridtable.effects.effect import Effect
 from hybridtable.effects.fitting import Coordinates, LeastSquares, fit_values, standard_errors
 from hybridtable.effects.registry import build_spec, get_effect
+from hybridtable.effects.selection import Block
 from hybridtable.effects.spec import ModelSpec, RigScale
 from hybridtable.errors import ParameterError
 from hybridtable.measurement.run_format import Run
@@ -149,22 +151,22 @@ def fit_effects(
 
 # -- criteria ------------------------------------------------------------------
 def delta_bic(before: Fit, after: Fit) -> float:
-    """``sum_b N_b ln(s2_b,before / s2_b,after) - dp ln N`` over shared blocks,
-    ``s2_b = max(RSS_b / N_b, floor_b)``: no model is credited with
-    residuals below a numerical floor (:attr:`~hybridtable.diagnosis.evaluate.Evaluation.floor`)."""
-    rb, ra = before.rss_blocks(), after.rss_blocks()
-    total = 0.0
-    n_total = 0
-    for key, r0 in rb.items():
-        i, c = key
-        n_b = len(before.evaluations[i].whitened[c])
-        n_total += n_b
-        s0 = max(r0 / n_b, before.evaluations[i].floor.get(c, 0.0))
-        s1 = max(ra[key] / n_b, after.evaluations[i].floor.get(c, 0.0))
-        if s0 > 0.0 and s1 > 0.0:
-            total += n_b * math.log(s0 / s1)
+    """:func:`~hybridtable.effects.selection.delta_bic` of the whitened replay
+    blocks (run x channel), each block's variance estimated, not below its
+    numerical floor (:attr:`~hybridtable.diagnosis.evaluate.Evaluation.floor`)."""
+
+    def blocks(fit: Fit, keys) -> list[Block]:
+        rss = fit.rss_blocks()
+        return [
+            Block(
+                rss[i, c], len(fit.evaluations[i].whitened[c]), fit.evaluations[i].floor.get(c, 0.0)
+            )
+            for i, c in keys
+        ]
+
+    keys = list(before.rss_blocks())
     dp = after.n_parameters - before.n_parameters
-    return total - dp * math.log(max(n_total, 2))
+    return selection.delta_bic(blocks(before, keys), blocks(after, keys), dp, stated=False)
 
 
 def pooled_error(

@@ -17,7 +17,6 @@ started from their single effects' fits.
 from __future__ import annotations
 
 import itertools
-import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -32,6 +31,7 @@ from hybridtable.effects.fitting import (
     fit_values,
     standard_errors,
 )
+from hybridtable.effects.selection import bic
 from hybridtable.effects.workers import pool_map
 from hybridtable.explain.model import JACOBIAN_STEP, Case, CorModel, EffectAt
 
@@ -77,9 +77,8 @@ class ModelFit:
 
     @property
     def bic(self) -> float:
-        """chi2 + p ln n."""
-        n = len(self.z)
-        return self.chi2 + self.n_parameters * math.log(n)
+        """chi2 + p ln n (:func:`~hybridtable.effects.selection.bic`)."""
+        return bic(self.chi2, self.n_parameters, len(self.z))
 
     @property
     def aic(self) -> float:

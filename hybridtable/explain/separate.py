@@ -5,7 +5,10 @@ one's BIC. For each look-alike of the best, every candidate run is predicted
 by both fits: each compensator at the table's first conditions, and each with
 the spring twice and half as stiff against the same spacecraft model (f_con
 times or over sqrt 2), and the SDC with twice the lead. The run whose two
-predictions differ by the most noise std separates them.
+predictions differ by the most noise std separates them
+(:func:`~hybridtable.effects.selection.most_separating`, as ``diagnose``'s
+does): with :data:`SEPARATING_STD` or more in one run, or else in the
+number of such runs it says.
 """
 
 from __future__ import annotations
@@ -16,28 +19,39 @@ from dataclasses import replace
 
 import numpy as np
 
+from hybridtable.effects import selection
+from hybridtable.effects.selection import most_separating
 from hybridtable.explain.conditions import Conditions
 from hybridtable.explain.fit import ModelFit
 from hybridtable.explain.model import Case, CorModel, EffectAt
 
-__all__ = ["LOOKALIKE_BIC", "lookalikes", "separating_runs"]
+__all__ = ["LOOKALIKE_BIC", "SEPARATING_STD", "lookalikes", "separating_runs"]
 
 #: Models whose BIC is within this of the best one's fit the table equally well.
 LOOKALIKE_BIC = 2.0
 
+#: A run separates two models when their predictions differ by more than this
+#: many noise std (a squared distance of 9: independent runs add theirs).
+SEPARATING_STD = 3.0
+
 
 def lookalikes(fits: Sequence[ModelFit]) -> list[ModelFit]:
-    """The fits within :data:`LOOKALIKE_BIC` of the best (the best first); a fit
-    that holds all of the best's effects and more is not another explanation, only
-    the best one with something added, and is left out."""
+    """The fits within :data:`LOOKALIKE_BIC` of the best (the best first;
+    :func:`~hybridtable.effects.selection.lookalikes`: a fit that holds all of the
+    best's effects and more is not another explanation, only the best one with
+    something added, and is left out)."""
     if not fits:
         return []
     best = fits[0]
-    return [best] + [
-        f
-        for f in fits[1:]
-        if f.bic - best.bic <= LOOKALIKE_BIC and not set(best.effects) <= set(f.effects)
-    ]
+    return [best, *selection.lookalikes(best, fits, LOOKALIKE_BIC, _bic, _effects)]
+
+
+def _bic(fit: ModelFit) -> float:
+    return fit.bic
+
+
+def _effects(fit: ModelFit) -> tuple[str, ...]:
+    return fit.effects
 
 
 def _candidates(first: Conditions) -> list[tuple[str, Case]]:
@@ -88,25 +102,36 @@ def separating_runs(
         return []
     best = alike[0]
     out = []
-    candidates = _candidates(first)
     for other in alike[1:4]:
-        scored = []
-        for words, case in candidates:
-            a, b = _predict(best, case, effects), _predict(other, case, effects)
-            scored.append((abs(a - b) / sigma_ln, words, a, b))
-        sep, words, a, b = max(scored, key=lambda t: t[0])
+        pair = {}
+
+        def distance(candidate, other=other, pair=pair) -> float:
+            words, case = candidate
+            pair[words] = (_predict(best, case, effects), _predict(other, case, effects))
+            return abs(pair[words][0] - pair[words][1]) / sigma_ln
+
+        sep = most_separating(_candidates(first), distance, SEPARATING_STD**2)
+        words = sep.design[0]
+        a, b = pair[words]
         out.append(
             {
                 "models": [best.name, other.name],
                 "run": words,
                 "cor": [float(np.exp(a)), float(np.exp(b))],
-                "separation_sigma": float(sep),
+                "separation_sigma": float(sep.distance),
+                "separates": sep.separates,
+                "runs_needed": sep.runs_needed,
                 "words": (
                     f"a run of {words} separates {best.name} (CoR {np.exp(a):.4f}) from "
-                    f"{other.name} (CoR {np.exp(b):.4f}) by {sep:.1f} noise std"
-                    if sep >= 3
-                    else f"no candidate run separates {best.name} from {other.name} by 3 noise "
-                    f"std (best: {words}, {sep:.1f} std)"
+                    f"{other.name} (CoR {np.exp(b):.4f}) by {sep.distance:.1f} noise std"
+                    if sep.separates
+                    else f"no candidate run separates {best.name} from {other.name} by "
+                    f"{SEPARATING_STD:g} noise std (best: {words}, {sep.distance:.1f} std"
+                    + (
+                        f"; {sep.runs_needed} such runs would)"
+                        if sep.runs_needed is not None
+                        else ")"
+                    )
                 ),
             }
         )

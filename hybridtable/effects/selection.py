@@ -1,0 +1,120 @@
+"""One rule for choosing among fitted models, for every front end.
+
+A front end fits models with :mod:`~hybridtable.effects.fitting` and scores
+them here:
+
+- **the information criterion** (BIC) of residuals in noise units, for both
+  noise models: *stated* (each residual's sigma is known, as a CoR table's
+  rows: ``-2 ln L = chi2``) or *estimated* per block (prewhitened blocks of a
+  recorded run whose innovation variance is estimated with the model:
+  ``-2 ln L = N_b ln s2_b``, ``s2_b`` never below the block's numerical floor,
+  so no model is credited with residuals finer than the numbers can be);
+  ``delta_bic`` is the gain of one model over another, ``- dp ln N`` for the
+  parameters it adds;
+- **look-alikes**: models whose criterion is within a margin of a reference
+  (the data cannot tell them apart); a model holding all of the reference's
+  effects and more is the reference with something added, not another
+  explanation;
+- **the separating run**: of candidate runs, the one on which two models'
+  predictions differ most in noise units; independent runs add their squared
+  distances, so it says how many such runs would separate them at a
+  threshold.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
+from typing import TypeVar
+
+__all__ = ["Block", "bic", "delta_bic", "lookalikes", "most_separating"]
+
+T = TypeVar("T")
+D = TypeVar("D")
+
+
+@dataclass(frozen=True)
+class Block:
+    """A block of residuals in noise units: their sum of squares, their number,
+    and (estimated noise) the smallest variance a model is credited with."""
+
+    rss: float
+    n: int
+    floor: float = 0.0
+
+
+def bic(chi2: float, n_parameters: int, n: int) -> float:
+    """``chi2 + p ln n`` of residuals whose noise is stated."""
+    return chi2 + n_parameters * math.log(n)
+
+
+def delta_bic(
+    before: Sequence[Block], after: Sequence[Block], added_parameters: int, stated: bool
+) -> float:
+    """The BIC of the model ``before`` minus that of ``after`` (positive: ``after``
+    is better) over the same blocks (see the module doc); ``stated``: the noise of
+    every residual is known, else each block's variance is estimated."""
+    total, n_total = 0.0, 0
+    for b0, b1 in zip(before, after, strict=True):
+        n_total += b0.n
+        if stated:
+            total += b0.rss - b1.rss
+            continue
+        s0 = max(b0.rss / b0.n, b0.floor)
+        s1 = max(b1.rss / b1.n, b1.floor)
+        if s0 > 0.0 and s1 > 0.0:
+            total += b0.n * math.log(s0 / s1)
+    return total - added_parameters * math.log(max(n_total, 2))
+
+
+def lookalikes(
+    reference: T,
+    others: Iterable[T],
+    margin: float,
+    score: Callable[[T], float],
+    effects: Callable[[T], Iterable[str]],
+) -> list[T]:
+    """The ``others`` whose ``score`` is within ``margin`` of ``reference``'s and that
+    are not ``reference`` with effects added."""
+    ref, ref_effects = score(reference), set(effects(reference))
+    return [
+        o
+        for o in others
+        if o is not reference
+        and abs(score(o) - ref) <= margin
+        and not (ref_effects < set(effects(o)))
+    ]
+
+
+@dataclass(frozen=True)
+class Separation:
+    """The run that separates two models best, and what it is worth."""
+
+    design: object
+    distance: float
+    threshold: float
+
+    @property
+    def separates(self) -> bool:
+        """One such run tells them apart: its squared distance exceeds the threshold."""
+        return self.distance * self.distance > self.threshold
+
+    @property
+    def runs_needed(self) -> int | None:
+        """How many such runs would (None: the models agree on it)."""
+        d2 = self.distance * self.distance
+        return math.ceil(self.threshold / d2) if d2 > 0.0 else None
+
+
+def most_separating(
+    designs: Iterable[D], distance: Callable[[D], float | None], threshold: float
+) -> Separation | None:
+    """Of ``designs``, the one whose ``distance`` (noise units; None: it could not
+    be simulated) is largest; None if none could be."""
+    best: Separation | None = None
+    for design in designs:
+        d = distance(design)
+        if d is not None and (best is None or d > best.distance):
+            best = Separation(design, d, threshold)
+    return best
