@@ -92,38 +92,21 @@ __all__ = [
 
 
 # -- one round of candidates ----------------------------------------------------
-_STATE: dict = {}
-
-
-def _candidate_job(job):
-    ev = _STATE["ev"]
-    name = job
+def _candidate_job(shared, name):
+    ev, base_fit, base_error, residuals, base_heldout = shared
     sims = ev.simulations
-    c = evaluate_candidate(
-        ev,
-        _STATE["base_fit"],
-        _STATE["base_error"],
-        get_effect(name),
-        _STATE["residuals"],
-        _STATE["base_heldout"],
-    )
+    c = evaluate_candidate(ev, base_fit, base_error, get_effect(name), residuals, base_heldout)
     return c, ev.simulations - sims
 
 
 def _run_round(ev, base_fit, base_error, base_heldout, names, workers, progress):
     residuals = residual_probe(ev.data, base_fit.evaluations)
-    _STATE.update(
-        ev=ev,
-        base_fit=base_fit,
-        base_error=base_error,
-        base_heldout=base_heldout,
-        residuals=residuals,
-    )
+    shared = (ev, base_fit, base_error, residuals, base_heldout)
     # Expensive effects first, so two workers finish together.
     jobs = sorted(names, key=lambda n: -len(get_effect(n).parameters))
-    out = pool_map(_candidate_job, jobs, workers, progress, f"fit {len(jobs)} effect(s)")
+    label = f"fit {len(jobs)} effect(s)"
+    out = pool_map(_candidate_job, jobs, workers, progress, label, shared=shared)
     ev.simulations += sum(s for _, s in out)
-    _STATE.clear()
     cands = [c for c, _ in out]
     rank_candidates(cands)
     mark_lookalikes(cands)

@@ -72,20 +72,15 @@ SCREENING_RUNS = 2
 GRID_FRACTIONS = (0.05, 0.25, 0.6)
 
 
-_STATE: dict = {}
-
-
-def _fit_job(job):
-    ev = _STATE["ev"]
+def _fit_job(ev, job):
     names, start, starts, nfev = job
     sims = ev.simulations
     fit = fit_effects(ev, names, start=start, starts=starts, max_nfev=nfev)
     return fit, ev.simulations - sims
 
 
-def _screen_job(job):
+def _screen_job(ev, job):
     """The best grid point of a pair on runs ``ks``: (whitened RSS, values)."""
-    ev = _STATE["ev"]
     names, starts, ks = job
     sims = ev.simulations
     best = (math.inf, None)
@@ -210,11 +205,8 @@ def pairs_and_swaps(
                 {a.effect: va, b.effect: vb} for va in grids[a.effect] for vb in grids[b.effect]
             ]
             screens.append((names, starts, worst))
-        _STATE.update(ev=ev)
-        screened = pool_map(
-            _screen_job, screens, workers, progress, f"screen {len(screens)} pair(s)"
-        )
-        _STATE.clear()
+        label = f"screen {len(screens)} pair(s)"
+        screened = pool_map(_screen_job, screens, workers, progress, label, shared=ev)
         ev.simulations += sum(s for _, s in screened)
         ranked = sorted(
             (
@@ -247,9 +239,8 @@ def pairs_and_swaps(
     if not proposals:
         return None
     jobs = list(proposals.values())
-    _STATE.update(ev=ev)
-    out = pool_map(_fit_job, jobs, workers, progress, f"fit {len(jobs)} pair(s)/swap(s)")
-    _STATE.clear()
+    label = f"fit {len(jobs)} pair(s)/swap(s)"
+    out = pool_map(_fit_job, jobs, workers, progress, label, shared=ev)
     ev.simulations += sum(s for _, s in out)
     current_bic = delta_bic(nominal, current)
     scored = sorted(

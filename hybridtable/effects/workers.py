@@ -1,9 +1,10 @@
 """Fitting jobs of a model selection (``diagnose``'s candidates, ``explain``'s
 models) in forked worker processes, with a progress bar or a callback.
 
-The jobs read their shared inputs (an evaluator, a base fit, the plug-in
-effects registered in this process) from module state set before the call:
-forked workers inherit it, so no Drake object is pickled.
+Every job gets the call's ``shared`` inputs (an evaluator, a base fit, the
+effects of a table): they are held in this module while the pool runs, and
+forked workers inherit them, so nothing of them (no Drake object) is pickled;
+the plug-in effects registered in this process are inherited the same way.
 """
 
 from __future__ import annotations
@@ -15,27 +16,38 @@ from typing import Any
 __all__ = ["pool_map"]
 
 
+#: The ``shared`` inputs of the running :func:`pool_map` calls (innermost last).
+_SHARED: list[Any] = []
+
+
+def _call(item: tuple[Callable[[Any, Any], Any], Any]) -> Any:
+    func, job = item
+    return func(_SHARED[-1], job)
+
+
 def pool_map(
-    func: Callable[[Any], Any],
+    func: Callable[[Any, Any], Any],
     jobs: Sequence[Any],
     workers: int,
     progress: bool = False,
     label: str = "fit",
     on_done: Callable[[Any, Any], None] | None = None,
+    shared: Any = None,
 ) -> list[Any]:
-    """``[func(j) for j in jobs]``, in ``workers`` forked processes when there
-    are two or more of each (and the platform forks); a progress bar on
-    standard error if ``progress``; ``on_done(job, result)`` after each job,
-    in order."""
+    """``[func(shared, j) for j in jobs]``, in ``workers`` forked processes when
+    there are two or more of each (and the platform forks); ``func`` is a
+    module-level function; a progress bar on standard error if ``progress``;
+    ``on_done(job, result)`` after each job, in order."""
     import multiprocessing as mp
 
+    _SHARED.append(shared)
     if workers <= 1 or len(jobs) <= 1 or "fork" not in mp.get_all_start_methods():
-        results = (func(j) for j in jobs)
+        results = (func(shared, j) for j in jobs)
     else:
         from concurrent.futures import ProcessPoolExecutor
 
         pool = ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("fork"))
-        results = pool.map(func, jobs)
+        results = pool.map(_call, [(func, j) for j in jobs])
     if progress:
         from tqdm import tqdm
 
@@ -49,6 +61,7 @@ def pool_map(
             if on_done is not None:
                 on_done(job, result)
     finally:
+        _SHARED.pop()
         if workers > 1 and len(jobs) > 1 and "pool" in locals():
             pool.shutdown()
     return out

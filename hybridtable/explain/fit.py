@@ -279,67 +279,58 @@ def fit_models(
     too_many: list[tuple[str, ...]] = []
     singles = [e for e in effects if len(e.parameters) < n]
     too_many += [(e.name,) for e in effects if len(e.parameters) >= n]
-    _STATE.update(effects={e.name: e for e in effects}, cases=cases, y=y, sigma=sigma)
-    try:
-        fits = _run([((), ())] + [((e.name,), ()) for e in singles], jobs, note)
-        single = {f.effects[0]: f for f in fits[1:]}
-        everything = CorModel(effects)
-        index, j = {}, 0
-        for e in effects:
-            index[e.name] = list(range(j, j + len(e.parameters)))
-            j += len(e.parameters)
-        zero = np.zeros(len(everything.parameters))
-        jac = everything.jacobian(cases, zero)
-        y0 = everything.predict(cases, zero)
-        lo, hi = everything.bounds()
-        best_single = [f.effects[0] for f in rank_fits(list(single.values()))[:3]]
-        work = []
-        seen: set[tuple[str, ...]] = set()
-        for size in range(2, max_effects + 1):
-            screened = _screen(effects, size, jac, index, y0, y, sigma, lo, hi)
-            chosen = [combo for _, combo in screened[:keep]]
-            chosen += [
-                tuple(e for e in effects if e.name in names)
-                for names in itertools.combinations(best_single, size)
-            ]
-            for combo in chosen:
-                names = tuple(e.name for e in combo)
-                if names in seen:
-                    continue
-                seen.add(names)
-                if sum(len(e.parameters) for e in combo) >= n:
-                    too_many.append(names)
-                    continue
-                start = {
-                    k: x
-                    for e in combo
-                    if e.name in single
-                    for k, x in single[e.name].values.items()
-                }
-                work.append((names, (start,)))
-        fits += _run(work, jobs, note)
-    finally:
-        _STATE.clear()
+    shared = ({e.name: e for e in effects}, cases, y, sigma)
+    fits = _run([((), ())] + [((e.name,), ()) for e in singles], jobs, note, shared)
+    single = {f.effects[0]: f for f in fits[1:]}
+    everything = CorModel(effects)
+    index, j = {}, 0
+    for e in effects:
+        index[e.name] = list(range(j, j + len(e.parameters)))
+        j += len(e.parameters)
+    zero = np.zeros(len(everything.parameters))
+    jac = everything.jacobian(cases, zero)
+    y0 = everything.predict(cases, zero)
+    lo, hi = everything.bounds()
+    best_single = [f.effects[0] for f in rank_fits(list(single.values()))[:3]]
+    work = []
+    seen: set[tuple[str, ...]] = set()
+    for size in range(2, max_effects + 1):
+        screened = _screen(effects, size, jac, index, y0, y, sigma, lo, hi)
+        chosen = [combo for _, combo in screened[:keep]]
+        chosen += [
+            tuple(e for e in effects if e.name in names)
+            for names in itertools.combinations(best_single, size)
+        ]
+        for combo in chosen:
+            names = tuple(e.name for e in combo)
+            if names in seen:
+                continue
+            seen.add(names)
+            if sum(len(e.parameters) for e in combo) >= n:
+                too_many.append(names)
+                continue
+            start = {
+                k: x for e in combo if e.name in single for k, x in single[e.name].values.items()
+            }
+            work.append((names, (start,)))
+    fits += _run(work, jobs, note, shared)
     return rank_fits(fits), sorted(set(too_many))
 
 
-#: What the fitting jobs share (set by :func:`fit_models`; forked workers inherit it).
-_STATE: dict = {}
-
-
-def _fit_job(job) -> ModelFit:
+def _fit_job(shared, job) -> ModelFit:
+    by_name, cases, y, sigma = shared
     names, starts = job
-    effects = [_STATE["effects"][n] for n in names]
-    return fit_model(effects, _STATE["cases"], _STATE["y"], _STATE["sigma"], starts)
+    return fit_model([by_name[n] for n in names], cases, y, sigma, starts)
 
 
-def _run(work, jobs: int, note: Callable[[str], None]) -> list[ModelFit]:
+def _run(work, jobs: int, note: Callable[[str], None], shared) -> list[ModelFit]:
     """Fit the (effect names, starts) of ``work``, in ``jobs`` forked processes."""
     return pool_map(
         _fit_job,
         work,
         jobs,
         on_done=lambda job, _fit: note(" + ".join(job[0]) or "the stated loop"),
+        shared=shared,
     )
 
 
