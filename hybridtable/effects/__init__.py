@@ -7,7 +7,15 @@ may be missing, declared once.
   :class:`EffectParameter` with unit, bounds, typical change and null);
 - :mod:`~hybridtable.effects.library`: the built-in effects, one module each;
 - :mod:`~hybridtable.effects.registry`: name -> effect, plug-ins and the
-  entry-point group ``hybridtable.effects``.
+  entry-point group ``hybridtable.effects``;
+- :mod:`~hybridtable.effects.fitting`: the one fit of effects to data (least
+  squares in each parameter's coordinate, standard errors);
+- :mod:`~hybridtable.effects.selection`: the one rule for choosing among fitted
+  models (BIC, look-alikes, the separating run);
+- :mod:`~hybridtable.effects.workers`: the forked worker pool of the fits.
+
+``diagnose`` (recorded runs) and ``explain`` (a CoR table) are front ends over
+these: each keeps its data, its noise model, its search and its words.
 """
 
 from hybridtable._lazy import lazy_exports
