@@ -106,11 +106,13 @@ def _elastic(params: ContactLawParams, d):
     # Solve phi(f) = f - g(d - s f) = 0 on (0, g(d)) by safeguarded Newton in
     # float, then one Newton step in T (exact first derivatives).
     dv = float(d.value()) if isinstance(d, AutoDiffXd) else float(d)
-    lo, hi = 0.0, g(dv)[0]
-    f = hi / (1.0 + g(dv)[1] * s)
+    # the root lies in (0, min(g(d), d / s)): the spring's own deflection d - s f is > 0
+    lo, hi = 0.0, min(g(dv)[0], dv / s)
+    f = min(g(dv)[0] / (1.0 + g(dv)[1] * s), 0.5 * hi)
     for _ in range(60):
         x = dv - s * f
-        if x <= 0.0:
+        if x <= 0.0:  # too much force: the series compliance alone takes more than d
+            hi = f
             f = 0.5 * (lo + hi)
             continue
         gx, dg = g(x)
@@ -127,6 +129,8 @@ def _elastic(params: ContactLawParams, d):
             f = f_new
             break
         f = f_new
+    if not dv - s * f > 0.0:
+        f = lo  # the bracket's force side whose spring deflection is > 0
     gx, dg = g(d - s * f)
     f_t = f - (f - gx) / (1.0 + s * dg)
     return f_t, dg / (1.0 + s * dg)

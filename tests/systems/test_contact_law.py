@@ -59,6 +59,34 @@ def test_contact_law_closed_forms():
     assert contact_law_force(law, p, 0.0)[0] == pytest.approx(K * p)
 
 
+def _bisected(k, n, dr, s, d):
+    """The root of f = g(d - s f) by plain bisection: phi(f) = f - g(d - s f) rises
+    from -g(d) at f = 0 to f > 0 at f = d / s."""
+    lo, hi = 0.0, min(k * dr * (d / dr) ** n, d / s)
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if mid - k * dr * (max(d - s * mid, 0.0) / dr) ** n > 0.0:
+            hi = mid
+        else:
+            lo = mid
+    return 0.5 * (lo + hi)
+
+
+def test_a_softening_spring_behind_a_series_compliance_solves_its_own_equation():
+    # found by diagnose's generator study: with a softening exponent (n < 1) the
+    # search left its bracket (d - s f < 0) and raised on a complex power
+    rng = np.random.default_rng(5)
+    for _ in range(3000):
+        k, n = 10 ** rng.uniform(3, 6), rng.uniform(0.3, 3.0)
+        dr, s, d = 10 ** rng.uniform(-5, -2), 10 ** rng.uniform(-9, -3), 10 ** rng.uniform(-7, -1)
+        law = ContactLawParams(
+            k, exponent=n, reference_deflection_m=dr, series_compliance_m_per_n=s
+        )
+        f, _ = contact_law_force(law, d, 0.0)
+        assert isinstance(f, float)
+        assert f == pytest.approx(_bisected(k, n, dr, s, d), rel=1e-9), (k, n, dr, s, d)
+
+
 def test_contact_law_never_pulls_and_is_zero_apart():
     law = ContactLawParams(K, damping_n_s_per_m=5000.0, friction_force_n=50.0)
     assert contact_law_force(law, 1e-4, -0.05) == (0.0, 0.0)  # 6 - 250 - 50 < 0
