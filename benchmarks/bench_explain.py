@@ -1,7 +1,7 @@
 """Benchmark: wall time of ``explain`` on the paper's tables, serial against parallel.
 
-Explains each example table (``examples/explain/``) with ``jobs=1`` and with
-``jobs=N`` in one run, the engine's cache cleared before each, and prints the
+Explains each example table (``examples/explain/``) with ``workers=1`` and with
+``workers=N`` in one run, the engine's cache cleared before each, and prints the
 wall and process CPU time, the number of models fitted and the ratio serial /
 parallel. Target: Table 3 (4 rows, continuous rig computer) under 30 s serial
 on a 2-core machine; the parallel ratio close to the number of cores.
@@ -26,7 +26,7 @@ ROOT = Path(__file__).resolve().parents[1] / "examples" / "explain"
 def _time(table, jobs: int) -> tuple[float, float, int]:
     _ln_cor_of.cache_clear()
     wall, cpu = time.perf_counter(), time.process_time()
-    expl = explain_table(table, jobs=jobs)
+    expl = explain_table(table, workers=jobs)
     return time.perf_counter() - wall, time.process_time() - cpu, len(expl.fits)
 
 

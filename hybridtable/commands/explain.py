@@ -94,11 +94,14 @@ def register(sub) -> None:
     )
     add_plugin_argument(p)
     p.add_argument(
+        "--workers",
         "--jobs",
-        type=integer_type(1, 64),
+        dest="workers",
+        type=integer_type(1, 256),
         default=None,
         metavar="N",
-        help="processes that fit models in parallel (default: 1; worth it from 4 cores)",
+        help="processes fitting models in parallel, 1 to 256 (default: 2, as diagnose; "
+        "--jobs is its older name)",
     )
     p.add_argument("--json", metavar="FILE", help="write the results as JSON (- for stdout)")
     p.add_argument(
@@ -150,7 +153,7 @@ def run(args: argparse.Namespace) -> int:
             effects=effects,
             max_effects=args.max_effects,
             model_error_ln=args.model_error,
-            jobs=args.jobs or 1,
+            workers=args.workers,
             progress=(lambda name: (bar.set_postfix_str(name[:40]), bar.update())) if bar else None,
         )
     finally:

@@ -55,7 +55,6 @@ noise floor.
 from __future__ import annotations
 
 import math
-import os
 import time
 from collections.abc import Sequence
 
@@ -82,7 +81,7 @@ from hybridtable.diagnosis.search import pairs_and_swaps
 from hybridtable.diagnosis.settings import EXPLAINED_MAX_ERROR, FIT_ACCURACY
 from hybridtable.effects.registry import default_effects, get_effect
 from hybridtable.effects.spec import ModelSpec, RigScale
-from hybridtable.effects.workers import pool_map
+from hybridtable.effects.workers import pool_map, worker_count
 from hybridtable.measurement.audit import audit_runs
 from hybridtable.measurement.run_format import Run
 
@@ -216,8 +215,7 @@ def diagnose(
     names = list(effects) if effects is not None else list(default_effects("diagnose"))
     for n in names:
         get_effect(n)
-    if workers is None:
-        workers = min(2, os.cpu_count() or 1)
+    workers = worker_count(workers)
     ev = Evaluator(data, scale, accuracy)
     ev.computer = {d.run_id: audit.computer_changes(d.run_id) for d in data}
     notes = []

@@ -13,7 +13,18 @@ import sys
 from collections.abc import Callable, Sequence
 from typing import Any
 
-__all__ = ["pool_map"]
+__all__ = ["DEFAULT_WORKERS", "pool_map", "worker_count"]
+
+
+#: Processes a fit uses when the user names none (at most the CPUs).
+DEFAULT_WORKERS = 2
+
+
+def worker_count(workers: int | None) -> int:
+    """``workers``, or :data:`DEFAULT_WORKERS` capped at the CPUs when None."""
+    import os
+
+    return workers if workers is not None else min(DEFAULT_WORKERS, os.cpu_count() or 1)
 
 
 #: The ``shared`` inputs of the running :func:`pool_map` calls (innermost last).

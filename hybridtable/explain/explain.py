@@ -17,6 +17,7 @@ it cannot determine.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
@@ -25,6 +26,7 @@ from scipy.stats import f as f_dist
 
 from hybridtable.effects.effect import Effect
 from hybridtable.effects.registry import default_effects, get_effect
+from hybridtable.effects.workers import worker_count
 from hybridtable.errors import ParameterError
 from hybridtable.explain.fit import ModelFit, fit_models
 from hybridtable.explain.identify import Identifiability, identifiability
@@ -162,7 +164,8 @@ def explain_table(
     max_effects: int = 3,
     model_error_ln: float = MODEL_ERROR_LN,
     progress: Callable[[str], None] | None = None,
-    jobs: int = 1,
+    workers: int | None = None,
+    jobs: int | None = None,
 ) -> Explanation:
     """Explain a measured CoR table.
 
@@ -181,9 +184,16 @@ def explain_table(
         The loop model's own error in ln CoR, added in quadrature to each row's noise.
     progress : callable, optional
         Called with the name of each model as it is fitted.
-    jobs : int
-        Processes that fit models in parallel (1: in this process).
+    workers : int, optional
+        Processes that fit models in parallel (1: in this process; default: as
+        ``diagnose``, :func:`~hybridtable.effects.workers.worker_count`).
+    jobs : int, optional
+        The older name of ``workers`` (deprecated).
     """
+    if jobs is not None:
+        warnings.warn("explain_table(jobs=) is now workers=", DeprecationWarning, stacklevel=2)
+        workers = jobs if workers is None else workers
+    workers = worker_count(workers)
     if effects is None:
         effects = [get_effect(n) for n in default_effects("explain")]
     std, source = table.noise()
@@ -193,7 +203,7 @@ def explain_table(
     rig = table_scale(cases)
     effects, cannot_run = _runnable([EffectAt(e, rig) for e in effects], cases)
     fits, not_fitted = fit_models(
-        effects, cases, y, sigma, max_effects, progress=progress, jobs=jobs
+        effects, cases, y, sigma, max_effects, progress=progress, workers=workers
     )
     # the stated loop is always fitted (it has no parameter and n >= 1 rows), and every
     # model fitted has fewer parameters than rows: the best exists and has dof >= 1

@@ -258,11 +258,11 @@ def fit_models(
     max_effects: int = 3,
     keep: int = 4,
     progress: Callable[[str], None] | None = None,
-    jobs: int = 1,
+    workers: int = 1,
 ) -> tuple[list[ModelFit], list[tuple[str, ...]]]:
     """Fit the stated loop, every single effect, and the promising pairs and triples.
 
-    ``jobs`` > 1 fits the models in that many forked processes
+    ``workers`` > 1 fits the models in that many forked processes
     (:func:`~hybridtable.effects.workers.pool_map`: the effects stay in this
     process's memory, which the workers inherit).
 
@@ -280,7 +280,7 @@ def fit_models(
     singles = [e for e in effects if len(e.parameters) < n]
     too_many += [(e.name,) for e in effects if len(e.parameters) >= n]
     shared = ({e.name: e for e in effects}, cases, y, sigma)
-    fits = _run([((), ())] + [((e.name,), ()) for e in singles], jobs, note, shared)
+    fits = _run([((), ())] + [((e.name,), ()) for e in singles], workers, note, shared)
     single = {f.effects[0]: f for f in fits[1:]}
     everything = CorModel(effects)
     index, j = {}, 0
@@ -313,7 +313,7 @@ def fit_models(
                 k: x for e in combo if e.name in single for k, x in single[e.name].values.items()
             }
             work.append((names, (start,)))
-    fits += _run(work, jobs, note, shared)
+    fits += _run(work, workers, note, shared)
     return rank_fits(fits), sorted(set(too_many))
 
 
@@ -323,12 +323,12 @@ def _fit_job(shared, job) -> ModelFit:
     return fit_model([by_name[n] for n in names], cases, y, sigma, starts)
 
 
-def _run(work, jobs: int, note: Callable[[str], None], shared) -> list[ModelFit]:
-    """Fit the (effect names, starts) of ``work``, in ``jobs`` forked processes."""
+def _run(work, workers: int, note: Callable[[str], None], shared) -> list[ModelFit]:
+    """Fit the (effect names, starts) of ``work``, in ``workers`` forked processes."""
     return pool_map(
         _fit_job,
         work,
-        jobs,
+        workers,
         on_done=lambda job, _fit: note(" + ".join(job[0]) or "the stated loop"),
         shared=shared,
     )

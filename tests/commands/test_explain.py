@@ -21,6 +21,7 @@ import argparse
 import io
 import json
 import math
+import os
 import struct
 from contextlib import redirect_stderr, redirect_stdout
 from dataclasses import dataclass
@@ -306,3 +307,27 @@ def test_a_malformed_table_exits_2_in_one_line(tmp_path, capsys, text, where):
     assert lines[0].startswith("hybridtable explain: error:")
     assert str(table) in lines[0] and where in lines[0]
     assert not out.exists()
+
+
+def test_explain_and_diagnose_take_the_same_workers_flag_and_default():
+    """One worker pool for both front ends: ``--workers N`` (``--jobs`` is explain's
+    older name for it), default :func:`~hybridtable.effects.workers.worker_count`."""
+    from hybridtable.cli import build_parser
+    from hybridtable.effects.workers import DEFAULT_WORKERS, worker_count
+
+    parser = build_parser()
+    for command in ("explain", "diagnose"):
+        assert parser.parse_args([command, "x", "--workers", "3"]).workers == 3
+        assert parser.parse_args([command, "x"]).workers is None
+    assert parser.parse_args(["explain", "x", "--jobs", "3"]).workers == 3
+    assert worker_count(None) == min(DEFAULT_WORKERS, os.cpu_count() or 1)
+    assert worker_count(5) == 5
+
+
+def test_explain_table_jobs_is_the_deprecated_name_of_workers():
+    from hybridtable.explain import explain_table, read_cor_table
+
+    table = read_cor_table(TABLE1)
+    with pytest.warns(DeprecationWarning, match="workers"):
+        expl = explain_table(table, effects=[], max_effects=1, jobs=1)
+    assert expl.nothing_missing
