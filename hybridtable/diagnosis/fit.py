@@ -16,7 +16,6 @@ from hybridtable.effects import selection
 from hybridtable.effects.effect import Effect
 from hybridtable.effects.fitting import Coordinates, LeastSquares, fit_values, standard_errors
 from hybridtable.effects.registry import build_spec, get_effect
-from hybridtable.effects.selection import Block
 from hybridtable.effects.spec import ModelSpec, RigScale
 from hybridtable.errors import ParameterError
 from hybridtable.measurement.run_format import Run
@@ -155,10 +154,10 @@ def delta_bic(before: Fit, after: Fit) -> float:
     blocks (run x channel), each block's variance estimated, not below its
     numerical floor (:attr:`~hybridtable.diagnosis.evaluate.Evaluation.floor`)."""
 
-    def blocks(fit: Fit, keys) -> list[Block]:
+    def blocks(fit: Fit, keys) -> list[selection.Block]:
         rss = fit.rss_blocks()
         return [
-            Block(
+            selection.Block(
                 rss[i, c], len(fit.evaluations[i].whitened[c]), fit.evaluations[i].floor.get(c, 0.0)
             )
             for i, c in keys
