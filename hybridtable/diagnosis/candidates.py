@@ -372,7 +372,7 @@ def mark_lookalikes(candidates: list[Candidate]) -> None:
     sig = [c for c in candidates if c.accepted]
     for c in sig:
         alike = lookalikes(
-            c, sig, INDISTINGUISHABLE_BIC, lambda x: x.delta_bic, lambda x: [x.effect]
+            c, sig, INDISTINGUISHABLE_BIC, lambda x: x.delta_bic, lambda x: [x.effect], False
         )
         c.indistinguishable_from = [o.effect for o in alike]
 

@@ -104,8 +104,10 @@ def _run_round(ev, base_fit, base_error, base_heldout, names, workers, progress)
     # Expensive effects first, so two workers finish together.
     jobs = sorted(names, key=lambda n: -len(get_effect(n).parameters))
     label = f"fit {len(jobs)} effect(s)"
+    before = ev.simulations
     out = pool_map(_candidate_job, jobs, workers, progress, label, shared=shared)
-    ev.simulations += sum(s for _, s in out)
+    # each job's count: in a forked worker it is lost, in this process it is in already
+    ev.simulations = before + sum(s for _, s in out)
     cands = [c for c, _ in out]
     rank_candidates(cands)
     mark_lookalikes(cands)

@@ -206,8 +206,9 @@ def pairs_and_swaps(
             ]
             screens.append((names, starts, worst))
         label = f"screen {len(screens)} pair(s)"
+        before = ev.simulations
         screened = pool_map(_screen_job, screens, workers, progress, label, shared=ev)
-        ev.simulations += sum(s for _, s in screened)
+        ev.simulations = before + sum(s for _, s in screened)  # once, in or out of process
         ranked = sorted(
             (
                 (cost, job[0], values)
@@ -240,8 +241,9 @@ def pairs_and_swaps(
         return None
     jobs = list(proposals.values())
     label = f"fit {len(jobs)} pair(s)/swap(s)"
+    before = ev.simulations
     out = pool_map(_fit_job, jobs, workers, progress, label, shared=ev)
-    ev.simulations += sum(s for _, s in out)
+    ev.simulations = before + sum(s for _, s in out)  # once, in or out of process
     current_bic = delta_bic(nominal, current)
     scored = sorted(
         ((delta_bic(nominal, fit), fit) for fit, _ in out if not fit.failed),

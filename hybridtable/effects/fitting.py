@@ -11,9 +11,10 @@ vector of residuals in noise units; everything else is here:
   parameter moves by comparable steps whatever its unit;
 - :func:`fit_values`: evaluate the informed starts (the origin, an earlier
   fit, an effect's data-driven starts) and the points of a grid over the
-  range, then polish the best informed start and the best grid point with
-  :func:`scipy.optimize.least_squares` (bounded, each in coordinates centred on
-  its start); the result is never worse than the best start;
+  range, then polish the best informed start (or each, :class:`LeastSquares`)
+  and the best grid point with :func:`scipy.optimize.least_squares` (bounded;
+  in coordinates centred on the start, or about the origin); the result is
+  never worse than the best start; ``success`` says every polish converged;
 - :func:`jacobian` and :func:`standard_errors`: the linearized covariance
   ``s^2 (J^T J)^-1`` with ``s^2 = max(1, chi2 / (N - p))``: the residuals are in
   noise units, and a misfit larger than the noise widens the errors rather
@@ -66,7 +67,10 @@ class LeastSquares:
     otherwise they stay about the origin, and scipy's finite-difference step,
     ``diff_step`` times ``max(1, |u|)``, grows with the distance from it (a
     coarser step over a residual that is rough at fine scales, as ln CoR of a
-    delay interpolated between ticks is).
+    delay interpolated between ticks is). ``each_start``: every informed start
+    given is polished (the origin only when none is), not only the best of them
+    and the origin: where a residual is cheap, a start from earlier fits can
+    lead to a better valley than a null point of lower chi2.
     """
 
     method: str = "trf"
@@ -78,6 +82,7 @@ class LeastSquares:
     per_parameter: bool = False
     margin: float = 0.0
     centred: bool = True
+    each_start: bool = False
 
     def nfev(self, n_free: int) -> int:
         return self.max_nfev * n_free if self.per_parameter else self.max_nfev
@@ -167,8 +172,8 @@ def fit_values(
     starts : sequence of mappings
         Further informed starts (an earlier fit, an effect's data-driven
         starts; partial: the rest from the origin, ``held`` values kept). The
-        one with the lowest chi2 is polished by least squares, in coordinates
-        centred on it.
+        one with the lowest chi2, the origin included, is polished by least
+        squares (each of them, with ``settings.each_start``).
     grid : sequence of mappings
         Points scanning the range: the best of them is polished too, so that a
         second valley, away from the informed starts, is found.
@@ -185,11 +190,13 @@ def fit_values(
             scored.append((float(r @ r), k, vals, r))
         return [min(scored, key=lambda t: (t[0], t[1]))] if scored else []
 
-    chosen = best_of([{}, *starts]) + best_of(grid)
-    best_cost, _, best_vals, _ = chosen[0]
-    if len(chosen) > 1 and chosen[1][0] < best_cost:
-        best_cost, _, best_vals, _ = chosen[1]
-    nfev = 1 + len(starts) + len(grid)
+    if settings.each_start:
+        informed = [best_of([s])[0] for s in (starts or [{}])]
+    else:
+        informed = best_of([{}, *starts])
+    chosen = informed + best_of(grid)
+    best_cost, _, best_vals, _ = min(chosen, key=lambda t: t[0])
+    nfev = (max(len(starts), 1) if settings.each_start else 1 + len(starts)) + len(grid)
     success, polished = True, False
     for _, _, origin, r0 in chosen if space.free else ():
         centred = space.centred(origin) if settings.centred else space
@@ -219,8 +226,9 @@ def fit_values(
                 max_nfev=settings.nfev(len(lo)),
             )
             u, ok, nfev = sol.x, bool(sol.status > 0), nfev + sol.nfev
-        except ValueError:  # e.g. non-finite residuals
-            u, ok = u0, False
+        except ValueError:  # e.g. non-finite residuals: the start stays as it was
+            success = False
+            continue
         success = success and ok
         r = fun(u)
         cost = float(r @ r)

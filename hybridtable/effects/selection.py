@@ -74,15 +74,17 @@ def lookalikes(
     margin: float,
     score: Callable[[T], float],
     effects: Callable[[T], Iterable[str]],
+    inclusive: bool = True,
 ) -> list[T]:
-    """The ``others`` whose ``score`` is within ``margin`` of ``reference``'s and that
-    are not ``reference`` with effects added."""
+    """The ``others`` whose ``score`` is within ``margin`` of ``reference``'s (at
+    ``margin`` itself too when ``inclusive``) and that are not ``reference`` with
+    effects added."""
     ref, ref_effects = score(reference), set(effects(reference))
     return [
         o
         for o in others
         if o is not reference
-        and abs(score(o) - ref) <= margin
+        and (abs(score(o) - ref) <= margin if inclusive else abs(score(o) - ref) < margin)
         and not (ref_effects < set(effects(o)))
     ]
 

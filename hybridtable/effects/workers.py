@@ -51,28 +51,30 @@ def pool_map(
     ``on_done(job, result)`` after each job, in order."""
     import multiprocessing as mp
 
+    forked = workers > 1 and len(jobs) > 1 and "fork" in mp.get_all_start_methods()
+    pool = None
     _SHARED.append(shared)
-    if workers <= 1 or len(jobs) <= 1 or "fork" not in mp.get_all_start_methods():
-        results = (func(shared, j) for j in jobs)
-    else:
-        from concurrent.futures import ProcessPoolExecutor
-
-        pool = ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("fork"))
-        results = pool.map(_call, [(func, j) for j in jobs])
-    if progress:
-        from tqdm import tqdm
-
-        results = tqdm(
-            results, total=len(jobs), desc=label, unit="fit", file=sys.stderr, leave=False
-        )
-    out = []
     try:
+        if forked:
+            from concurrent.futures import ProcessPoolExecutor
+
+            pool = ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("fork"))
+            results = pool.map(_call, [(func, j) for j in jobs])
+        else:
+            results = (func(shared, j) for j in jobs)
+        if progress:
+            from tqdm import tqdm
+
+            results = tqdm(
+                results, total=len(jobs), desc=label, unit="fit", file=sys.stderr, leave=False
+            )
+        out = []
         for job, result in zip(jobs, results, strict=True):
             out.append(result)
             if on_done is not None:
                 on_done(job, result)
+        return out
     finally:
         _SHARED.pop()
-        if workers > 1 and len(jobs) > 1 and "pool" in locals():
+        if pool is not None:
             pool.shutdown()
-    return out

@@ -16,7 +16,6 @@ it cannot determine.
 
 from __future__ import annotations
 
-import math
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -150,8 +149,11 @@ def _flat(table: CorTable, y: np.ndarray, sigma: np.ndarray, best: ModelFit) -> 
 def _value_words(fit: ModelFit) -> str:
     parts = []
     for k, v in fit.values.items():
-        s = fit.std.get(k, math.inf)
-        if k.endswith("_s"):
+        s = fit.std.get(k)
+        if s is None:
+            parts.append(f"{k} = {1e3 * v:.3g} ms" if k.endswith("_s") else f"{k} = {v:.4g}")
+            parts[-1] += " (not determined by the table)"
+        elif k.endswith("_s"):
             parts.append(f"{k} = {1e3 * v:.3g} +/- {1e3 * s:.2g} ms")
         else:
             parts.append(f"{k} = {v:.4g} +/- {s:.2g}")

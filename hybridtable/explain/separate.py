@@ -129,7 +129,7 @@ def separating_runs(
                     f"{SEPARATING_STD:g} noise std (best: {words}, {sep.distance:.1f} std"
                     + (
                         f"; {sep.runs_needed} such runs would)"
-                        if sep.runs_needed is not None
+                        if sep.runs_needed is not None and sep.runs_needed > 1
                         else ")"
                     )
                 ),

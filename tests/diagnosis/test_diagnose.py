@@ -238,6 +238,21 @@ def test_examples_of_the_nominal_rig_say_none():
     assert d.verdict == "none"
 
 
+def test_the_count_of_model_runs_does_not_depend_on_the_processes():
+    # a job run in this process counted its simulations twice (141 against 75)
+    from hybridtable.measurement.run_reader import read_runs
+    from tests.examples import EXAMPLES as folder
+
+    runs = read_runs([folder])
+    counts = [
+        diagnose(runs, effects=["contact_damping", "extra_delay"], workers=w, separate=False)
+        for w in (1, 2)
+    ]
+    assert counts[0].simulations == counts[1].simulations
+    same = [json.dumps(d.to_json()["ranking"], sort_keys=True) for d in counts]
+    assert same[0] == same[1]  # the same fits either way (NaN for the figures not computed)
+
+
 # -- command line ----------------------------------------------------------------
 def test_diagnose_command_json_report_and_errors(tmp_path, capsys):
     runs = _runs(tmp_path, "force_bias", seed=3)

@@ -131,3 +131,36 @@ def test_no_room_to_move_gives_no_standard_error():
     space = Coordinates((("e", p),), SCALE, {"e": {"k": 1.0}})
     std = standard_errors(lambda v: np.array([v["e"]["k"]]), space, np.array([1.0]), 1e-2)
     assert std == {"e": {"k": None}}
+
+
+def _two_valleys(v):
+    b = v["line"]["b"]
+    return np.array([(b * b - 9.0), 0.1 * (b - 3.0)])
+
+
+def test_each_start_polishes_a_start_the_origin_beats():
+    # the origin (b = 0, chi2 81.09) is beaten by b = -2.5 (7.9) but not by b = 5.5
+    # (449): only a polish of every given start finds the valley at b = 3
+    space = _line_space()
+    space = Coordinates(space.free[1:], SCALE, {"line": {"a": 0.0, "b": -2.5}})
+    best_only = fit_values(_two_valleys, space, [{"line": {"b": 5.5}}])
+    each = fit_values(_two_valleys, space, [{"line": {"b": 5.5}}], LeastSquares(each_start=True))
+    assert best_only.values["line"]["b"] == pytest.approx(-3.0, abs=0.05)
+    assert each.values["line"]["b"] == pytest.approx(3.0, abs=1e-3)
+
+
+def test_a_polish_that_fails_leaves_the_start_and_its_own_residual():
+    # least_squares refuses non-finite residuals: the start, as evaluated, is the answer
+    seen = []
+
+    def residual(v):
+        seen.append(v["line"]["b"])
+        b = v["line"]["b"]
+        return np.array([b - 1.0, math.nan if b != 2.5 else 0.0])
+
+    space = _line_space()
+    space = Coordinates(space.free[1:], SCALE, {"line": {"a": 0.0, "b": 2.5}})
+    sol = fit_values(residual, space)
+    assert not sol.success
+    assert sol.values["line"]["b"] == 2.5 and sol.values["line"]["b"] in seen
+    assert sol.cost == pytest.approx(1.5**2)

@@ -244,3 +244,21 @@ def test_explain_backlash_gives_the_stated_loops_cor(backlash_table):
     for got, want in zip(backlash["predicted_cor"], stated["predicted_cor"], strict=True):
         assert math.isfinite(got)
         assert got == pytest.approx(want, abs=1e-4)
+
+
+def test_a_worker_pool_hands_its_shared_inputs_to_every_job_and_lets_go():
+    from hybridtable.effects import workers
+
+    def boom(shared, job):
+        if job == 2:
+            raise RuntimeError("job 2")
+        return shared["k"] * job
+
+    assert workers.pool_map(_scaled, [1, 2, 3], 2, shared={"k": 10}) == [10, 20, 30]
+    with pytest.raises(RuntimeError):
+        workers.pool_map(boom, [1, 2, 3], 1, shared={"k": 10})
+    assert workers._SHARED == []
+
+
+def _scaled(shared, job):
+    return shared["k"] * job

@@ -52,6 +52,10 @@ def test_lookalikes_are_within_the_margin_and_not_the_reference_with_more_added(
     ref = ("a",)
     alike = lookalikes(ref, list(models), 2.0, models.__getitem__, lambda m: m)
     assert alike == [("b",), ("b", "d")]
+    # at the margin itself: in when inclusive (explain's), out when not (diagnose's)
+    models[("e",)] = 12.0
+    assert ("e",) in lookalikes(ref, list(models), 2.0, models.__getitem__, lambda m: m)
+    assert ("e",) not in lookalikes(ref, list(models), 2.0, models.__getitem__, lambda m: m, False)
 
 
 def test_the_separating_run_is_the_farthest_and_says_how_many_runs_would_do():

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from hybridtable.effects.registry import default_effects
@@ -190,3 +191,22 @@ def test_the_stated_delay_alone_would_not_explain_two_rows(explained):
     gap = math.log(expl.table.rows[0].cor) - math.log(nominal.predicted_cor[0])
     assert gap == pytest.approx(math.pi**2 * 1.0 * 0.002, rel=0.1)
     assert not expl.nothing_missing
+
+
+def test_a_value_the_table_cannot_determine_is_worded_without_an_error():
+    from hybridtable.explain.explain import _value_words
+    from hybridtable.explain.fit import ModelFit
+
+    fit = ModelFit(
+        effects=("extra_delay",),
+        values={"extra_delay_s": 0.002, "ratio": 1.1},
+        std={"extra_delay_s": None, "ratio": 0.05},
+        predicted_cor=np.ones(3),
+        measured_cor=np.ones(3),
+        z=np.zeros(3),
+        chi2=0.0,
+        dof=1,
+    )
+    words = _value_words(fit)
+    assert "extra_delay_s = 2 ms (not determined by the table)" in words
+    assert "ratio = 1.1 +/- 0.05" in words
