@@ -149,8 +149,8 @@ class ParameterAt:
     """An :class:`EffectParameter` with its numbers at one rig's scale.
 
     ``null`` is the value at the fit's origin (the null value, else the start);
-    :meth:`to_unit`, :meth:`from_value` and :meth:`bounds` work in the fit's
-    coordinate ``u`` (:meth:`EffectParameter.value_at`).
+    ``scale`` its typical change (the fit's unit step,
+    :class:`~hybridtable.effects.fitting.Coordinates`).
     """
 
     parameter: EffectParameter
@@ -175,18 +175,6 @@ class ParameterAt:
     @property
     def quantity(self) -> str:
         return self.parameter.quantity
-
-    def to_unit(self, u: float) -> float:
-        """The value at the fit's coordinate ``u``."""
-        return self.parameter.value_at(u, self.rig)
-
-    def from_value(self, value: float) -> float:
-        """The fit's coordinate of ``value``."""
-        return self.parameter.coordinate(value, self.rig)
-
-    def bounds(self) -> tuple[float, float]:
-        """The range in the fit's coordinate."""
-        return self.from_value(self.lower), self.from_value(self.upper)
 
 
 @dataclass(frozen=True)

@@ -25,9 +25,7 @@ from scipy.optimize import lsq_linear
 from scipy.stats import chi2 as chi2_dist
 
 from hybridtable.effects.fitting import (
-    Coordinates,
     LeastSquares,
-    Values,
     fit_values,
     standard_errors,
 )
@@ -140,21 +138,6 @@ COR_LEAST_SQUARES = LeastSquares(
 )
 
 
-def _space(model: CorModel, values: dict[str, float] | None = None) -> Coordinates:
-    """The fit's coordinates of ``model`` about ``values`` (default: each null)."""
-    values = values or {}
-    origin = {
-        e.name: {p.name: values.get(p.name, p.null) for p in e.parameters} for e in model.effects
-    }
-    free = tuple((e.name, p.parameter) for e in model.effects for p in e.parameters)
-    rig = model.effects[0].rig if model.effects else None
-    return Coordinates(free, rig, origin)
-
-
-def _flat(values: Values) -> dict[str, float]:
-    return {k: x for v in values.values() for k, x in v.items()}
-
-
 def _finish(model: CorModel, cases, y, sigma, values: dict[str, float]) -> ModelFit:
     pred = model.predict_values(cases, values)
     z = (pred - y) / sigma
@@ -165,10 +148,10 @@ def _finish(model: CorModel, cases, y, sigma, values: dict[str, float]) -> Model
         for p, x, a, b in zip(model.parameters, u, lo, hi, strict=True)
         if min(x - a, b - x) < 1e-3
     )
-    std = _flat(
+    std = model.flat(
         standard_errors(
-            lambda v: (model.predict_values(cases, _flat(v)) - y) / sigma,
-            _space(model, values),
+            lambda v: (model.predict_values(cases, model.flat(v)) - y) / sigma,
+            model.space.centred(model.nested(values)),
             z,
             step=JACOBIAN_STEP,
         )
@@ -207,20 +190,13 @@ def fit_model(
     axes = [_axis(p, a, b, points) for p, a, b in zip(model.parameters, lo, hi, strict=True)]
     grid = [model.values(np.array(g)) for g in itertools.product(*axes)]
     sol = fit_values(
-        lambda v: (model.predict_values(cases, _flat(v)) - y) / sigma,
-        _space(model),
-        [_nested(model, s) for s in starts],
+        lambda v: (model.predict_values(cases, model.flat(v)) - y) / sigma,
+        model.space,
+        [model.nested(s) for s in starts],
         COR_LEAST_SQUARES,
-        grid=[_nested(model, g) for g in grid],
+        grid=[model.nested(g) for g in grid],
     )
-    return _finish(model, cases, y, sigma, _flat(sol.values))
-
-
-def _nested(model: CorModel, values: dict[str, float]) -> Values:
-    return {
-        e.name: {p.name: values[p.name] for p in e.parameters if p.name in values}
-        for e in model.effects
-    }
+    return _finish(model, cases, y, sigma, model.flat(sol.values))
 
 
 def _axis(p, a: float, b: float, points: int) -> np.ndarray:

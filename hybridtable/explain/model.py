@@ -24,7 +24,7 @@ from functools import cached_property, lru_cache
 import numpy as np
 
 from hybridtable.effects.effect import Effect, ParameterAt
-from hybridtable.effects.fitting import Coordinates, jacobian
+from hybridtable.effects.fitting import Coordinates, Values, jacobian
 from hybridtable.effects.registry import build_spec
 from hybridtable.effects.spec import ModelSpec, RigScale
 from hybridtable.errors import ParameterError, SimulationError
@@ -86,7 +86,7 @@ class EffectAt:
     def probe_values(self) -> dict[str, float]:
         """Every parameter one typical change from its null, within its bounds: a
         point where the effect acts (at its null values it vanishes)."""
-        return {p.name: min(max(p.to_unit(1.0), p.lower), p.upper) for p in self.parameters}
+        return CorModel((self,)).values(np.ones(len(self.parameters)))
 
     def spec(self, values: Mapping[str, float], base: ModelSpec | None = None) -> ModelSpec:
         """``base`` (default nominal) with the effect at ``values`` (missing: null);
@@ -194,14 +194,22 @@ class CorModel:
     Notes
     -----
     The parameters are handled in the fit's coordinates ``u`` (``u = 0``: every
-    effect null; one unit: one ``scale`` of the parameter, see
-    :class:`~hybridtable.effects.effect.ParameterAt`).
+    effect null; one unit: one ``scale`` of the parameter, of its logarithm for a
+    ratio): :attr:`space`, the one fit's
+    :class:`~hybridtable.effects.fitting.Coordinates`.
     """
 
     def __init__(self, effects: Sequence[EffectAt]) -> None:
         self.effects = tuple(effects)
         self.parameters: tuple[ParameterAt, ...] = tuple(
             p for e in self.effects for p in e.parameters
+        )
+        #: The fit's coordinates about every effect's null (the one fit's, with
+        #: the parameters of a CoR table's scale).
+        self.space = Coordinates(
+            tuple((e.name, p.parameter) for e in self.effects for p in e.parameters),
+            self.effects[0].rig if self.effects else None,
+            {e.name: {p.name: p.null for p in e.parameters} for e in self.effects},
         )
         self._systems: dict[tuple, float] = {}
 
@@ -210,22 +218,29 @@ class CorModel:
         """The effects' names."""
         return [e.name for e in self.effects]
 
+    def nested(self, values: Mapping[str, float]) -> Values:
+        """Parameter -> value as effect -> parameter -> value (missing: left out)."""
+        return {
+            e.name: {p.name: values[p.name] for p in e.parameters if p.name in values}
+            for e in self.effects
+        }
+
+    @staticmethod
+    def flat(values: Mapping[str, Mapping[str, float]]) -> dict[str, float]:
+        """Effect -> parameter -> value as parameter -> value."""
+        return {k: x for v in values.values() for k, x in v.items()}
+
     def values(self, u: Sequence[float]) -> dict[str, float]:
         """Parameter name -> value at coordinates ``u``."""
-        return {p.name: p.to_unit(float(x)) for p, x in zip(self.parameters, u, strict=True)}
+        return self.flat(self.space.values(u))
 
     def coordinates(self, values: Mapping[str, float]) -> np.ndarray:
         """The coordinates ``u`` of parameter ``values`` (missing: null)."""
-        return np.array([p.from_value(values.get(p.name, p.null)) for p in self.parameters])
+        return self.space.coordinates(self.nested(values))
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """Lower and upper bounds of ``u``."""
-        lo, hi = (
-            zip(*(p.bounds() for p in self.parameters), strict=True)
-            if self.parameters
-            else ((), ())
-        )
-        return np.array(lo, float), np.array(hi, float)
+        return self.space.bounds()
 
     def predict(self, cases: Sequence[Case], u: Sequence[float]) -> np.ndarray:
         """ln CoR of each case at coordinates ``u``."""
