@@ -66,9 +66,16 @@ def test_a_diverging_run_is_a_row_and_the_campaign_goes_on(tmp_path, capsys):
 
 
 def _campaign(spec: Path, out: Path, workers: int, **popen) -> subprocess.Popen:
-    """``hybridtable sweep`` in a process of its own."""
+    """``hybridtable sweep`` in a process of its own, with Ctrl-C's default action
+    (a test process started in the background, or one whose earlier tests left
+    SIGINT ignored, would pass that on, and Python would not turn it into
+    KeyboardInterrupt)."""
     args = ["sweep", str(spec), "--out", str(out), "--workers", str(workers), "--no-progress"]
-    return subprocess.Popen([sys.executable, "-m", "hybridtable.cli", *args], **popen)
+    return subprocess.Popen(
+        [sys.executable, "-m", "hybridtable.cli", *args],
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+        **popen,
+    )
 
 
 def _wait_for_rows(path: Path, proc: subprocess.Popen, at_least: int, timeout_s: float) -> int:
