@@ -72,7 +72,7 @@ try:
         params.compensator_params(), h, gated=False)
     best = None
     for _ in range(runs + 1):
-        loop = B.build_hybrid_loop(p, contact=UnilateralSpringContact(p.contact(), bilateral=True))
+        loop = B.build_hybrid_loop(p, contact=UnilateralSpringContact(p.plant.contact, bilateral=True))
         sim = Simulator(loop.diagram)
         loop.set_initial_conditions(sim.get_mutable_context())
         ResetIntegratorFromFlags(sim, "runge_kutta3", loop.computer_period_s)

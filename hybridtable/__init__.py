@@ -9,7 +9,13 @@ from hybridtable.compensators.paper import COMPENSATORS, Compensator, Compensato
 from hybridtable.errors import ParameterError, SimulationError
 from hybridtable.loop.builder import HybridLoop, add_hybrid_loop, build_hybrid_loop
 from hybridtable.loop.metrics import ContactMetrics, contact_metrics
-from hybridtable.loop.params import HybridLoopParams
+from hybridtable.loop.params import (
+    Approach,
+    CompensatorConfig,
+    HybridLoopParams,
+    Plant,
+    RigComputer,
+)
 from hybridtable.loop.simulation import SimulationResult, run_loop, simulate
 from hybridtable.systems.contact import ContactParams, UnilateralSpringContact
 from hybridtable.systems.sensor import ForceSensorDelay, SensorParams
@@ -17,6 +23,10 @@ from hybridtable.systems.spacecraft import Spacecraft, SpacecraftParams
 from hybridtable.systems.table import SecondOrderTable, TableParams
 
 __all__ = [
+    "Approach",
+    "CompensatorConfig",
+    "Plant",
+    "RigComputer",
     "COMPENSATORS",
     "Compensator",
     "CompensatorParams",

@@ -10,7 +10,7 @@ import pytest
 
 from hybridtable.errors import ParameterError
 from hybridtable.limits import LIMITS, check_plausible, limit_words
-from hybridtable.loop.params import _PLAUSIBLE_FIELDS, HybridLoopParams
+from hybridtable.loop.params import FIELDS, HybridLoopParams
 from hybridtable.measurement.run_format import RUN_COLUMNS, RUN_KEYS
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
@@ -19,7 +19,9 @@ DOCS = Path(__file__).resolve().parents[1] / "docs"
 def test_every_number_a_user_gives_has_a_range():
     numbers = [k for k, kind in RUN_KEYS.items() if kind == "number"]
     assert set(numbers) <= set(LIMITS)
-    assert set(_PLAUSIBLE_FIELDS) <= set(LIMITS)
+    words = {"compensator", "contact_gate", "table_initial_state", "clamp_nonnegative", "passivity"}
+    given_state = {"table_initial_position_m", "table_initial_velocity_m_per_s"}
+    assert set(FIELDS) - words - given_state <= set(LIMITS)
     assert set(RUN_COLUMNS) - {"time_s"} <= set(LIMITS)
     for name, limit in LIMITS.items():
         assert limit.low < limit.high, name
@@ -46,6 +48,9 @@ def test_parameters_refuse_absurd_values_naming_the_field():
     with pytest.raises(ParameterError, match=r"^table_response_hz = 1e\+06 Hz is outside"):
         HybridLoopParams(**base, table_response_hz=1e6)
     HybridLoopParams(**base, table_response_hz=math.inf)  # the ideal table
+    for name in sorted(set(FIELDS) & set(LIMITS)):  # every loop quantity, in whichever config
+        with pytest.raises(ParameterError, match=f"^{name} "):
+            HybridLoopParams(**{**base, name: LIMITS[name].high * 10})
     with pytest.raises(ParameterError, match="makes spacecraft_mass_kg = 2.53e"):
         HybridLoopParams.from_contact_frequency(1e-3, 1e10)
 

@@ -234,9 +234,9 @@ class ContactLoopLinearizer:
         if name == "spacecraft":
             return self.spacecraft_block(p.spacecraft_mass_kg)
         if name == "table":
-            return self.table_block(p.table())
+            return self.table_block(p.plant.table)
         if name == "contact":
-            return self.contact_block(p.contact())
+            return self.contact_block(p.plant.contact)
         if name == "force_sensor":
             return self.sensor_block(p.sensor_delay_s)
         return self.compensator_block(p.compensator_params())

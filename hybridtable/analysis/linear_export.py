@@ -25,7 +25,6 @@ from __future__ import annotations
 import io
 import json
 import math
-from dataclasses import fields
 from pathlib import Path
 
 import numpy as np
@@ -162,7 +161,7 @@ def linear_model_document(
             "sample_rate_hz": p.sample_rate_hz,
         },
         "operating_point": {k: _plain(v) for k, v in operating_point.items()},
-        "parameters": {f.name: _plain(getattr(p, f.name)) for f in fields(p)},
+        "parameters": {k: _plain(v) for k, v in p.quantities().items()},
         "closed_loop_poles": [[float(z.real), float(z.imag)] for z in poles],
         "notes": list(loop.notes),
     }

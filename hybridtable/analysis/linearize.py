@@ -228,15 +228,15 @@ def add_contact_loop(
     ``[f, df/dt]``, the compensator ungated and reading ``df_mea/dt``.
     """
     order = check_pade_order(pade_order)
-    sc = builder.AddNamedSystem("spacecraft", Spacecraft(params.spacecraft()))
-    table = builder.AddNamedSystem("table", SecondOrderTable(params.table()))
+    sc = builder.AddNamedSystem("spacecraft", Spacecraft(params.plant.spacecraft))
+    table = builder.AddNamedSystem("table", SecondOrderTable(params.plant.table))
     contact = builder.AddNamedSystem(
-        "contact", UnilateralSpringContact(params.contact(), bilateral=True)
+        "contact", UnilateralSpringContact(params.plant.contact, bilateral=True)
     )
     mux = builder.AddNamedSystem("force_mux", Multiplexer(2))
     sensor = builder.AddNamedSystem(
         "force_sensor",
-        ForceSensorDelay(params.sensor(), mode="pade", pade_order=order, size=2),
+        ForceSensorDelay(params.rig.sensor, mode="pade", pade_order=order, size=2),
     )
     demux = builder.AddNamedSystem("force_demux", Demultiplexer(2))
     comp = builder.AddNamedSystem(
@@ -266,7 +266,7 @@ def add_contact_loop(
 def linearization_notes(params: HybridLoopParams) -> tuple[str, ...]:
     """Caveats of the linear model at ``params``, in words (empty when none)."""
     cp = params.compensator_params()
-    if params.table().is_ideal and params.contact_damping_n_s_per_m > 0 and cp.uses_lead:
+    if params.plant.table.is_ideal and params.contact_damping_n_s_per_m > 0 and cp.uses_lead:
         return (
             "ideal table with a damped contact: the table reports a_act = 0, so the "
             "contact's force rate lacks c * a and the SDC lead of the linear model "

@@ -167,8 +167,8 @@ class SampledLoopLinearizer:
     def continuous_plant(self, params: HybridLoopParams) -> StateSpaceBlock:
         """Table + bilateral contact, continuous: command ``[p_des, v_des]`` ->
         ``[p_act, v_act, a_act, f_act]``."""
-        table = self._cont.table_block(params.table())
-        contact = self._cont.contact_block(params.contact())
+        table = self._cont.table_block(params.plant.table)
+        contact = self._cont.contact_block(params.plant.contact)
         return self._plant_wiring.assemble([table, contact], "plant")
 
     def spacecraft_block(self, mass_kg: float, period_s: float) -> StateSpaceBlock:
@@ -241,9 +241,9 @@ class SampledLoopLinearizer:
             If they differ by more than ``rtol``.
         """
         builder = DiagramBuilder()
-        table = builder.AddNamedSystem("table", SecondOrderTable(params.table()))
+        table = builder.AddNamedSystem("table", SecondOrderTable(params.plant.table))
         contact = builder.AddNamedSystem(
-            "contact", UnilateralSpringContact(params.contact(), bilateral=True)
+            "contact", UnilateralSpringContact(params.plant.contact, bilateral=True)
         )
         builder.Connect(table.GetOutputPort("motion"), contact.GetInputPort("motion"))
         mux = builder.AddNamedSystem("mux", Multiplexer([3, 1]))

@@ -34,5 +34,5 @@ def sensor_like_delay(params, size: int = 3) -> System:
     a signal through it is read by the rig computer at the same instants as
     the measured force (same delay line, same period)."""
     if params.sample_period_s is None:
-        return ForceSensorDelay(params.sensor(), "continuous", params.step_s, size=size)
-    return ForceSensorDelay(params.sensor(), "sampled", params.sample_period_s, size=size)
+        return ForceSensorDelay(params.rig.sensor, "continuous", params.step_s, size=size)
+    return ForceSensorDelay(params.rig.sensor, "sampled", params.sample_period_s, size=size)

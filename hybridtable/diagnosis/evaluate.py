@@ -80,7 +80,7 @@ def prepare_runs(runs: Sequence[Run]) -> list[RunData]:
         except ValueError as err:
             raise MeasurementError(f"{run.where('csv')}: {err}") from None
         m = delay_samples(params.sensor_delay_s, run.sample_period_s)
-        table = params.table()
+        table = params.plant.table
         h = run.sample_period_s
         settle = max(2, settle_ticks(table.settling_time_s, h, run.n))
         noise = estimate_noise(run, m, settle)

@@ -251,7 +251,7 @@ class ModelSpec:
             mode = StructuralModeParams(**dict(self.table))
 
             def table(params):
-                return ResonantTable(params.table(), mode)
+                return ResonantTable(params.plant.table, mode)
 
         return RigPhysics(
             table=self._wrapped("table", table),

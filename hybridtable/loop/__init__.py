@@ -8,7 +8,8 @@
         +--compensated_force-- compensator <-+---measured_force----+
                                ^--commanded_state-- spacecraft
 
-- :mod:`~hybridtable.loop.params`: :class:`HybridLoopParams`, every parameter of a run;
+- :mod:`~hybridtable.loop.params`: :class:`HybridLoopParams`, every parameter of a run,
+  one config per component (:class:`Plant`, :class:`RigComputer`, :class:`Approach`);
 - :mod:`~hybridtable.loop.scenario`: a scenario file (TOML) of nested sections,
   one per component, shared with the 6-DoF loop;
 - :mod:`~hybridtable.loop.builder`: :func:`add_hybrid_loop` wires the systems of
@@ -24,10 +25,20 @@
 from hybridtable.loop.builder import LOGGED, HybridLoop, add_hybrid_loop, build_hybrid_loop
 from hybridtable.loop.fast import fast_unsupported, simulate_fast
 from hybridtable.loop.metrics import ContactMetrics, contact_metrics
-from hybridtable.loop.params import HybridLoopParams
+from hybridtable.loop.params import (
+    Approach,
+    CompensatorConfig,
+    HybridLoopParams,
+    Plant,
+    RigComputer,
+)
 from hybridtable.loop.simulation import SimulationResult, run_loop, simulate
 
 __all__ = [
+    "Approach",
+    "CompensatorConfig",
+    "Plant",
+    "RigComputer",
     "LOGGED",
     "ContactMetrics",
     "HybridLoop",

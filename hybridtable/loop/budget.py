@@ -91,7 +91,7 @@ def fastest_pole_rad_per_s(params: HybridLoopParams) -> tuple[float, str]:
     spacecraft model is integrated (a sampled rig computer steps it itself).
     """
     poles: list[tuple[float, str]] = [(0.0, "")]
-    table = params.table()
+    table = params.plant.table
     if not table.is_ideal:
         poles.append(
             (

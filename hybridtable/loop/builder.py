@@ -149,16 +149,16 @@ def add_hybrid_loop(
             h_computer, _ = continuous_delay_period(params.sensor_delay_s, params.step_s)
         else:
             h_computer = params.step_s
-        sensor = ForceSensorDelay(params.sensor(), "continuous", params.step_s)
-        spacecraft = Spacecraft(params.spacecraft())
+        sensor = ForceSensorDelay(params.rig.sensor, "continuous", params.step_s)
+        spacecraft = Spacecraft(params.plant.spacecraft)
     else:
         h_computer = h_sample
-        sensor = ForceSensorDelay(params.sensor(), "sampled", h_sample)
-        spacecraft = Spacecraft(params.spacecraft(), sample_period_s=h_sample)
+        sensor = ForceSensorDelay(params.rig.sensor, "sampled", h_sample)
+        spacecraft = Spacecraft(params.plant.spacecraft, sample_period_s=h_sample)
     spacecraft = add_component(builder, "spacecraft", spacecraft, flat)
-    table = add_component(builder, "table", table or SecondOrderTable(params.table()), flat)
+    table = add_component(builder, "table", table or SecondOrderTable(params.plant.table), flat)
     contact = add_component(
-        builder, "contact", contact or UnilateralSpringContact(params.contact()), flat
+        builder, "contact", contact or UnilateralSpringContact(params.plant.contact), flat
     )
     sensor = add_component(builder, "force_sensor", sensor_backend or sensor, flat)
     compensator = add_component(

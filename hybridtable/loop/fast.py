@@ -119,7 +119,7 @@ def _law(params: HybridLoopParams) -> tuple[CompensationLaw, float, float | None
     term); an ideal table has no response error, so no MDC term."""
     cp = params.compensator_params()
     law = compensation_law(cp)
-    if params.table().is_ideal:  # p_des - p_act = 0
+    if params.plant.table.is_ideal:  # p_des - p_act = 0
         law = replace(law, motion_correction=False)
     c = cp.damping_n_s_per_m
     return law, cp.stiffness_n_per_m, (c if c > 0.0 else None)
@@ -197,7 +197,7 @@ class _Continuous:
 
     def __init__(self, params: HybridLoopParams, h: float) -> None:
         self.h = h
-        self.ideal = params.table().is_ideal
+        self.ideal = params.plant.table.is_ideal
         self.k, self.c = params.contact_stiffness_n_per_m, params.contact_damping_n_s_per_m
         self.undelayed = params.sensor_delay_s == 0.0
         law, kc, cc = _law(params)
@@ -419,7 +419,7 @@ def _run_sampled(params: HybridLoopParams, h: float, n_delay: int, rule: _StopRu
     A, B = computer_step(params.spacecraft_mass_kg, h)  # the rig computer's model, one tick
     (a00, a01), (a10, a11) = A.tolist()
     b0, b1 = B[:, 0].tolist()
-    table = params.table()
+    table = params.plant.table
     ideal = table.is_ideal
     ic = params.initial_conditions()
     p, v, pa, va = ic["p_des_m"], ic["v_des_m_per_s"], ic["p_act_m"], ic["v_act_m_per_s"]

@@ -1,17 +1,34 @@
-"""Parameters of one hybrid-loop run (:class:`HybridLoopParams`), SI units."""
+"""Parameters of one hybrid-loop run (:class:`HybridLoopParams`), SI units: a
+scenario nested one config per component, as Tedrake's ``manipulation``
+scenarios are::
+
+    HybridLoopParams
+      plant: Plant                     what is physically there
+        spacecraft: SpacecraftParams     mass_kg
+        contact: ContactParams           stiffness_n_per_m, damping_n_s_per_m
+        table: TableParams               response_frequency_hz, damping_ratio
+      rig: RigComputer                 the rig's computer
+        sensor: SensorParams             sensor_delay_s
+        sample_rate_hz, time_step_s
+        compensator: CompensatorConfig   name, what it believes, dead band, clamp, gate, passivity
+      approach: Approach               initial_velocity_m_per_s, initial_gap_m, the table's state
+
+Each system of the loop takes its own config (``params.plant.contact`` is the
+contact's). Each quantity also has one flat name (:data:`FIELDS`): the
+vocabulary of the command-line flags, the plausible ranges
+(:data:`hybridtable.limits.LIMITS`), sweep axes, scenario and model files. The
+flat names build and change a scenario (``HybridLoopParams(spacecraft_mass_kg=...,
+contact_stiffness_n_per_m=...)``, ``params.with_(sensor_delay_s=0.01)``) and read
+it (``params.sensor_delay_s`` is ``params.rig.sensor.sensor_delay_s``).
+"""
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
-from typing import Any
+from dataclasses import MISSING, dataclass, fields, replace
+from typing import Any, get_type_hints
 
-from hybridtable._validation import (
-    check_choice,
-    check_nonnegative,
-    check_positive,
-    check_positive_or_inf,
-)
+from hybridtable._validation import check_choice, check_nonnegative, check_positive
 from hybridtable.compensators.paper import CONTACT_GATES, CompensatorParams
 from hybridtable.compensators.registry import compensator_names
 from hybridtable.errors import ParameterError
@@ -25,7 +42,12 @@ from hybridtable.systems.table import TableParams
 __all__ = [
     "TABLE_INITIAL_STATES",
     "BELIEFS",
+    "FIELDS",
+    "Approach",
+    "CompensatorConfig",
     "HybridLoopParams",
+    "Plant",
+    "RigComputer",
     "believed",
 ]
 
@@ -41,6 +63,32 @@ BELIEFS: dict[str, str] = {
     "compensator_damping_n_s_per_m": "contact_damping_n_s_per_m",
 }
 
+#: Each quantity's flat name -> where it lives in :class:`HybridLoopParams`.
+FIELDS: dict[str, tuple[str, ...]] = {
+    "spacecraft_mass_kg": ("plant", "spacecraft", "mass_kg"),
+    "contact_stiffness_n_per_m": ("plant", "contact", "stiffness_n_per_m"),
+    "contact_damping_n_s_per_m": ("plant", "contact", "damping_n_s_per_m"),
+    "sensor_delay_s": ("rig", "sensor", "sensor_delay_s"),
+    "table_response_hz": ("plant", "table", "response_frequency_hz"),
+    "table_damping_ratio": ("plant", "table", "damping_ratio"),
+    "compensator": ("rig", "compensator", "name"),
+    "lead_time_s": ("rig", "compensator", "lead_time_s"),
+    "compensator_stiffness_n_per_m": ("rig", "compensator", "stiffness_n_per_m"),
+    "compensator_damping_n_s_per_m": ("rig", "compensator", "damping_n_s_per_m"),
+    "force_deadband_n": ("rig", "compensator", "force_deadband_n"),
+    "clamp_nonnegative": ("rig", "compensator", "clamp_nonnegative"),
+    "contact_gate": ("rig", "compensator", "contact_gate"),
+    "initial_velocity_m_per_s": ("approach", "initial_velocity_m_per_s"),
+    "initial_gap_m": ("approach", "initial_gap_m"),
+    "table_initial_state": ("approach", "table_initial_state"),
+    "table_initial_position_m": ("approach", "table_initial_position_m"),
+    "table_initial_velocity_m_per_s": ("approach", "table_initial_velocity_m_per_s"),
+    "sample_rate_hz": ("rig", "sample_rate_hz"),
+    "time_step_s": ("rig", "time_step_s"),
+    "passivity": ("rig", "compensator", "passivity"),
+}
+_FLAT_NAME: dict[tuple[str, ...], str] = {path: name for name, path in FIELDS.items()}
+
 
 def believed(params: Any, belief: str) -> float:
     """What the compensator believes for ``belief`` (a key of :data:`BELIEFS`)
@@ -50,62 +98,166 @@ def believed(params: Any, belief: str) -> float:
     return getattr(params, BELIEFS[belief]) if value is None else value
 
 
-#: The fields checked against their plausible range (:data:`hybridtable.limits.LIMITS`).
-_PLAUSIBLE_FIELDS: tuple[str, ...] = (
-    "spacecraft_mass_kg",
-    "contact_stiffness_n_per_m",
-    "contact_damping_n_s_per_m",
-    "sensor_delay_s",
-    "table_response_hz",
-    "table_damping_ratio",
-    "lead_time_s",
-    "compensator_stiffness_n_per_m",
-    "compensator_damping_n_s_per_m",
-    "force_deadband_n",
-    "initial_velocity_m_per_s",
-    "initial_gap_m",
-    "sample_rate_hz",
-    "time_step_s",
-)
+def _plausible(config: Any, prefix: tuple[str, ...], names: tuple[str, ...]) -> None:
+    """Each flat name in ``names`` (under ``prefix``) inside its plausible range
+    (:mod:`hybridtable.limits`), so that no absurd value reaches a simulation
+    that would run forever."""
+    for name in names:
+        value = config
+        for key in FIELDS[name][len(prefix) :]:
+            value = getattr(value, key)
+        if value is not None:
+            check_plausible(name, value)
+
+
+def _set(config: Any, name: str, value: Any) -> None:
+    object.__setattr__(config, name, value)
 
 
 @dataclass(frozen=True)
-class HybridLoopParams:
-    """Every parameter of one hybrid-loop run, SI units.
+class Plant:
+    """What is physically there: the spacecraft model, the contact, the table.
 
     Parameters
     ----------
-    spacecraft_mass_kg : float
-        Spacecraft model mass m, > 0.
-    contact_stiffness_n_per_m : float
-        True contact stiffness k_con, > 0.
-    contact_damping_n_s_per_m : float
-        True contact damping, >= 0.
-    sensor_delay_s : float
-        Force-sensor delay T_fms, >= 0.
-    table_response_hz : float
-        Table response frequency f_resp, > 0, ``math.inf`` for an ideal table.
-    table_damping_ratio : float
-        Table damping ratio, >= 0.
-    compensator : str
-        A registered compensator (:func:`hybridtable.compensators.registry.compensator_names`):
-        the paper's "none", "SDC", "MDC", "SDMDC", or a plug-in.
+    spacecraft : SpacecraftParams
+        The spacecraft model's mass m (``spacecraft_mass_kg``), > 0.
+    contact : ContactParams
+        True contact stiffness k_con (``contact_stiffness_n_per_m``), > 0, and
+        damping (``contact_damping_n_s_per_m``), >= 0.
+    table : TableParams
+        Table response frequency f_resp (``table_response_hz``), > 0,
+        ``math.inf`` for an ideal table; damping ratio (``table_damping_ratio``).
+    """
+
+    spacecraft: SpacecraftParams
+    contact: ContactParams
+    table: TableParams = TableParams(math.inf, 0.8)
+
+    def __post_init__(self) -> None:
+        _plausible(
+            self,
+            ("plant",),
+            (
+                "spacecraft_mass_kg",
+                "contact_stiffness_n_per_m",
+                "contact_damping_n_s_per_m",
+                "table_response_hz",
+                "table_damping_ratio",
+            ),
+        )
+
+
+@dataclass(frozen=True)
+class CompensatorConfig:
+    """The compensator the rig's computer runs, and what it believes.
+
+    Parameters
+    ----------
+    name : str
+        A registered compensator (``compensator``,
+        :func:`hybridtable.compensators.registry.compensator_names`): the
+        paper's "none", "SDC", "MDC", "SDMDC", or a plug-in.
     lead_time_s : float or None
-        SDC lead time; ``None`` means ``sensor_delay_s`` (the paper's choice).
-    compensator_stiffness_n_per_m, compensator_damping_n_s_per_m : float or None
-        What the MDC believes; ``None`` means the true contact values
-        (:data:`BELIEFS`, resolved by :meth:`beliefs`).
+        SDC lead time; ``None`` means the sensor delay (the paper's choice).
+    stiffness_n_per_m, damping_n_s_per_m : float or None
+        What the MDC believes (``compensator_stiffness_n_per_m``,
+        ``compensator_damping_n_s_per_m``); ``None`` means the true contact
+        values (:data:`BELIEFS`, resolved by :meth:`HybridLoopParams.beliefs`).
     force_deadband_n : float
         Measured forces at or below this are "no contact".
     clamp_nonnegative : bool
         Clamp the compensated force at zero.
     contact_gate : {"measured_force", "table_position"}
         How the compensator tells contact (:mod:`hybridtable.compensators.paper`).
+    passivity : bool
+        Guard the compensator with the time-domain passivity observer and
+        controller (:mod:`hybridtable.compensators.passivity`).
+    """
+
+    name: str = "none"
+    lead_time_s: float | None = None
+    stiffness_n_per_m: float | None = None
+    damping_n_s_per_m: float | None = None
+    force_deadband_n: float = 0.0
+    clamp_nonnegative: bool = False
+    contact_gate: str = "measured_force"
+    passivity: bool = False
+
+    def __post_init__(self) -> None:
+        _set(self, "force_deadband_n", check_nonnegative("force_deadband_n", self.force_deadband_n))
+        check_choice("compensator", self.name, compensator_names())
+        check_choice("contact_gate", self.contact_gate, CONTACT_GATES)
+        for key, name in (
+            ("lead_time_s", "lead_time_s"),
+            ("stiffness_n_per_m", "compensator_stiffness_n_per_m"),
+            ("damping_n_s_per_m", "compensator_damping_n_s_per_m"),
+        ):
+            if getattr(self, key) is not None:
+                _set(self, key, check_nonnegative(name, getattr(self, key)))
+        _plausible(
+            self,
+            ("rig", "compensator"),
+            (
+                "lead_time_s",
+                "compensator_stiffness_n_per_m",
+                "compensator_damping_n_s_per_m",
+                "force_deadband_n",
+            ),
+        )
+
+
+@dataclass(frozen=True)
+class RigComputer:
+    """The rig's computer: the force it reads, its rate, its compensator.
+
+    Parameters
+    ----------
+    sensor : SensorParams
+        The force-sensor delay T_fms (``sensor_delay_s``), >= 0.
+    sample_rate_hz : float or None
+        ``None``: a continuous rig computer. Otherwise the rate of its loop; the
+        sensor delay must then be a whole number of ticks.
+    time_step_s : float or None
+        Continuous mode: the largest integration step and delay-line period
+        (``None``: :attr:`HybridLoopParams.step_s`).
+    compensator : CompensatorConfig
+        The compensator it runs and what it believes.
+    """
+
+    sensor: SensorParams = SensorParams()
+    sample_rate_hz: float | None = None
+    time_step_s: float | None = None
+    compensator: CompensatorConfig = CompensatorConfig()
+
+    def __post_init__(self) -> None:
+        for name in ("sample_rate_hz", "time_step_s"):
+            if getattr(self, name) is not None:
+                _set(self, name, check_positive(name, getattr(self, name)))
+        _plausible(self, ("rig",), ("sensor_delay_s", "sample_rate_hz", "time_step_s"))
+        if self.sample_rate_hz is not None:
+            # Raises a clear error when the delay is not a whole number of ticks.
+            from hybridtable.systems.sensor import delay_samples
+
+            delay_samples(self.sensor.sensor_delay_s, self.sample_period_s)
+
+    @property
+    def sample_period_s(self) -> float | None:
+        """1 / sample_rate_hz, or None for a continuous rig computer."""
+        return None if self.sample_rate_hz is None else 1.0 / self.sample_rate_hz
+
+
+@dataclass(frozen=True)
+class Approach:
+    """How the run starts: the spacecraft's approach and the table's state.
+
+    Parameters
+    ----------
     initial_velocity_m_per_s : float
         Approach velocity of the spacecraft model, > 0.
     initial_gap_m : float
         Gap between the devices at t = 0, >= 0.
-    table_initial_state : {"tracking", "command", "rest"}
+    table_initial_state : {"tracking", "command", "rest", "given"}
         ``"tracking"``: the table starts in steady tracking of the approach
         ramp (lag ``2 zeta / omega`` behind the command, same velocity), so the
         contact sees no start-up transient. ``"command"``: at the initial
@@ -116,60 +268,18 @@ class HybridLoopParams:
         whose table was following an earlier command).
     table_initial_position_m, table_initial_velocity_m_per_s : float or None
         The table's state at t = 0 when ``table_initial_state="given"`` (m, m/s).
-    sample_rate_hz : float or None
-        ``None``: continuous rig computer. Otherwise the rate of the rig's
-        computer loop.
-    time_step_s : float
-        Continuous mode: the largest integration step and delay-line period.
-    passivity : bool
-        Guard the compensator with the time-domain passivity observer and
-        controller (:mod:`hybridtable.compensators.passivity`).
     """
 
-    spacecraft_mass_kg: float
-    contact_stiffness_n_per_m: float
-    contact_damping_n_s_per_m: float = 0.0
-    sensor_delay_s: float = 0.0
-    table_response_hz: float = math.inf
-    table_damping_ratio: float = 0.8
-    compensator: str = "none"
-    lead_time_s: float | None = None
-    compensator_stiffness_n_per_m: float | None = None
-    compensator_damping_n_s_per_m: float | None = None
-    force_deadband_n: float = 0.0
-    clamp_nonnegative: bool = False
-    contact_gate: str = "measured_force"
     initial_velocity_m_per_s: float = 0.1
     initial_gap_m: float = 0.001
     table_initial_state: str = "tracking"
     table_initial_position_m: float | None = None
     table_initial_velocity_m_per_s: float | None = None
-    sample_rate_hz: float | None = None
-    time_step_s: float | None = None
-    passivity: bool = False
 
     def __post_init__(self) -> None:
-        s = object.__setattr__
-        s(self, "spacecraft_mass_kg", check_positive("spacecraft_mass_kg", self.spacecraft_mass_kg))
-        for name in ("contact_stiffness_n_per_m", "initial_velocity_m_per_s"):
-            s(self, name, check_positive(name, getattr(self, name)))
-        if self.time_step_s is not None:
-            s(self, "time_step_s", check_positive("time_step_s", self.time_step_s))
-        for name in (
-            "contact_damping_n_s_per_m",
-            "sensor_delay_s",
-            "table_damping_ratio",
-            "force_deadband_n",
-            "initial_gap_m",
-        ):
-            s(self, name, check_nonnegative(name, getattr(self, name)))
-        s(
-            self,
-            "table_response_hz",
-            check_positive_or_inf("table_response_hz", self.table_response_hz),
-        )
-        check_choice("compensator", self.compensator, compensator_names())
-        check_choice("contact_gate", self.contact_gate, CONTACT_GATES)
+        v = check_positive("initial_velocity_m_per_s", self.initial_velocity_m_per_s)
+        _set(self, "initial_velocity_m_per_s", v)
+        _set(self, "initial_gap_m", check_nonnegative("initial_gap_m", self.initial_gap_m))
         check_choice("table_initial_state", self.table_initial_state, TABLE_INITIAL_STATES)
         given = (self.table_initial_position_m, self.table_initial_velocity_m_per_s)
         if self.table_initial_state == "given":
@@ -185,25 +295,95 @@ class HybridLoopParams:
                 "table_initial_position_m and table_initial_velocity_m_per_s need "
                 'table_initial_state "given"'
             )
-        for name in (
-            "lead_time_s",
-            "compensator_stiffness_n_per_m",
-            "compensator_damping_n_s_per_m",
-        ):
-            if getattr(self, name) is not None:
-                s(self, name, check_nonnegative(name, getattr(self, name)))
-        if self.sample_rate_hz is not None:
-            s(self, "sample_rate_hz", check_positive("sample_rate_hz", self.sample_rate_hz))
-        # Every number inside its plausible range (hybridtable.limits), so that
-        # no absurd value reaches a simulation that would run forever.
-        for name in _PLAUSIBLE_FIELDS:
-            if getattr(self, name) is not None:
-                check_plausible(name, getattr(self, name))
-        if self.sample_rate_hz is not None:
-            # Raises a clear error when the delay is not a whole number of ticks.
-            from hybridtable.systems.sensor import delay_samples
+        _plausible(self, ("approach",), ("initial_velocity_m_per_s", "initial_gap_m"))
 
-            delay_samples(self.sensor_delay_s, self.sample_period_s)
+
+_HINTS: dict[type, dict[str, Any]] = {}
+
+
+def _build(cls: type, prefix: tuple[str, ...], base: Any, changes: dict[tuple, Any]) -> Any:
+    """Config ``cls`` at ``prefix``: ``base`` (an instance, or ``None``: the
+    defaults) with ``changes`` ({path below ``prefix``: value}). A component's
+    error that names its own field is said with the field's flat name."""
+    hints = _HINTS.get(cls) or _HINTS.setdefault(cls, get_type_hints(cls))
+    values: dict[str, Any] = {}
+    for f in fields(cls):
+        below = {path[1:]: v for path, v in changes.items() if path[0] == f.name}
+        if () in below:
+            values[f.name] = below.pop(())
+        if below:
+            inner = values.get(f.name, getattr(base, f.name) if base is not None else None)
+            if inner is None and f.default is not MISSING:
+                inner = f.default
+            values[f.name] = _build(hints[f.name], (*prefix, f.name), inner, below)
+    try:
+        return replace(base, **values) if base is not None else cls(**values)
+    except ParameterError as err:
+        text = str(err)
+        for key in values:
+            flat = _FLAT_NAME.get((*prefix, key))
+            if flat and text.startswith(key + " "):
+                raise ParameterError(flat + text[len(key) :]) from None
+        raise
+
+
+@dataclass(frozen=True, init=False)
+class HybridLoopParams:
+    """Every parameter of one hybrid-loop run, SI units, one config per
+    component (the module's docstring draws the tree).
+
+    Build it nested (``HybridLoopParams(plant=Plant(...), rig=RigComputer(...))``)
+    or by the quantities' flat names (:data:`FIELDS`), or both: the flat names
+    change the configs given (or the defaults)::
+
+        HybridLoopParams(spacecraft_mass_kg=2533.0, contact_stiffness_n_per_m=1e5,
+                         sensor_delay_s=0.005, compensator="SDMDC")
+
+    Every flat name reads as a property (``params.sensor_delay_s``), and
+    :meth:`with_` changes by flat name or by config. The plant is required
+    (``spacecraft_mass_kg`` and ``contact_stiffness_n_per_m`` at least); the rig
+    computer defaults to a continuous one with no delay and no compensator,
+    the approach to 0.1 m/s from 1 mm with the table tracking.
+    """
+
+    plant: Plant
+    rig: RigComputer = RigComputer()
+    approach: Approach = Approach()
+
+    def __init__(
+        self,
+        plant: Plant | None = None,
+        rig: RigComputer | None = None,
+        approach: Approach | None = None,
+        **named: Any,
+    ) -> None:
+        unknown = sorted(set(named) - set(FIELDS))
+        if unknown:
+            raise TypeError(
+                f"HybridLoopParams got unknown {', '.join(unknown)} "
+                f"(known: plant, rig, approach, {', '.join(FIELDS)})"
+            )
+        changes = {FIELDS[name]: value for name, value in named.items()}
+        parts = {"plant": plant, "rig": rig or RigComputer(), "approach": approach or Approach()}
+        types = {"plant": Plant, "rig": RigComputer, "approach": Approach}
+        for name, config in parts.items():
+            below = {path[1:]: v for path, v in changes.items() if path[0] == name}
+            if below:
+                try:
+                    config = _build(types[name], (name,), config, below)
+                except TypeError:
+                    config = None
+            if not isinstance(config, types[name]):
+                if name == "plant" and config is None:
+                    raise TypeError(
+                        "HybridLoopParams needs plant= or spacecraft_mass_kg and "
+                        "contact_stiffness_n_per_m"
+                    )
+                raise ParameterError(
+                    f"{name} must be a {types[name].__name__} (got {type(config).__name__}; "
+                    "give single quantities by name, e.g. spacecraft_mass_kg=...)"
+                )
+            object.__setattr__(self, name, config)
 
     # -- derived quantities ------------------------------------------------
     @classmethod
@@ -240,16 +420,29 @@ class HybridLoopParams:
     @property
     def sample_period_s(self) -> float | None:
         """1 / sample_rate_hz, or None for a continuous loop."""
-        return None if self.sample_rate_hz is None else 1.0 / self.sample_rate_hz
+        return self.rig.sample_period_s
 
     @property
     def effective_delay_s(self) -> float:
         """tau_eff = T_fms + 2 zeta / omega_resp, the loop's low-frequency delay."""
-        return self.sensor_delay_s + self.table().ramp_lag_s
+        return self.sensor_delay_s + self.plant.table.ramp_lag_s
 
-    def with_(self, **changes) -> HybridLoopParams:
-        """A copy with some fields changed (validated again)."""
-        return replace(self, **changes)
+    def with_(self, **changes: Any) -> HybridLoopParams:
+        """A copy with some quantities (flat names, :data:`FIELDS`) or configs
+        (``plant``, ``rig``, ``approach``) changed, validated again."""
+        configs = {
+            name: changes.pop(name) for name in ("plant", "rig", "approach") if name in changes
+        }
+        return HybridLoopParams(
+            configs.get("plant", self.plant),
+            configs.get("rig", self.rig),
+            configs.get("approach", self.approach),
+            **changes,
+        )
+
+    def quantities(self) -> dict[str, Any]:
+        """Every quantity by its flat name (:data:`FIELDS`, in that order)."""
+        return {name: getattr(self, name) for name in FIELDS}
 
     # -- what the compensator believes -----------------------------------------
     def beliefs(self) -> dict[str, float]:
@@ -292,18 +485,6 @@ class HybridLoopParams:
         )
         return self.with_(contact_damping_n_s_per_m=c)
 
-    def spacecraft(self) -> SpacecraftParams:
-        return SpacecraftParams(mass_kg=self.spacecraft_mass_kg)
-
-    def table(self) -> TableParams:
-        return TableParams(self.table_response_hz, self.table_damping_ratio)
-
-    def contact(self) -> ContactParams:
-        return ContactParams(self.contact_stiffness_n_per_m, self.contact_damping_n_s_per_m)
-
-    def sensor(self) -> SensorParams:
-        return SensorParams(self.sensor_delay_s)
-
     def compensator_params(self) -> CompensatorParams:
         """The paper's compensator of this loop, with what it believes (:meth:`beliefs`)."""
         believed = self.beliefs()
@@ -328,5 +509,19 @@ class HybridLoopParams:
         elif self.table_initial_state == "command":
             pa, va = x0, v0
         else:
-            pa, va = x0 - self.table().ramp_lag_s * v0, v0
+            pa, va = x0 - self.plant.table.ramp_lag_s * v0, v0
         return {"p_des_m": x0, "v_des_m_per_s": v0, "p_act_m": pa, "v_act_m_per_s": va}
+
+
+def _flat_property(name: str, path: tuple[str, ...]) -> property:
+    def read(params: HybridLoopParams) -> Any:
+        value: Any = params
+        for key in path:
+            value = getattr(value, key)
+        return value
+
+    return property(read, doc=f"``{'.'.join(path)}`` (flat name ``{name}``).")
+
+
+for _name, _path in FIELDS.items():
+    setattr(HybridLoopParams, _name, _flat_property(_name, _path))

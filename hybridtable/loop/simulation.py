@@ -63,7 +63,7 @@ class SimulationResult:
 
 
 def _approach_s(params: HybridLoopParams) -> float:
-    lag = params.table().ramp_lag_s
+    lag = params.plant.table.ramp_lag_s
     return (params.initial_gap_m + lag * params.initial_velocity_m_per_s) / (
         params.initial_velocity_m_per_s
     )
@@ -89,7 +89,7 @@ def settle_window_s(params: HybridLoopParams, computer_period_s: float) -> float
     delay, five computer periods and, for a real table, five time constants of
     its decay, at most 20 of its periods (a lightly damped table rings long
     after the devices have parted)."""
-    table = params.table()
+    table = params.plant.table
     settle = params.sensor_delay_s + 5.0 * computer_period_s
     if not table.is_ideal:
         settle += min(

@@ -316,7 +316,7 @@ def compare_run(
     quiet_phys = ~dilate(on, guard, guard)
     quiet_f = delayed_labels(quiet_phys.astype(int), m).astype(bool)
     noise_f, offset_f, n_f = force_noise_rms(run.f_mea_n, quiet_f)
-    table = rep.params.table()
+    table = rep.params.plant.table
     settle = settle_ticks(table.settling_time_s, h, len(run.p_act_m))
     settle = max(settle, guard)
     quiet_p = ~dilate(on, guard, settle)

@@ -139,15 +139,17 @@ class RigPhysics:
         return params
 
     def make_table(self, params: HybridLoopParams) -> System:
-        return self.table(params) if self.table else SecondOrderTable(params.table())
+        return self.table(params) if self.table else SecondOrderTable(params.plant.table)
 
     def make_contact(self, params: HybridLoopParams) -> System:
-        return self.contact(params) if self.contact else UnilateralSpringContact(params.contact())
+        return (
+            self.contact(params) if self.contact else UnilateralSpringContact(params.plant.contact)
+        )
 
     def make_sensor(self, params: HybridLoopParams) -> System:
         if self.sensor:
             return self.sensor(params)
-        return ForceSensorDelay(params.sensor(), "sampled", params.sample_period_s)
+        return ForceSensorDelay(params.rig.sensor, "sampled", params.sample_period_s)
 
 
 def rig_params(info: RunInfo, source: str | None = None) -> HybridLoopParams:

@@ -9,7 +9,7 @@ simulation of the whole model; :func:`model_verdict` and
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from functools import partial
 
 from hybridtable.analysis.margins import loop_margins
@@ -80,11 +80,8 @@ def model_operating_point(
             f"the sensor delay's fraction of a tick ({exact.sensor_delay_s * 1e3:.4g} ms taken "
             f"as {lin_point.sensor_delay_s * 1e3:.4g} ms, whole ticks of the sampled model)"
         )
-    changes = {
-        f.name: (getattr(point, f.name), getattr(lin_point, f.name))
-        for f in fields(point)
-        if getattr(point, f.name) != getattr(lin_point, f.name)
-    }
+    linear = lin_point.quantities()
+    changes = {k: (v, linear[k]) for k, v in point.quantities().items() if v != linear[k]}
     out = ModelPoint({}, {}, {}, {}, {}, left, changes)
     for c in compensators:
         p = point.with_(compensator=c)

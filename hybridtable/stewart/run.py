@@ -281,7 +281,7 @@ def stewart_loop_params(params: HybridLoopParams) -> HybridLoopParams:
 def _expected_loop_s(params: HybridLoopParams) -> float:
     """About how long the loop runs (approach, one contact half-period, the
     settling window of :func:`~hybridtable.loop.simulation.run_loop`), s."""
-    table = params.table()
+    table = params.plant.table
     v = params.initial_velocity_m_per_s
     approach = (params.initial_gap_m + table.ramp_lag_s * v) / v
     settle = params.sensor_delay_s + 5.0 / params.sample_rate_hz

@@ -28,7 +28,7 @@ points gives the paper's runs bit for bit.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from typing import Any
 
 from hybridtable.errors import ParameterError
@@ -70,7 +70,7 @@ class Input:
 
 
 def _loop_inputs() -> dict[str, Input]:
-    from hybridtable.loop.params import HybridLoopParams
+    from hybridtable.loop.params import FIELDS
 
     docs = {
         "spacecraft_mass_kg": ("kg", "spacecraft model mass"),
@@ -96,12 +96,12 @@ def _loop_inputs() -> dict[str, Input]:
         "passivity": ("", "the passivity guard on the compensator"),
     }
     out = {}
-    for f in fields(HybridLoopParams):
-        unit, doc = docs[f.name]
-        kind = "bool" if f.name in ("clamp_nonnegative", "passivity") else "number"
-        if f.name in ("compensator", "contact_gate", "table_initial_state"):
+    for name in FIELDS:
+        unit, doc = docs[name]
+        kind = "bool" if name in ("clamp_nonnegative", "passivity") else "number"
+        if name in ("compensator", "contact_gate", "table_initial_state"):
             kind = "text"
-        out[f.name] = Input(f.name, kind, unit, doc)
+        out[name] = Input(name, kind, unit, doc)
     return out
 
 

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import fields
 from typing import Any
 
 from hybridtable.analysis.sweep import GRID_FIELDS, SweepResult, margins_from_rows
@@ -51,11 +50,7 @@ def margins_spec(
     """
     from hybridtable.sweeps.spec import parse_spec
 
-    fixed = {
-        f.name: getattr(base, f.name)
-        for f in fields(base)
-        if f.name not in _AXES and getattr(base, f.name) is not None
-    }
+    fixed = {k: v for k, v in base.quantities().items() if k not in _AXES and v is not None}
     raw: dict[str, Any] = {
         "name": "margins",
         "engine": "diagram",

@@ -116,7 +116,7 @@ def test_sampled_model_reproduces_drake_sampled_loop_tick_by_tick(comp, table_hz
     h = p.sample_period_s
     loop = build_hybrid_loop(
         p,
-        contact=UnilateralSpringContact(p.contact(), bilateral=True),
+        contact=UnilateralSpringContact(p.plant.contact, bilateral=True),
         compensator=Compensator(p.compensator_params(), derivative_period_s=h, gated=False),
     )
     sim = run_loop(loop, t_max_s=0.4, stop_at_separation=False, accuracy=1e-12)

@@ -25,9 +25,16 @@ def test_registry_holds_the_paper_compensators_then_the_plugins():
     assert names[:4] == COMPENSATORS
     assert set(PLUGINS) <= set(names)
     for name in PLUGINS:
-        assert HybridLoopParams(1.0, 1.0, compensator=name).compensator == name
+        assert (
+            HybridLoopParams(
+                spacecraft_mass_kg=1.0, contact_stiffness_n_per_m=1.0, compensator=name
+            ).compensator
+            == name
+        )
     with pytest.raises(ParameterError, match="smith"):  # the message lists the choices
-        HybridLoopParams(1.0, 1.0, compensator="nonesuch")
+        HybridLoopParams(
+            spacecraft_mass_kg=1.0, contact_stiffness_n_per_m=1.0, compensator="nonesuch"
+        )
     with pytest.raises(ValueError, match="already registered"):
         register_compensator("smith", make_smith)
     with pytest.raises(ValueError, match="already registered"):

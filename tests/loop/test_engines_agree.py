@@ -193,12 +193,12 @@ def computer_period_s(p: HybridLoopParams) -> float:
 
 def _mdc_acts(p: HybridLoopParams) -> bool:
     """The MDC term is in the law (an ideal table has ``p_des - p_act = 0``)."""
-    return p.compensator_params().uses_motion_correction and not p.table().is_ideal
+    return p.compensator_params().uses_motion_correction and not p.plant.table.is_ideal
 
 
 def cor_tolerance(p: HybridLoopParams) -> tuple[float, str]:
     """The CoR tolerance of ``p`` and its class (see the module docstring)."""
-    if p.table().is_ideal and (p.sample_rate_hz is not None or p.sensor_delay_s > 0.0):
+    if p.plant.table.is_ideal and (p.sample_rate_hz is not None or p.sensor_delay_s > 0.0):
         return COR_TOL_EXACT, "exact"
     switches = p.sensor_delay_s == 0.0 or (
         _mdc_acts(p) and (p.clamp_nonnegative or p.contact_gate == "table_position")

@@ -145,8 +145,8 @@ def test_the_sampled_table_is_the_integrated_one_at_the_ticks(tmp_path, mode):
 
     def table(params):
         if mode is None:
-            return SecondOrderTable(params.table())
-        return ResonantTable(params.table(), mode)
+            return SecondOrderTable(params.plant.table)
+        return ResonantTable(params.plant.table, mode)
 
     fast = replay(run, RigPhysics(table=table))
     slow = replay(run, RigPhysics(table=lambda p: _ContinuousOnly(table(p))), accuracy=1e-11)
