@@ -20,6 +20,10 @@ vocabulary of the command-line flags, the plausible ranges
 flat names build and change a scenario (``HybridLoopParams(spacecraft_mass_kg=...,
 contact_stiffness_n_per_m=...)``, ``params.with_(sensor_delay_s=0.01)``) and read
 it (``params.sensor_delay_s`` is ``params.rig.sensor.sensor_delay_s``).
+
+Why one module: the configs, the flat names (:data:`FIELDS`) that each
+config's checks are worded in, and the scenario that builds and reads them
+through those names are one concept; apart, each would import the others.
 """
 
 from __future__ import annotations
