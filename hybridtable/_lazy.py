@@ -46,6 +46,7 @@ def register_entry_points(group: str, registry: dict[str, Any], kind: str) -> No
     only here, when a registry's names are first asked for."""
     from importlib.metadata import entry_points
 
+    from hybridtable._plugins import Guarded, call_user
     from hybridtable.errors import ParameterError
 
     for ep in entry_points(group=group):
@@ -53,4 +54,6 @@ def register_entry_points(group: str, registry: dict[str, Any], kind: str) -> No
             raise ParameterError(
                 f"{kind} {ep.name!r} of entry point {ep.value} is already registered"
             )
-        registry[ep.name] = ep.load()
+        who = f"{kind} {ep.name!r} (entry point {ep.value} of {group})"
+        loaded = call_user(who, ep.load)
+        registry[ep.name] = Guarded(loaded, who) if callable(loaded) else loaded

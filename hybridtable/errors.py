@@ -12,6 +12,9 @@ exception                 raised when
 ``SpecError``             a sweep spec is malformed (names the file and the
                           key); exit 2
 ``CommandError``          any other bad command-line input; exit 2
+``PluginError``           a user's plug-in raised, exited or returned a
+                          non-finite number (names the plug-in); exit 2. Not
+                          a ValueError: no fit takes it for a failed model
 ``SimulationError``       a simulation diverged or its contact never ended;
                           exit 1
 ``DivergenceError``       the SimulationError of a loop whose force grew without
@@ -29,6 +32,7 @@ __all__ = [
     "WorkspaceError",
     "SpecError",
     "CommandError",
+    "PluginError",
     "SimulationError",
     "DivergenceError",
     "LinearizationError",
@@ -56,6 +60,11 @@ class SpecError(ParameterError):
 
 class CommandError(Exception):
     """A user-facing error: printed as one line, exit code 2."""
+
+
+class PluginError(CommandError):
+    """A user's plug-in failed (:mod:`hybridtable._plugins`): one line naming
+    it, exit code 2; never taken for a model that failed to fit."""
 
 
 class SimulationError(RuntimeError):

@@ -30,6 +30,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "hybridtable"
 LAYERS: dict[str, int] = {
     "errors": 0,
     "_lazy": 0,
+    "_plugins": 0,
     "_validation": 0,
     "_files": 0,
     "_components": 0,

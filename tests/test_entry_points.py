@@ -98,7 +98,8 @@ def test_entry_points_add_a_compensator_and_an_effect(tmp_path, monkeypatch, for
     names = effects.effect_names()
     assert names[: len(builtin_effects)] == builtin_effects
     assert "demo_bias" in names[len(builtin_effects) :]
-    assert effects.get_effect("demo_bias") is plugin.DEMO_BIAS
+    assert effects.user_effect("demo_bias") is plugin.DEMO_BIAS
+    assert effects.effect_source("demo_bias") == "entry point"
     # Loaded once: a second use neither reloads nor duplicates.
     assert effects.effect_names() == names
     assert compensators.compensator_names().count("demo-sdc") == 1

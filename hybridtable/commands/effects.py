@@ -16,11 +16,7 @@ import argparse
 
 from hybridtable.errors import ParameterError
 
-__all__ = ["SOURCES", "register", "run", "paper_scale", "effect_json", "format_effects"]
-
-#: Where a registered effect comes from (``"script"``: ``register_effect``
-#: called in this process, e.g. by a program using the Python API).
-SOURCES: tuple[str, ...] = ("built-in", "entry point", "plug-in", "script")
+__all__ = ["register", "run", "paper_scale", "effect_json", "format_effects"]
 
 #: Sample period of the paper's Table 1 point as a reference rig (s): the
 #: paper's loop is continuous; recorded runs are sampled at 1 kHz.
@@ -151,6 +147,8 @@ def _number(x: float | None, rig: bool) -> str:
 def format_effects(items: list[dict]) -> str:
     """The console text of :func:`effect_json` objects: one sentence, the rig
     the bounds are evaluated at, and the table."""
+    from hybridtable.effects.registry import SOURCES
+
     counts = {s: sum(1 for e in items if e["source"] == s) for s in SOURCES}
     plugins = counts["entry point"] + counts["plug-in"]
     head = (
@@ -210,34 +208,14 @@ def format_effects(items: list[dict]) -> str:
     return "\n".join(lines)
 
 
-def _sources(plugin_effects) -> dict[str, str]:
-    """Effect name -> where it comes from (:data:`SOURCES`)."""
-    from importlib.metadata import entry_points
-
-    from hybridtable.effects.effect import Effect
-    from hybridtable.effects.library import BUILTIN_EFFECTS
-    from hybridtable.effects.registry import EFFECTS, ENTRY_POINT_GROUP
-
-    out = {e.name: "built-in" for e in BUILTIN_EFFECTS if EFFECTS.get(e.name) is e}
-    for ep in entry_points(group=ENTRY_POINT_GROUP):
-        try:  # loaded (and checked) by the registry already: the module is cached
-            effect = ep.load()
-        except Exception:  # a broken entry point is the registry's to report
-            continue
-        if isinstance(effect, Effect) and EFFECTS.get(effect.name) is effect:
-            out.setdefault(effect.name, "entry point")
-    for effect in plugin_effects:
-        out.setdefault(effect.name, "plug-in")
-    return out
-
-
 def run(args: argparse.Namespace) -> int:
     from hybridtable.commands._common import check_outputs, input_paths, write_json
-    from hybridtable.effects.registry import effect_names, get_effect, load_plugin
+    from hybridtable.effects.registry import effect_names, effect_source, get_effect, load_plugin
     from hybridtable.effects.spec import RigScale
 
     effect_names()  # registers the entry points' effects before the plug-ins
-    plugin_effects = [e for text in args.plugin for e in load_plugin(text)]
+    for text in args.plugin:
+        load_plugin(text)
     inputs = []
     if args.rig:
         from hybridtable.measurement.run_reader import read_runs
@@ -251,9 +229,8 @@ def run(args: argparse.Namespace) -> int:
         scale = paper_scale()
         where = "the paper's Table 1 point"
     check_outputs(args, inputs, files={"--json": args.json})
-    sources = _sources(plugin_effects)
     names = effect_names()
-    items = [effect_json(get_effect(n), sources.get(n, "script"), scale, where) for n in names]
+    items = [effect_json(get_effect(n), effect_source(n), scale, where) for n in names]
     if args.json != "-":
         print(format_effects(items))
     if args.json:

@@ -17,8 +17,10 @@ import importlib.util
 import sys
 import warnings
 from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import replace
 from pathlib import Path
 
+from hybridtable._plugins import Guarded, PluginError, call_user, finite_numbers
 from hybridtable.effects.effect import FRONT_ENDS, Effect
 from hybridtable.effects.legacy import CorEffect, as_effect
 from hybridtable.effects.library import builtin_effects
@@ -39,6 +41,10 @@ __all__ = [
     "parse_effect_specs",
     "build_spec",
     "load_plugin",
+    "guarded",
+    "user_effect",
+    "effect_source",
+    "SOURCES",
 ]
 
 
@@ -57,6 +63,16 @@ _entry_points_loaded = False
 #: The source file of each effect registered by an entry point (to recognise
 #: the same plug-in given again with ``--plugin``).
 _ENTRY_POINT_FILES: dict[str, Path] = {}
+
+#: Each plug-in effect registered guarded -> the effect its module defines.
+_GUARDED_FROM: dict[str, Effect] = {}
+
+#: Where an effect comes from: a built-in, an installed package's entry point,
+#: a ``--plugin``, or a script's :func:`register_effect`.
+SOURCES: tuple[str, ...] = ("built-in", "entry point", "plug-in", "script")
+
+#: Each registered effect -> its source (one of :data:`SOURCES`).
+_SOURCE: dict[str, str] = {}
 
 
 def _module_file(module_name: str) -> Path | None:
@@ -93,7 +109,7 @@ def _load_entry_points() -> None:
     found = [(ep, ENTRY_POINT_GROUP) for ep in entry_points(group=ENTRY_POINT_GROUP)]
     found += [(ep, OLD_ENTRY_POINT_GROUP) for ep in entry_points(group=OLD_ENTRY_POINT_GROUP)]
     for ep, group in found:
-        effect = ep.load()
+        effect = call_user(f"entry point {ep.name} = {ep.value} of {group}", ep.load)
         if group == OLD_ENTRY_POINT_GROUP:
             warnings.warn(
                 f"entry point {ep.name} of {OLD_ENTRY_POINT_GROUP} is deprecated: give the "
@@ -109,7 +125,9 @@ def _load_entry_points() -> None:
                 f"effect {effect.name!r} of entry point {ep.name} = {ep.value} "
                 "is already registered"
             )
-        EFFECTS[effect.name] = effect
+        EFFECTS[effect.name] = guarded(effect, f"effect {effect.name!r} of entry point {ep.value}")
+        _GUARDED_FROM[effect.name] = effect
+        _SOURCE[effect.name] = "entry point"
         module_file = _module_file(ep.module)
         if module_file is not None:
             _ENTRY_POINT_FILES[effect.name] = module_file
@@ -127,7 +145,15 @@ def register_effect(effect: Effect, replace_existing: bool = False) -> Effect:
     if effect.name in EFFECTS and not replace_existing:
         raise ParameterError(f"effect {effect.name!r} is already registered")
     EFFECTS[effect.name] = effect
+    _SOURCE[effect.name] = "script"
+    _GUARDED_FROM.pop(effect.name, None)
     return effect
+
+
+def effect_source(name: str) -> str:
+    """Where the registered effect ``name`` comes from (:data:`SOURCES`)."""
+    get_effect(name)
+    return _SOURCE[name]
 
 
 def register_cor_effect(effect: CorEffect | Effect, *, replace: bool = False) -> Effect:
@@ -154,6 +180,8 @@ def default_effects(front_end: str) -> tuple[str, ...]:
 def unregister_effect(name: str) -> None:
     """Remove an effect from the registry (no error if absent)."""
     EFFECTS.pop(name, None)
+    _GUARDED_FROM.pop(name, None)
+    _SOURCE.pop(name, None)
 
 
 def effect_names() -> tuple[str, ...]:
@@ -248,20 +276,24 @@ def _import_module(where: str, text: str):
         module = importlib.util.module_from_spec(spec)
         sys.modules[name] = module
         try:
-            spec.loader.exec_module(module)
-        except Exception as err:
+            call_user(f"--plugin {text}: {where} failed to load:", spec.loader.exec_module, module)
+        except ParameterError:
             del sys.modules[name]
-            raise ParameterError(f"--plugin {text}: {where} failed to load: {err!r}") from None
+            raise
         return module
-    try:
-        return importlib.import_module(where)
-    except ModuleNotFoundError as err:
-        raise ParameterError(
-            f"--plugin {text}: no module {err.name!r} (give an importable module "
-            "or the path of a .py file)"
-        ) from None
-    except Exception as err:
-        raise ParameterError(f"--plugin {text}: module {where} failed to load: {err!r}") from None
+
+    def load():
+        try:
+            return importlib.import_module(where)
+        except ModuleNotFoundError as err:
+            if err.name is None or not where.startswith(err.name):
+                raise  # a module the plug-in imports is missing: its failure
+            raise ParameterError(
+                f"--plugin {text}: no module {err.name!r} (give an importable module "
+                "or the path of a .py file)"
+            ) from None
+
+    return call_user(f"--plugin {text}: module {where} failed to load:", load)
 
 
 def load_plugin(text: str) -> list[Effect]:
@@ -308,17 +340,88 @@ def load_plugin(text: str) -> list[Effect]:
         )
     _load_entry_points()
     here = Path(module.__file__) if getattr(module, "__file__", None) else None
+    out = []
     for effect in items:
-        if EFFECTS.get(effect.name) is not effect:
-            if effect.name in EFFECTS and _same_source(_ENTRY_POINT_FILES.get(effect.name), here):
-                continue  # the installed copy of this very file: already registered
-            if effect.name in EFFECTS:
-                raise ParameterError(
-                    f"--plugin {text}: an effect named {effect.name!r} is already "
-                    "registered (rename the plug-in's effect)"
-                )
-            register_effect(effect)
-    return items
+        known = EFFECTS.get(effect.name)
+        if known is not None and _GUARDED_FROM.get(effect.name) is effect:
+            out.append(known)  # this very plug-in, loaded before
+            continue
+        if known is not None and _same_source(_ENTRY_POINT_FILES.get(effect.name), here):
+            out.append(known)  # the installed copy of this very file: already registered
+            continue
+        if known is not None:
+            raise ParameterError(
+                f"--plugin {text}: an effect named {effect.name!r} is already "
+                "registered (rename the plug-in's effect)"
+            )
+        out.append(register_effect(guarded(effect, f"effect {effect.name!r} (--plugin {text})")))
+        _GUARDED_FROM[effect.name] = effect
+        _SOURCE[effect.name] = "plug-in"
+    return out
+
+
+def user_effect(name: str) -> Effect:
+    """The effect ``name`` as its plug-in defines it (the registry holds it
+    :func:`guarded`); a built-in effect as registered."""
+    return _GUARDED_FROM.get(name) or get_effect(name)
+
+
+def guarded(effect: Effect, who: str) -> Effect:
+    """``effect`` with every function of a user's in it called through the one
+    guard (:mod:`hybridtable._plugins`): ``apply`` (and the systems' wrappers
+    and loop changes the spec it returns adds), ``starts``, and each
+    parameter's bounds, scale, null and initial value (a finite number each).
+    A failure is one line naming ``who``."""
+
+    def number(bound, what: str):
+        return Guarded(bound, f"{who}: {what}", finite_numbers) if callable(bound) else bound
+
+    parameters = tuple(
+        replace(
+            p,
+            **{
+                field: number(getattr(p, field), f"{p.name}'s {field}")
+                for field in ("lower", "upper", "scale", "null", "initial")
+            },
+        )
+        for p in effect.parameters
+    )
+    starts = effect.starts and Guarded(effect.starts, f"{who} starts", _finite_starts)
+    apply = _GuardedApply(effect.apply, who)
+    return replace(effect, apply=apply, starts=starts, parameters=parameters)
+
+
+class _GuardedApply:
+    """A user's ``apply`` through the guard; the wrappers and loop changes it
+    adds to the spec are guarded too (picklable, for worker processes)."""
+
+    def __init__(self, apply, who: str) -> None:
+        self.apply, self.who = apply, who
+
+    def __call__(self, spec: ModelSpec, values, scale) -> ModelSpec:
+        who = self.who
+        out = call_user(f"{who} apply", self.apply, spec, values, scale)
+        if not isinstance(out, ModelSpec):
+            raise PluginError(f"{who} apply returned {type(out).__name__}, not a ModelSpec")
+        wrappers = tuple(
+            (c, w if i < len(spec.wrappers) else Guarded(w, f"{who}: its {c} wrapper"))
+            for i, (c, w) in enumerate(out.wrappers)
+        )
+        loop = tuple(
+            ch if i < len(spec.loop) else Guarded(ch, f"{who}: its loop change")
+            for i, ch in enumerate(out.loop)
+        )
+        return replace(out, wrappers=wrappers, loop=loop)
+
+
+def _finite_starts(who: str, starts):
+    if not isinstance(starts, list | tuple):
+        raise PluginError(f"{who} returned {type(starts).__name__}, not a list of dicts")
+    for start in starts:
+        if not isinstance(start, Mapping):
+            raise PluginError(f"{who} returned {start!r:.80}, not a dict of values")
+        finite_numbers(who, start)
+    return list(starts)
 
 
 def build_spec(
@@ -335,4 +438,5 @@ def build_spec(
 
 for _effect in builtin_effects():
     register_effect(_effect)
+    _SOURCE[_effect.name] = "built-in"
 del _effect

@@ -52,6 +52,7 @@ from pydrake.systems.primitives import (
 from pydrake.systems.scalar_conversion import TemplateSystem
 
 from hybridtable._components import Block, Component
+from hybridtable.errors import SimulationError
 
 __all__ = [
     "CompiledLaw",
@@ -95,17 +96,30 @@ def _symbolic(expressions: Sequence[Expression], variables: Sequence) -> Symboli
 
 class _Signals(dict):
     """A law's input values by port name, as Python numbers, each evaluated
-    when the law first reads it (a port it does not read may be unconnected)."""
+    when the law first reads it (a port it does not read may be unconnected).
 
-    def __init__(self, context, ports, held) -> None:
+    With ``system`` (the ``float`` form), a non-finite input stops the run
+    with a :class:`~hybridtable.errors.SimulationError` naming the system and
+    the input: a NaN that reached a continuous state would make the
+    integrator's error control shrink its step without end, and a NaN that a
+    gate reads as "no contact" would give a silently wrong run.
+    """
+
+    def __init__(self, context, ports, held, system=None) -> None:
         super().__init__()
         self._context, self._ports, self._held = context, ports, held
+        self._system = system
 
     def __missing__(self, name: str):
         if name in self._held:
             value = self._context.get_discrete_state(self._held[name]).value().tolist()
         else:
             value = self._ports[name].Eval(self._context).tolist()
+        if self._system is not None and not all(map(math.isfinite, value)):
+            raise SimulationError(
+                f"{self._system.get_name()}'s input {name} is not finite ({value}) at "
+                f"t = {self._context.get_time():.6g} s: a system before it gave NaN or inf"
+            )
         self[name] = value
         return value
 
@@ -147,9 +161,11 @@ def LawSystem_(T):
             return store
 
         def _make_calc(self, law, size):
+            checked = self if T is float else None
+
             def calc(context, output):
                 # Only the inputs the law reads are evaluated (others may be unconnected).
-                value = law(_Signals(context, self._ports, self._held))
+                value = law(_Signals(context, self._ports, self._held, checked))
                 if size == 1 and not isinstance(value, list | tuple | np.ndarray):
                     output.SetAtIndex(0, value)
                 else:

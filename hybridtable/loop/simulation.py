@@ -9,6 +9,7 @@ import numpy as np
 from pydrake.systems.analysis import Simulator
 
 from hybridtable._components import eval_output
+from hybridtable._plugins import simulation_failure
 from hybridtable.errors import SimulationError
 from hybridtable.laws.separation import DIVERGED_FORCE_RATIO, SeparationRule
 from hybridtable.loop.budget import check_budget
@@ -164,12 +165,15 @@ def run_loop(
     # Advance in chunks and look at the forces between chunks (a per-step
     # Python monitor would cost as much as the systems themselves). The
     # logger holds every step; a chunk only decides when to stop.
-    simulator.Initialize()
+    first = True
     while True:
         try:
+            if first:
+                simulator.Initialize()
+                first = False
             simulator.AdvanceTo(rule.next_check_s)
-        except (RuntimeError, SystemExit) as err:  # Drake asserts reach Python as SystemExit
-            raise SimulationError(f"simulation failed: {err}") from None
+        except (Exception, SystemExit) as err:  # Drake's asserts (SystemExit), a system's callback
+            raise simulation_failure(err) from None
         forces = tuple(eval_output(part, port, context)[0] for part, port in watched)
         f_act, f_mea, f_comp = forces
         if rule.check(

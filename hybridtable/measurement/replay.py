@@ -35,6 +35,7 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import LogVectorOutput, TrajectorySource, ZeroOrderHold
 from pydrake.trajectories import PiecewisePolynomial
 
+from hybridtable._plugins import simulation_failure
 from hybridtable.errors import SimulationError
 from hybridtable.laws.compiled import LawSystem
 from hybridtable.loop.budget import check_budget
@@ -163,11 +164,11 @@ def replay_command(
         integ.set_fixed_step_mode(True)
     else:
         integ.set_target_accuracy(accuracy)
-    simulator.Initialize()
     try:
+        simulator.Initialize()
         simulator.AdvanceTo((n - 0.5) * h)
-    except (RuntimeError, SystemExit) as err:  # Drake asserts reach Python as SystemExit
-        raise SimulationError(f"replay failed: {err}") from None
+    except (Exception, SystemExit) as err:  # Drake's asserts (SystemExit), a system's callback
+        raise simulation_failure(err, "replay failed") from None
     found = {name: sink.FindLog(context) for name, sink in logs.items()}
     t = found["motion"].sample_times()
     if len(t) < n or not np.allclose(t[:n], h * np.arange(n), rtol=0.0, atol=1e-6 * h):

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from pydrake.systems.analysis import Simulator
 
+from hybridtable._plugins import simulation_failure
 from hybridtable.errors import SimulationError
 from hybridtable.laws.separation import SeparationRule
 from hybridtable.six_dof.builder import LOG_LAYOUT, DockingLoop, build_docking_loop
@@ -160,8 +161,8 @@ def simulate6(
         t = rule.next_check_s
         try:
             simulator.AdvanceTo(t)
-        except (RuntimeError, SystemExit) as err:  # Drake asserts reach Python as SystemExit
-            raise SimulationError(f"the 6-DoF simulation failed: {err}") from None
+        except (Exception, SystemExit) as err:  # Drake's asserts (SystemExit), a system's callback
+            raise simulation_failure(err, "the 6-DoF simulation failed") from None
         data = log.data()
         force = np.linalg.norm(data[27:30], axis=0)
         quiet = (force == 0.0) & ~np.any(data[36:42] != 0.0, axis=0)

@@ -192,11 +192,11 @@ def test_a_real_entry_point_is_found_by_diagnose(runs, tmp_path, monkeypatch):
     monkeypatch.setattr(registry, "_entry_points_loaded", False)
     try:
         assert "backlash" in registry.effect_names()
-        assert registry.get_effect("backlash") is sys.modules[module].EFFECT
+        assert registry.user_effect("backlash") is sys.modules[module].EFFECT
         # The file it was installed from, given again with --plugin: the same code,
         # registered once (a user following docs/plugins.md after pip install).
         registry.load_plugin(f"{BACKLASH}:EFFECT")
-        assert registry.get_effect("backlash") is sys.modules[module].EFFECT
+        assert registry.user_effect("backlash") is sys.modules[module].EFFECT
         other = tmp_path / "other_backlash.py"
         other.write_text(BACKLASH.read_text(encoding="utf-8") + "\n# changed\n", encoding="utf-8")
         with pytest.raises(ParameterError, match="already registered"):
