@@ -35,6 +35,11 @@ __all__ = [
     "regular_file_problem",
     "read_user_text",
     "read_user_json",
+    "read_user_toml",
+    "check_document",
+    "MAX_TEXT_BYTES",
+    "MAX_TOML_BYTES",
+    "MAX_NESTING",
 ]
 
 
@@ -155,16 +160,40 @@ def _exists(path: Path) -> bool | None:
     return True
 
 
-def read_user_text(path: str | Path, error: type[Exception] = ValueError) -> str:
+#: The largest text file a user may give (a run's CSV is read by
+#: :mod:`hybridtable.measurement.csv_fast` instead): 64 MiB.
+MAX_TEXT_BYTES = 64 * 2**20
+
+#: The largest scenario, sweep spec or other TOML file: 4 MiB (a hundred
+#: thousand listed values; a spec draws its values, it does not list millions).
+MAX_TOML_BYTES = 4 * 2**20
+
+#: The deepest nesting of tables and arrays a TOML or JSON file may have.
+MAX_NESTING = 32
+
+
+def read_user_text(
+    path: str | Path, error: type[Exception] = ValueError, max_bytes: int = MAX_TEXT_BYTES
+) -> str:
     """The UTF-8 text (a BOM allowed) of a file a user gave, or ``error`` with
     one line naming it: not a regular file (a FIFO or device would block or
-    never end), unreadable, or not UTF-8 (the byte that is not)."""
+    never end), larger than ``max_bytes`` (checked before reading),
+    unreadable, or not UTF-8 (the byte that is not)."""
     path = Path(path)
     problem = regular_file_problem(path)
     if problem:
         raise error(f"{path}: {problem}")
     try:
-        data = path.read_bytes()
+        size = path.stat().st_size
+        if size > max_bytes:
+            raise error(
+                f"{path}: {size / 2**20:.1f} MiB, more than the {max_bytes / 2**20:g} MiB "
+                "such a file may have"
+            )
+        with path.open("rb") as f:  # at most max_bytes, should it grow meanwhile
+            data = f.read(max_bytes + 1)
+        if len(data) > max_bytes:
+            raise error(f"{path}: more than the {max_bytes / 2**20:g} MiB such a file may have")
     except OSError as err:
         raise error(f"{path}: cannot read ({err.strerror})") from None
     try:
@@ -175,21 +204,63 @@ def read_user_text(path: str | Path, error: type[Exception] = ValueError) -> str
         ) from None
 
 
-def read_user_json(path: str | Path, error: type[Exception] = ValueError) -> object:
+def read_user_json(
+    path: str | Path, error: type[Exception] = ValueError, max_bytes: int = MAX_TEXT_BYTES
+) -> object:
     """The JSON value of a file a user gave (:func:`read_user_text`), or
     ``error`` with one line: empty, not valid JSON (its line and column), or
-    nested too deeply for Python's parser."""
-    text = read_user_text(path, error)
+    not a document a number can be read from (:func:`check_document`)."""
+    text = read_user_text(path, error, max_bytes)
     if not text.strip():
         raise error(f"{path}: empty file")
     try:
-        return json.loads(text)
+        value = json.loads(text)
     except json.JSONDecodeError as err:
         raise error(
             f"{path} line {err.lineno}, column {err.colno}: not valid JSON ({err.msg})"
         ) from None
     except RecursionError:
-        raise error(f"{path}: not valid JSON here (nested too deeply)") from None
+        raise error(f"{path}: nested more than {MAX_NESTING} deep") from None
+    return check_document(value, path, error)
+
+
+def read_user_toml(
+    path: str | Path, error: type[Exception] = ValueError, max_bytes: int = MAX_TOML_BYTES
+) -> dict:
+    """The parsed TOML of a file a user gave (:func:`read_user_text`, at most
+    ``max_bytes``), or ``error`` with one line: not valid TOML, or not a
+    document a number can be read from (:func:`check_document`)."""
+    import tomllib
+
+    text = read_user_text(path, error, max_bytes)
+    try:
+        value = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise error(f"{path}: not valid TOML ({err})") from None
+    except RecursionError:
+        raise error(f"{path}: nested more than {MAX_NESTING} deep") from None
+    return check_document(value, path, error)
+
+
+def check_document(value: object, path: str | Path, error: type[Exception] = ValueError):
+    """``value`` (a parsed JSON or TOML document) if it nests at most
+    :data:`MAX_NESTING` deep and every integer in it can be a float (a
+    ``10**400`` is no quantity); else ``error`` naming the file and the key."""
+    stack: list[tuple[object, str, int]] = [(value, "", 0)]
+    while stack:
+        item, where, depth = stack.pop()
+        if depth > MAX_NESTING:
+            raise error(f"{path}: {where or 'the document'} nests more than {MAX_NESTING} deep")
+        if isinstance(item, dict):
+            stack += [(v, f"{where}.{k}" if where else str(k), depth + 1) for k, v in item.items()]
+        elif isinstance(item, list):
+            stack += [(v, f"{where}[{i}]", depth + 1) for i, v in enumerate(item)]
+        elif isinstance(item, int) and not isinstance(item, bool) and abs(item) > 2**1023:
+            raise error(
+                f"{path}: {where or 'the value'} is an integer of {len(str(item))} digits, "
+                "too large to be a number"
+            )
+    return value
 
 
 def writable_problem(path: str | Path, folder: bool = False) -> str | None:

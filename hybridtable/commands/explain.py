@@ -78,6 +78,14 @@ def register(sub) -> None:
         help="the loop model's own error in ln CoR, added to every row's noise (default: 0.001)",
     )
     p.add_argument(
+        "--max-rows",
+        type=integer_type(1, 100_000),
+        default=200,
+        metavar="N",
+        help="the most rows of distinct conditions the table may have; each costs seconds "
+        "on two cores (default: 200)",
+    )
+    p.add_argument(
         "--max-effects",
         type=integer_type(1, 3),
         default=3,
@@ -154,6 +162,7 @@ def run(args: argparse.Namespace) -> int:
             max_effects=args.max_effects,
             model_error_ln=args.model_error,
             workers=args.workers,
+            max_rows=args.max_rows,
             progress=(lambda name: (bar.set_postfix_str(name[:40]), bar.update())) if bar else None,
         )
     finally:

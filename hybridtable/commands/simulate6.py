@@ -126,8 +126,11 @@ def run(args: argparse.Namespace) -> int:
         "simulated_s": sim_s,
         "wall_time_s": result.wall_time_s,
     }
+    notes = [m.spin_note] if m.spin_note else []
     if reference is None:
-        out["note"] = "reference null: --no-reference skipped the ideal rig's run"
+        notes.append("reference null: --no-reference skipped the ideal rig's run")
+    if notes:
+        out["note"] = "; ".join(notes)
     if math.isinf(modes.critical_delay_s):
         out["margins"]["note"] = "critical_delay_s inf: no mode grows at any delay up to 50 ms"
     if not quiet:
@@ -139,6 +142,8 @@ def run(args: argparse.Namespace) -> int:
                 f"{m.energy_ratio:.4f}."
             )
         print(format_docking(params.compensator, m, reference, modes, result.wall_time_s, sim_s))
+        if m.spin_note:
+            print(f"note: {m.spin_note}")
     if args.plot:
         from hybridtable.reports.six_dof import plot_wrench
 

@@ -118,6 +118,7 @@ def _json_document(args, spec, summary, result, figures) -> dict:
         "complete": result.complete,
         "interrupted": result.interrupted,
         "resumed": result.resumed,
+        "rerun": [{"run": run, "why": why} for run, why in result.rerun],
         "workers": result.workers,
         "scheduler": result.scheduler,
         "dashboard": result.dashboard,
@@ -181,6 +182,14 @@ def run(args: argparse.Namespace) -> int:
             f"({rate:.1f} runs/s on {result.workers} worker{'s' if result.workers != 1 else ''})"
             + (f"; {result.resumed} were already in the file" if result.resumed else "")
         )
+        if result.rerun:
+            run, why = result.rerun[0]
+            print(
+                f"ran {len(result.rerun)} run(s) of the file again, whose rows could not be "
+                f"kept (run {run}: {why}"
+                + (f"; and {len(result.rerun) - 1} more" if len(result.rerun) > 1 else "")
+                + ")"
+            )
     if args.json:
         write_json(args.json, _json_document(args, spec, summary, result, figures))
     if result.interrupted:

@@ -17,6 +17,8 @@ from pathlib import Path
 from typing import Any
 
 from hybridtable._files import read_user_json
+from hybridtable._validation import check_choice
+from hybridtable.compensators.registry import compensator_names
 from hybridtable.diagnosis.model_file import (
     MODEL_FORMAT,
     FittedEffect,
@@ -27,6 +29,7 @@ from hybridtable.diagnosis.model_file import (
 from hybridtable.effects.registry import get_effect
 from hybridtable.effects.spec import RigScale
 from hybridtable.errors import MeasurementError, ParameterError
+from hybridtable.limits import check_plausible
 from hybridtable.measurement.rig import COMPUTER_PARAMS
 from hybridtable.measurement.run_format import RunInfo
 from hybridtable.measurement.run_reader import run_info_from_dict
@@ -140,8 +143,14 @@ def _computer(raw: Any, where: str) -> dict[str, Any]:
         if k == "compensator":
             if not isinstance(v, str):
                 raise ParameterError(f"{where}.compensator must be a string")
+            try:
+                check_choice("compensator", v, compensator_names())
+            except ParameterError as err:
+                raise ParameterError(f"{where}.{err}") from None
         elif not (_finite(v) and v >= 0):
             raise ParameterError(f"{where}.{k} must be a number >= 0 (got {v!r})")
+        else:
+            check_plausible(k, v, where=where)
     return dict(raw)
 
 

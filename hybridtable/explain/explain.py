@@ -34,7 +34,7 @@ from hybridtable.explain.patterns import WINDOW_LN, interactions, readings, tren
 from hybridtable.explain.separate import LOOKALIKE_BIC, lookalikes, separating_runs
 from hybridtable.explain.table import CorTable
 
-__all__ = ["ALPHA", "MODEL_ERROR_LN", "Explanation", "explain_table"]
+__all__ = ["ALPHA", "MAX_DISTINCT_ROWS", "MODEL_ERROR_LN", "Explanation", "explain_table"]
 
 #: The chi2 test's false-alarm rate.
 ALPHA = 0.01
@@ -42,6 +42,11 @@ ALPHA = 0.01
 #: simulated Table 1 differs from this loop by up to 5e-4 (its integrator and
 #: delay line are not ours).
 MODEL_ERROR_LN = 1.0e-3
+#: The most rows of distinct conditions a table may have (repeated rows of the
+#: same conditions cost one): each is simulated for every model and every step
+#: of its fit; the whole explanation takes 2 s (Table 1) to 12 s (Table 3) a
+#: row on a 2-core machine.
+MAX_DISTINCT_ROWS = 200
 
 
 @dataclass
@@ -168,6 +173,7 @@ def explain_table(
     progress: Callable[[str], None] | None = None,
     workers: int | None = None,
     jobs: int | None = None,
+    max_rows: int = MAX_DISTINCT_ROWS,
 ) -> Explanation:
     """Explain a measured CoR table.
 
@@ -191,6 +197,10 @@ def explain_table(
         ``diagnose``, :func:`~hybridtable.effects.workers.worker_count`).
     jobs : int, optional
         The older name of ``workers`` (deprecated).
+    max_rows : int
+        The most rows of distinct conditions (compensator and conditions) the
+        table may have; more are refused before any work
+        (:class:`~hybridtable.errors.ParameterError`), not left to run for hours.
     """
     if jobs is not None:
         warnings.warn("explain_table(jobs=) is now workers=", DeprecationWarning, stacklevel=2)
@@ -202,6 +212,14 @@ def explain_table(
     y = table.ln_cor
     sigma = np.sqrt((std / np.exp(y)) ** 2 + model_error_ln**2)
     cases = [(r.compensator, r.conditions) for r in table.rows]
+    distinct = len(set(cases))
+    if distinct > max_rows:
+        raise ParameterError(
+            f"{table.source}: {distinct} rows of distinct conditions, more than the "
+            f"{max_rows} explain fits (each is simulated for every model and every step of "
+            "its fit: seconds a row on two cores): average repeated runs of the same conditions into one row with "
+            "their cor_std, or give a larger --max-rows"
+        )
     rig = table_scale(cases)
     effects, cannot_run = _runnable([EffectAt(e, rig) for e in effects], cases)
     fits, not_fitted = fit_models(

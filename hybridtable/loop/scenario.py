@@ -27,7 +27,6 @@ naming the file, the section and the key.
 from __future__ import annotations
 
 import math
-import tomllib
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
@@ -73,13 +72,9 @@ LOOP_SCENARIO_KEYS: dict[str, tuple[str, ...]] = {
 
 def read_scenario(path: str | Path) -> dict[str, Any]:
     """The parsed TOML of a scenario file (``SpecError``: unreadable, not TOML)."""
-    from hybridtable._files import read_user_text
+    from hybridtable._files import read_user_toml
 
-    text = read_user_text(Path(path), SpecError)
-    try:
-        return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as err:
-        raise SpecError(f"{path}: not valid TOML ({err})") from None
+    return read_user_toml(Path(path), SpecError)
 
 
 def section(

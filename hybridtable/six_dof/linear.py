@@ -53,10 +53,12 @@ class ContactModes:
     damping_ratios : tuple of float
         ``-Re s / |s|`` of each.
     max_growth_rate_per_s : float
-        Over those modes (the faster ones are the table's and the delay
-        line's, which decay).
+        Over every mode of the loop in contact: the slowest are the
+        contact's; a faster one that grows is one the rig computer cannot
+        integrate at its rate (a body too light or too stiffly held for its
+        tick), reported among the modes above in place of the fastest of them.
     stable : bool
-        No mode in contact grows.
+        No mode of the loop in contact grows.
     critical_delay_s : float
         The shortest sensor delay at which a mode grows (``math.inf``: none
         up to the scan's end; 0: it grows without delay).
@@ -185,18 +187,21 @@ def contact_modes(params: DockingLoopParams, max_delay_s: float = 0.05) -> Conta
     K, C = contact.stiffness(params.nominal_pose())
     h = params.sample_period_s
     lam, s = _modes(tick_matrix(params, K, C), h)
+    growth = float(s.real.max()) if s.size else 0.0
     # Modes of the contact, not of the table or the delay line: below the
-    # Nyquist rate and among the slowest.
-    order = np.argsort(np.abs(s))[:_REPORTED]
+    # Nyquist rate and among the slowest; and the fastest-growing, if it grows.
+    order = list(np.argsort(np.abs(s))[:_REPORTED])
+    fastest = int(np.argmax(s.real)) if s.size else None
+    if fastest is not None and growth > _NEUTRAL_PER_S and fastest not in order:
+        order[-1] = fastest
     s = s[order]
-    lam = lam[order]
-    growth = s.real
+    lam_all, lam = lam, lam[order]
     return ContactModes(
         frequencies_hz=tuple(float(abs(v.imag)) / (2 * math.pi) for v in s),
-        growth_rates_per_s=tuple(float(v) for v in growth),
+        growth_rates_per_s=tuple(float(v) for v in s.real),
         damping_ratios=tuple(float(-v.real / abs(v)) if abs(v) > 0 else 0.0 for v in s),
-        max_growth_rate_per_s=float(growth.max()) if growth.size else 0.0,
-        stable=bool(not growth.size or growth.max() <= _NEUTRAL_PER_S),
+        max_growth_rate_per_s=growth,
+        stable=bool(growth <= _NEUTRAL_PER_S),
         critical_delay_s=critical_delay_s(params, K, C, max_delay_s),
-        spectral_radius=float(np.abs(lam).max()) if lam.size else 1.0,
+        spectral_radius=float(np.abs(lam_all).max()) if lam_all.size else 1.0,
     )

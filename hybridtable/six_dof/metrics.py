@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -52,6 +53,22 @@ class DockingMetrics:
 
     def to_dict(self) -> dict[str, float]:
         return asdict(self)
+
+    @property
+    def spin_note(self) -> str | None:
+        """Words on a CoR along the normal that the body's spin makes: the
+        port's normal velocity exceeds what the kinetic energy after the
+        contact allows a translating body (``CoR^2 <= energy ratio`` without
+        spin, the approach being a pure translation), so the CoR describes the
+        port's swing, not the bounce. ``None`` otherwise."""
+        bound = math.sqrt(max(self.energy_ratio, 0.0))
+        if not self.cor_normal > 1.05 * bound:
+            return None
+        return (
+            f"cor_normal {self.cor_normal:.4g} is the port's normal velocity, which the body's "
+            f"spin makes after the contact: a translating body with the energy left (energy "
+            f"ratio {self.energy_ratio:.4g}) leaves at most at CoR {bound:.4g}"
+        )
 
 
 def docking_metrics(

@@ -26,6 +26,7 @@ from hybridtable.limits import check_plausible
 from hybridtable.loop.params import believed
 
 __all__ = [
+    "MAX_MISALIGNMENT_RAD",
     "TABLE_BACKENDS",
     "STIFFNESS_MODELS",
     "RigidBodyParams",
@@ -195,6 +196,10 @@ class DockingContactParams:
         )
 
 
+#: The largest roll or pitch misalignment of an approach (rad).
+MAX_MISALIGNMENT_RAD = 0.5
+
+
 @dataclass(frozen=True)
 class ApproachParams:
     """How the spacecraft comes in.
@@ -221,9 +226,10 @@ class ApproachParams:
         gap = check_nonnegative("initial_gap_m", self.initial_gap_m)
         s(self, "initial_gap_m", check_plausible("initial_gap_m", gap))
         pair = _pair("misalignment_rad", self.misalignment_rad)
-        if max(abs(pair[0]), abs(pair[1])) > 0.5:
+        if max(abs(pair[0]), abs(pair[1])) > MAX_MISALIGNMENT_RAD:
             raise ParameterError(
-                f"misalignment_rad must be within +-0.5 rad (29 deg) per axis (got {pair})"
+                f"misalignment_rad must be within +-{MAX_MISALIGNMENT_RAD} rad "
+                f"({math.degrees(MAX_MISALIGNMENT_RAD):.3g} deg) per axis (got {pair})"
             )
         s(self, "misalignment_rad", pair)
 

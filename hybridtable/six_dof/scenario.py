@@ -44,6 +44,7 @@ from hybridtable.loop.scenario import (
     top_level,
 )
 from hybridtable.six_dof.params import (
+    MAX_MISALIGNMENT_RAD,
     ApproachParams,
     DockingContactParams,
     DockingLoopParams,
@@ -125,10 +126,20 @@ def _parse(raw: Mapping[str, Any]) -> DockingLoopParams:
         value = ap.pop("misalignment_deg")
         if not isinstance(value, list) or len(value) != 2:
             raise SpecError(f"[approach] misalignment_deg must be [roll, pitch] (got {value!r})")
-        ap["misalignment_rad"] = [
-            math.radians(number("approach", "misalignment_deg", v)) for v in value
-        ]
-    approach = keyed("approach", "", lambda: ApproachParams(**ap))
+        degrees = [number("approach", "misalignment_deg", v) for v in value]
+        if not all(isinstance(v, int | float) and math.isfinite(v) for v in degrees):
+            raise SpecError(f"[approach] misalignment_deg must be 2 finite numbers (got {value!r})")
+        ap["misalignment_rad"] = [math.radians(v) for v in degrees]
+    try:
+        approach = keyed("approach", "", lambda: ApproachParams(**ap))
+    except SpecError as err:  # said in the file's own key and unit
+        if "misalignment_rad" not in str(err) or "misalignment_rad" not in ap:
+            raise
+        raise SpecError(
+            f"[approach] misalignment_deg must be within +-{math.degrees(MAX_MISALIGNMENT_RAD):.3g} "
+            "deg per "
+            f"axis (got {value!r})"
+        ) from None
     kwargs: dict[str, Any] = dict(rig)
     if "backend" in tb:
         kwargs["table"] = tb["backend"]

@@ -36,7 +36,7 @@ from typing import Any
 
 from hybridtable.errors import CommandError
 from hybridtable.sweeps.plan import SweepSpec
-from hybridtable.sweeps.runner import blank_row, run_many
+from hybridtable.sweeps.runner import blank_row, row_problem, run_many
 from hybridtable.sweeps.store import read_results, write_results
 
 __all__ = [
@@ -81,6 +81,9 @@ class CampaignResult:
         From the first task submitted to the last result (no cluster start-up).
     retried : list of int
         Runs retried alone after their task killed its workers.
+    rerun : list of (run, why)
+        Rows of the file that ``resume`` did not keep, and why
+        (:func:`~hybridtable.sweeps.runner.row_problem`): those runs ran again.
     rows : list of dict
         The rows, sorted by run.
     """
@@ -97,6 +100,7 @@ class CampaignResult:
     run_seconds: float = 0.0
     compute_time_s: float = 0.0
     retried: list[int] = field(default_factory=list)
+    rerun: list[tuple[Any, str]] = field(default_factory=list)
     rows: list[dict[str, Any]] = field(default_factory=list, repr=False)
 
     @property
@@ -239,7 +243,11 @@ def run_campaign(
     rows: dict[int, dict[str, Any]] = {}
     if resume and path is not None and path.exists():
         for row in read_results(path, spec).to_pylist():
-            rows[row["run"]] = row
+            problem = row_problem(spec, row)
+            if problem is None and row["run"] not in rows:
+                rows[row["run"]] = row
+            else:  # run again: what the file says of it cannot be trusted
+                result.rerun.append((row.get("run"), problem or "the run is in the file twice"))
         result.resumed = len(rows)
     todo = [i for i in range(spec.n_runs) if i not in rows]
     if not todo:

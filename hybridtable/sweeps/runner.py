@@ -19,7 +19,15 @@ from hybridtable.sweeps.inputs import NOISE_INPUTS, effect_values, loop_params, 
 from hybridtable.sweeps.metrics import MARGINS, METRICS, SIMULATION
 from hybridtable.sweeps.plan import RunInputs, SweepSpec
 
-__all__ = ["STATUSES", "ID_COLUMNS", "run_one", "run_many", "blank_row", "empty_metrics"]
+__all__ = [
+    "STATUSES",
+    "ID_COLUMNS",
+    "run_one",
+    "run_many",
+    "blank_row",
+    "empty_metrics",
+    "row_problem",
+]
 
 #: What became of a run, best first.
 STATUSES: tuple[str, ...] = ("ok", "diverged", "failed", "invalid", "error")
@@ -50,6 +58,44 @@ def blank_row(spec: SweepSpec, inputs: RunInputs) -> dict[str, Any]:
     row["compensator"] = inputs.values.get("compensator", "none")
     row.update(empty_metrics(spec))
     return row
+
+
+def row_problem(spec: SweepSpec, row: dict[str, Any]) -> str | None:
+    """Why a row read back from a campaign's file cannot be kept as run
+    ``row["run"]`` of ``spec`` (``--resume``), or ``None``: a run outside the
+    spec, a status that is none of :data:`STATUSES`, inputs that are not the
+    spec's draw for that run, a run counted ``ok`` with a simulation metric
+    that is not a finite number or an undecided ``stable``, or a run that is
+    not ``ok`` with numbers."""
+    index = row.get("run")
+    if not isinstance(index, int) or not 0 <= index < spec.n_runs:
+        return f"run {index!r} is not one of the spec's {spec.n_runs}"
+    if row.get("status") not in STATUSES:
+        return f"status {row.get('status')!r} is none of {', '.join(STATUSES)}"
+    expected = blank_row(spec, spec.run_inputs(index))
+    for name in ("point", "sample", "seed", *spec.swept, "compensator"):
+        got, want = row.get(name), expected[name]
+        same = got == want or (
+            isinstance(got, float)
+            and isinstance(want, float)
+            and math.isnan(got)
+            and math.isnan(want)
+        )
+        if not same:
+            return f"{name} is {got!r}, not the spec's draw {want!r}"
+    for name in spec.metrics:
+        value, metric = row.get(name), METRICS[name]
+        if row["status"] != "ok":
+            if not (value is None or (isinstance(value, float) and math.isnan(value))):
+                return f"a {row['status']} run with {name} = {value!r}"
+        elif metric.kind == "bool":
+            if not isinstance(value, bool):
+                return f"an ok run with stable = {value!r}"
+        elif not isinstance(value, int | float) or (
+            metric.source == SIMULATION and not math.isfinite(value)
+        ):
+            return f"an ok run with {name} = {value!r}"
+    return None
 
 
 def _model(spec: SweepSpec):

@@ -34,7 +34,6 @@ number of workers or the order of completion.
 from __future__ import annotations
 
 import math
-import tomllib
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -77,14 +76,10 @@ def load_spec(path: str | Path) -> SweepSpec:
     SpecError
         One line naming the file and the key (exit 2 on the command line).
     """
-    from hybridtable._files import read_user_text
+    from hybridtable._files import read_user_toml
 
     path = Path(path)
-    text = read_user_text(path, SpecError)
-    try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as err:
-        raise SpecError(f"{path}: not valid TOML ({err})") from None
+    raw = read_user_toml(path, SpecError)
     return parse_spec(raw, source=str(path), folder=path.parent)
 
 
