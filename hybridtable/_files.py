@@ -11,7 +11,11 @@ Every output of every command goes through here:
   in only when all are written: an interrupted report leaves the target
   folder as it was;
 - :func:`writable_problem` says, before any work, why a path cannot be
-  written (a parent that is a file, a read-only folder).
+  written (a parent that is a file, a read-only folder);
+- a write that fails (a full disk) is a :class:`~hybridtable.errors.WriteError`
+  naming the output, and leaves nothing of it; without ``--force``
+  (:func:`overwrite_policy`) a finished file appears only where none is, in
+  one step (two processes writing one output: one of them fails).
 """
 
 from __future__ import annotations
@@ -25,7 +29,10 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
+from hybridtable.errors import WriteError
+
 __all__ = [
+    "overwrite_policy",
     "write_text_atomic",
     "write_bytes_atomic",
     "atomic_path",
@@ -49,35 +56,97 @@ def _umask() -> int:
     return mask
 
 
+#: Whether an output may replace an existing file: the command's ``--force``
+#: (:func:`overwrite_policy`); a program using the library replaces.
+_REPLACE: list[bool] = [True]
+
+
 @contextlib.contextmanager
-def atomic_path(path: str | Path) -> Iterator[Path]:
+def overwrite_policy(replace: bool) -> Iterator[None]:
+    """Within the block, :func:`atomic_path` (and every writer on it) replaces
+    an existing file only if ``replace``: otherwise the file appears only if
+    none is there when it is complete (a hard link: the check and the write
+    are one step, so of two processes writing the same new output, one fails
+    with a :class:`~hybridtable.errors.WriteError` instead of replacing the
+    other's)."""
+    _REPLACE.append(bool(replace))
+    try:
+        yield
+    finally:
+        _REPLACE.pop()
+
+
+def _write_failed(target: Path, err: OSError | WriteError) -> WriteError:
+    if isinstance(err, WriteError):  # a file of a staged folder: said as the folder
+        why = err.why
+    else:
+        why = err.strerror or " ".join(str(err).split())
+    out = WriteError(f"could not write {target}: {why}; nothing of it was written")
+    out.why = why
+    return out
+
+
+def _publish(tmp: str, target: Path, replace: bool) -> None:
+    """Move the finished ``tmp`` to ``target``: replacing, or only if no file is there."""
+    if replace:
+        os.replace(tmp, target)
+        return
+    try:
+        os.link(tmp, target)
+    except FileExistsError:
+        raise WriteError(
+            f"{target} exists now (another process wrote it meanwhile?); nothing was "
+            "written: give --force to replace it"
+        ) from None
+    except OSError:  # a file system without hard links: check, then rename
+        if os.path.lexists(target):
+            raise WriteError(f"{target} exists now; nothing was written") from None
+        os.replace(tmp, target)
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | Path, replace: bool | None = None) -> Iterator[Path]:
     """A temporary path (same folder, same suffix) to write ``path``'s content
-    to; renamed onto ``path`` when the block ends without error, removed
-    otherwise. Creates the folder."""
+    to; moved onto ``path`` when the block ends without error, removed
+    otherwise. Creates the folder.
+
+    ``replace``: whether an existing ``path`` is replaced (default: the
+    :func:`overwrite_policy`). A write that fails (a full disk) raises a
+    :class:`~hybridtable.errors.WriteError` naming ``path``, and leaves
+    nothing of it."""
     target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=target.suffix, dir=target.parent)
-    os.close(fd)
+    replace = _REPLACE[-1] if replace is None else replace
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(
+            prefix=f".{target.name}.", suffix=target.suffix, dir=target.parent
+        )
+        os.close(fd)
+    except OSError as err:
+        raise _write_failed(target, err) from None
     try:
         yield Path(tmp)
         os.chmod(tmp, 0o666 & ~_umask())  # as open() would, not mkstemp's 0600
-        os.replace(tmp, target)
+        _publish(tmp, target, replace)
+    except OSError as err:  # a full disk, a quota, a file too large
+        raise _write_failed(target, err) from None
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
 
 
-def write_text_atomic(path: str | Path, text: str) -> None:
+def write_text_atomic(path: str | Path, text: str, replace: bool | None = None) -> None:
     """Write ``text`` (UTF-8, newlines as given) to ``path`` atomically,
-    creating its folder."""
-    with atomic_path(path) as tmp:
+    creating its folder (``replace``: as :func:`atomic_path`)."""
+    with atomic_path(path, replace) as tmp:
         with open(tmp, "w", encoding="utf-8", newline="") as f:
             f.write(text)
 
 
-def write_bytes_atomic(path: str | Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` atomically, creating its folder."""
-    with atomic_path(path) as tmp:
+def write_bytes_atomic(path: str | Path, data: bytes, replace: bool | None = None) -> None:
+    """Write ``data`` to ``path`` atomically, creating its folder (``replace``:
+    as :func:`atomic_path`)."""
+    with atomic_path(path, replace) as tmp:
         tmp.write_bytes(data)
 
 
@@ -103,8 +172,11 @@ def staged_folder(path: str | Path) -> Iterator[Staging]:
     removed and ``path`` is left as it was.
     """
     target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    stage = Path(tempfile.mkdtemp(prefix=f".{target.name}.partial-", dir=target.parent))
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        stage = Path(tempfile.mkdtemp(prefix=f".{target.name}.partial-", dir=target.parent))
+    except OSError as err:
+        raise _write_failed(target, err) from None
     try:
         yield Staging(stage, target)
         os.chmod(stage, 0o777 & ~_umask())
@@ -118,6 +190,10 @@ def staged_folder(path: str | Path) -> Iterator[Staging]:
             else:
                 dst.parent.mkdir(parents=True, exist_ok=True)
                 os.replace(src, dst)
+    except (OSError, WriteError) as err:  # a full disk while the outputs were written
+        if isinstance(err, WriteError) and not hasattr(err, "why"):
+            raise  # another process's output, not a failed write
+        raise _write_failed(target, err) from None
     finally:
         if stage.exists():
             shutil.rmtree(stage, ignore_errors=True)
@@ -249,7 +325,7 @@ def check_document(value: object, path: str | Path, error: type[Exception] = Val
     stack: list[tuple[object, str, int]] = [(value, "", 0)]
     while stack:
         item, where, depth = stack.pop()
-        if depth > MAX_NESTING:
+        if isinstance(item, dict | list) and depth + 1 > MAX_NESTING:
             raise error(f"{path}: {where or 'the document'} nests more than {MAX_NESTING} deep")
         if isinstance(item, dict):
             stack += [(v, f"{where}.{k}" if where else str(k), depth + 1) for k, v in item.items()]

@@ -15,6 +15,7 @@ import argparse
 import os
 import sys
 
+from hybridtable._files import overwrite_policy
 from hybridtable.commands import (
     compare,
     compensators,
@@ -29,7 +30,7 @@ from hybridtable.commands import (
     sweep,
 )
 from hybridtable.commands._common import add_force_argument
-from hybridtable.errors import CommandError, ParameterError, SimulationError
+from hybridtable.errors import CommandError, ParameterError, SimulationError, WriteError
 
 __all__ = [
     "main",
@@ -144,7 +145,8 @@ def main(argv: list[str] | None = None) -> int:
     stdout = sys.stdout
     sys.stdout = reader = _ReaderMayLeave(stdout)
     try:
-        code = int(args.func(args) or 0)
+        with overwrite_policy(bool(getattr(args, "force", False))):
+            code = int(args.func(args) or 0)
         # The files are written; only what went to the console was lost.
         return 141 if reader.gone and getattr(args, "json", None) == "-" else code
     except (ParameterError, CommandError) as err:
@@ -152,7 +154,7 @@ def main(argv: list[str] | None = None) -> int:
         text = _one_line(_flag_message(err, sub))
         print(f"hybridtable {args.command}: error: {text}", file=sys.stderr)
         return 2
-    except SimulationError as err:
+    except (SimulationError, WriteError) as err:
         print(f"hybridtable {args.command}: error: {_one_line(str(err))}", file=sys.stderr)
         return 1
     except MemoryError:
@@ -168,6 +170,11 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # the reader (``| head``) closed stdout: stop quietly
         _silence(stdout)
         return 141
+    except OSError as err:  # a write that no helper wrapped: still one line
+        where = f" ({err.filename})" if getattr(err, "filename", None) else ""
+        why = err.strerror or " ".join(str(err).split())
+        print(f"hybridtable {args.command}: error: {_one_line(why + where)}", file=sys.stderr)
+        return 1
     finally:
         sys.stdout = stdout
 

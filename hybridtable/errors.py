@@ -17,6 +17,9 @@ exception                 raised when
                           a ValueError: no fit takes it for a failed model
 ``SimulationError``       a simulation diverged or its contact never ended;
                           exit 1
+``WriteError``            an output could not be written (a full disk, a file
+                          another process wrote meanwhile); nothing of it is
+                          left; exit 1
 ``DivergenceError``       the SimulationError of a loop whose force grew without
                           bound (a sweep records the run as ``diverged``)
 ``LinearizationError``    Drake could not linearize a system
@@ -34,6 +37,7 @@ __all__ = [
     "CommandError",
     "PluginError",
     "SimulationError",
+    "WriteError",
     "DivergenceError",
     "LinearizationError",
     "InterconnectionError",
@@ -65,6 +69,11 @@ class CommandError(Exception):
 class PluginError(CommandError):
     """A user's plug-in failed (:mod:`hybridtable._plugins`): one line naming
     it, exit code 2; never taken for a model that failed to fit."""
+
+
+class WriteError(Exception):
+    """An output could not be written (:mod:`hybridtable._files`): one line
+    naming it, nothing of it left behind, exit code 1."""
 
 
 class SimulationError(RuntimeError):

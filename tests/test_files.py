@@ -74,3 +74,102 @@ def test_writable_problem_names_a_parent_that_is_a_file(tmp_path):
     assert writable_problem(tmp_path / "afile" / "rep", folder=True).endswith(
         "is a file, not a folder"
     )
+
+
+# -- what a user's file may be, and what a failed write leaves -------------------
+
+import json as _json  # noqa: E402
+import resource  # noqa: E402
+import signal  # noqa: E402
+import subprocess  # noqa: E402
+import sys  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import pytest  # noqa: E402
+
+from hybridtable._files import (  # noqa: E402
+    MAX_NESTING,
+    atomic_path,
+    overwrite_policy,
+    read_user_json,
+    read_user_toml,
+)
+from hybridtable.errors import SpecError, WriteError  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_a_file_too_large_is_refused_before_it_is_read(tmp_path):
+    big = tmp_path / "spec.toml"
+    big.write_text("x = [" + "1," * 600_000 + "1]\n")
+    with pytest.raises(SpecError, match=r"spec.toml: 1\.\d MiB, more than the 1 MiB"):
+        read_user_toml(big, SpecError, max_bytes=2**20)
+
+
+@pytest.mark.parametrize("depth", [MAX_NESTING + 1, 5000])
+def test_nesting_deeper_than_the_limit_is_one_line(tmp_path, depth):
+    toml = tmp_path / "deep.toml"
+    toml.write_text("a = " + "[" * depth + "]" * depth + "\n")
+    with pytest.raises(SpecError, match="nest"):
+        read_user_toml(toml, SpecError)
+    doc = tmp_path / "deep.json"
+    doc.write_text("[" * depth + "]" * depth)
+    with pytest.raises(ValueError, match="nest"):
+        read_user_json(doc)
+    shallow = tmp_path / "ok.json"
+    shallow.write_text("[" * MAX_NESTING + "]" * MAX_NESTING)
+    assert read_user_json(shallow) is not None
+
+
+def test_an_integer_no_float_can_hold_names_its_key(tmp_path):
+    doc = tmp_path / "model.json"
+    doc.write_text(_json.dumps({"nominal": {"spacecraft_mass_kg": 10**400}}))
+    with pytest.raises(ValueError, match=r"nominal\.spacecraft_mass_kg is an integer of 401"):
+        read_user_json(doc)
+
+
+def test_without_force_a_new_output_never_replaces_one_written_meanwhile(tmp_path):
+    target = tmp_path / "out.json"
+    with overwrite_policy(False):
+        with pytest.raises(WriteError, match="exists now"):
+            with atomic_path(target) as tmp:
+                tmp.write_text("mine")
+                target.write_text("the other process's")  # written while we wrote
+    assert target.read_text() == "the other process's"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.json"]
+    with overwrite_policy(True):  # --force: replaced
+        with atomic_path(target) as tmp:
+            tmp.write_text("mine")
+    assert target.read_text() == "mine"
+
+
+def _small_disk():
+    """In the child: writes beyond 64 kB fail (EFBIG), as on a full disk."""
+    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    resource.setrlimit(resource.RLIMIT_FSIZE, (64_000, 64_000))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    "argv, output",
+    [
+        (["simulate", "--plot", "fig.png"], "fig.png"),
+        (["simulate", "--record", "runs", "--sample-rate-hz", "1000"], "runs"),
+        (["margins", "--report", "report", "--no-progress"], "report"),
+    ],
+)
+def test_a_full_disk_is_one_line_and_leaves_nothing(tmp_path, argv, output):
+    done = subprocess.run(
+        [sys.executable, "-m", "hybridtable.cli", *argv],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        preexec_fn=_small_disk,
+        timeout=600,
+        env={**os.environ, "PYTHONPATH": str(ROOT), "MPLBACKEND": "Agg"},
+    )
+    lines = [line for line in done.stderr.splitlines() if "error:" in line]
+    assert done.returncode == 1, done.stderr[-2000:]
+    assert len(lines) == 1 and "Traceback" not in done.stderr
+    assert f"could not write {output}" in lines[0] and "nothing of it was written" in lines[0]
+    assert list(tmp_path.iterdir()) == []

@@ -369,13 +369,9 @@ def write_docking_html(
     scene = DockingScene(meshcat, run, magnify, force_scale_n_per_m)
     frames = scene.record()
     html = meshcat.StaticHtml()
-    if overwrite:
-        from hybridtable._files import write_text_atomic
+    from hybridtable._files import write_text_atomic
 
-        write_text_atomic(path, html)
-    else:
-        with path.open("x", encoding="utf-8") as fh:
-            fh.write(html)
+    write_text_atomic(path, html, replace=overwrite)  # complete, and no other's replaced
     return {
         "path": str(path),
         "magnify": scene.magnify,

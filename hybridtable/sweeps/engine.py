@@ -241,6 +241,11 @@ def run_campaign(
     path = None if out is None else Path(out)
     result = CampaignResult(path, spec.n_runs)
     rows: dict[int, dict[str, Any]] = {}
+    if path is not None and not (resume and path.exists()):
+        # Claim the file first, in one step: of two campaigns started at once
+        # on one new --out, the second stops here instead of replacing the
+        # first's rows later (WriteError). From here on the file is ours.
+        write_results(path, spec, [])
     if resume and path is not None and path.exists():
         for row in read_results(path, spec).to_pylist():
             problem = row_problem(spec, row)
@@ -376,7 +381,7 @@ def _write(path, spec, rows) -> tuple[float, int]:
     the rows written."""
     t = time.monotonic()
     if path is not None:
-        write_results(path, spec, rows.values())
+        write_results(path, spec, rows.values(), replace=True)  # claimed: ours to rewrite
     return time.monotonic() - t, len(rows)
 
 

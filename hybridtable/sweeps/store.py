@@ -80,14 +80,18 @@ def _tool_version() -> str:
         return "unknown"
 
 
-def write_results(path: str | Path, spec: SweepSpec, rows: Iterable[dict[str, Any]]) -> int:
-    """Write ``rows`` (any order) sorted by run, atomically; return their count."""
+def write_results(
+    path: str | Path, spec: SweepSpec, rows: Iterable[dict[str, Any]], replace: bool | None = None
+) -> int:
+    """Write ``rows`` (any order) sorted by run, atomically; return their count.
+    ``replace``: whether an existing file is replaced (default: the command's
+    ``--force``, :func:`~hybridtable._files.overwrite_policy`)."""
     from hybridtable._files import atomic_path
 
     schema = results_schema(spec)
     ordered = sorted(rows, key=lambda r: r["run"])
     table = pa.Table.from_pylist(ordered, schema=schema)
-    with atomic_path(path) as tmp:
+    with atomic_path(path, replace=replace) as tmp:
         pq.write_table(table, tmp, compression="zstd")
     return len(ordered)
 
