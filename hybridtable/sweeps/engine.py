@@ -240,12 +240,37 @@ def run_campaign(
     t0 = time.perf_counter()
     path = None if out is None else Path(out)
     result = CampaignResult(path, spec.n_runs)
-    rows: dict[int, dict[str, Any]] = {}
-    if path is not None and not (resume and path.exists()):
+    claimed = path is not None and not (resume and path.exists())
+    if claimed:
         # Claim the file first, in one step: of two campaigns started at once
         # on one new --out, the second stops here instead of replacing the
         # first's rows later (WriteError). From here on the file is ours.
         write_results(path, spec, [])
+    try:
+        return _campaign(
+            spec,
+            path,
+            resume,
+            result,
+            t0,
+            in_process,
+            client,
+            scheduler,
+            workers,
+            on_start,
+            progress,
+        )
+    except Exception:
+        if claimed and result.written == 0:  # nothing run: leave no file behind
+            path.unlink(missing_ok=True)
+        raise
+
+
+def _campaign(
+    spec, path, resume, result, t0, in_process, client, scheduler, workers, on_start, progress
+) -> CampaignResult:
+    """:func:`run_campaign` once its file is claimed."""
+    rows: dict[int, dict[str, Any]] = {}
     if resume and path is not None and path.exists():
         for row in read_results(path, spec).to_pylist():
             problem = row_problem(spec, row)
