@@ -277,7 +277,7 @@ def _import_module(where: str, text: str):
         sys.modules[name] = module
         try:
             call_user(f"--plugin {text}: {where} failed to load:", spec.loader.exec_module, module)
-        except ParameterError:
+        except Exception:  # PluginError: a module half loaded is no module
             del sys.modules[name]
             raise
         return module
@@ -286,7 +286,7 @@ def _import_module(where: str, text: str):
         try:
             return importlib.import_module(where)
         except ModuleNotFoundError as err:
-            if err.name is None or not where.startswith(err.name):
+            if err.name != where and not where.startswith(f"{err.name}."):
                 raise  # a module the plug-in imports is missing: its failure
             raise ParameterError(
                 f"--plugin {text}: no module {err.name!r} (give an importable module "
