@@ -5,7 +5,7 @@ STAMP := $(VENV)/.installed
 BROWSER_STAMP := $(VENV)/.installed-browser
 CHROMIUM := /usr/bin/chromium
 
-.PHONY: run test test-browser test-docs lint setup clean
+.PHONY: run test test-browser test-docs test-fuzz lint setup clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -42,6 +42,13 @@ test-browser: $(BROWSER_STAMP)
 # repository with nothing beside it (tests/test_docs.py).
 test-docs: $(STAMP)
 	MPLBACKEND=Agg $(VENV)/bin/python -m pytest -q -m docs tests/test_docs.py
+
+# The hostile corpus of the newer surfaces (tests/fuzz/surfaces.py: plug-ins,
+# sweep specs and --resume, model files, 6-DoF scenarios, CoR tables, outputs),
+# written apart from the code; about 10 minutes on two cores. Not in CI yet:
+# some of its cases still fail (the closing note of issue 34 lists them).
+test-fuzz: $(STAMP)
+	MPLBACKEND=Agg $(VENV)/bin/python -m pytest -q -m fuzz tests/fuzz/test_surfaces.py
 
 clean:
 	rm -rf $(VENV) out

@@ -312,6 +312,7 @@ def _simulate_with_effects(args: argparse.Namespace, params):
 
     scale = RigScale.from_params(params, params.sample_period_s or params.step_s)
     physics, spec, _ = rig_physics(args, None, scale)
+    params = physics.apply(params)  # the effects' changes of the loop (spec.with_loop)
     changes_sensor = bool(spec.sensor) or any(c == "sensor" for c, _ in spec.wrappers)
     if changes_sensor and params.sample_period_s is None:
         raise CommandError("--add: effects of the force sensor need --sample-rate-hz")

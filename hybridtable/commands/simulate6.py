@@ -127,6 +127,8 @@ def run(args: argparse.Namespace) -> int:
         "wall_time_s": result.wall_time_s,
     }
     notes = [m.spin_note] if m.spin_note else []
+    if m.spin_note:  # said beside the number too
+        out["metrics"]["note"] = m.spin_note
     if reference is None:
         notes.append("reference null: --no-reference skipped the ideal rig's run")
     if notes:

@@ -404,14 +404,30 @@ class _GuardedApply:
         if not isinstance(out, ModelSpec):
             raise PluginError(f"{who} apply returned {type(out).__name__}, not a ModelSpec")
         wrappers = tuple(
-            (c, w if i < len(spec.wrappers) else Guarded(w, f"{who}: its {c} wrapper"))
+            (c, w if i < len(spec.wrappers) else Guarded(w, f"{who}: its {c} wrapper", _system))
             for i, (c, w) in enumerate(out.wrappers)
         )
         loop = tuple(
-            ch if i < len(spec.loop) else Guarded(ch, f"{who}: its loop change")
+            ch if i < len(spec.loop) else Guarded(ch, f"{who}: its loop change", _loop_params)
             for i, ch in enumerate(out.loop)
         )
         return replace(out, wrappers=wrappers, loop=loop)
+
+
+def _system(who: str, system):
+    from pydrake.systems.framework import System
+
+    if not isinstance(system, System):
+        raise PluginError(f"{who} returned {type(system).__name__}, not a Drake system")
+    return system
+
+
+def _loop_params(who: str, params):
+    from hybridtable.loop.params import HybridLoopParams
+
+    if not isinstance(params, HybridLoopParams):
+        raise PluginError(f"{who} returned {type(params).__name__}, not the loop's parameters")
+    return params
 
 
 def _finite_starts(who: str, starts):

@@ -346,7 +346,13 @@ class DockingLoopParams:
             raise ParameterError('stiffness_model "given" needs compensator_stiffness_matrix')
         for name in ("force_deadband_n", "force_noise_n", "moment_noise_n_m"):
             s(self, name, check_nonnegative(name, getattr(self, name)))
-        if isinstance(self.seed, bool) or int(self.seed) != self.seed or self.seed < 0:
+        if (
+            isinstance(self.seed, bool)
+            or not isinstance(self.seed, int | float)
+            or not math.isfinite(self.seed)
+            or int(self.seed) != self.seed
+            or self.seed < 0
+        ):
             raise ParameterError(f"seed must be a whole number >= 0 (got {self.seed!r})")
         s(self, "seed", int(self.seed))
         if self.duration_s is not None:

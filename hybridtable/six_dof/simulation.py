@@ -17,10 +17,14 @@ from hybridtable.six_dof.metrics import DockingMetrics, docking_metrics
 from hybridtable.six_dof.params import DockingLoopParams
 from hybridtable.six_dof.pose import rotation_exp
 
-__all__ = ["DockingRun", "simulate6", "contact_potential_j", "expected_end_s"]
+__all__ = ["MAX_TICKS", "DockingRun", "simulate6", "contact_potential_j", "expected_end_s"]
 
 #: Simulated time between checks of the record (s).
 _CHUNK_S = 0.02
+
+#: The most rig-computer ticks one 6-DoF run may take (each a Python tick of
+#: the rig computer's systems, about 0.1 ms): 10 s at 10 kHz.
+MAX_TICKS = 100_000
 
 
 @dataclass
@@ -136,6 +140,14 @@ def simulate6(
     import time
 
     start = time.perf_counter()
+    t_end = params.duration_s if params.duration_s is not None else expected_end_s(params)
+    ticks = t_end * params.sample_rate_hz
+    if ticks > MAX_TICKS:
+        raise SimulationError(
+            f"too long to simulate: {ticks:.3g} ticks of the rig computer ({t_end:.3g} s at "
+            f"{params.sample_rate_hz:g} Hz); at most {MAX_TICKS:g} (a lower sample_rate_hz or "
+            "a shorter duration_s)"
+        )
     loop = loop or build_docking_loop(params)
     if on_loop is not None:
         on_loop(loop)

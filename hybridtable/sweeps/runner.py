@@ -15,6 +15,7 @@ import time
 from typing import Any
 
 from hybridtable.errors import DivergenceError, ParameterError, SimulationError
+from hybridtable.laws.separation import DIVERGED_FORCE_RATIO
 from hybridtable.sweeps.inputs import NOISE_INPUTS, effect_values, loop_params, noise_params
 from hybridtable.sweeps.metrics import MARGINS, METRICS, SIMULATION
 from hybridtable.sweeps.plan import RunInputs, SweepSpec
@@ -60,6 +61,11 @@ def blank_row(spec: SweepSpec, inputs: RunInputs) -> dict[str, Any]:
     return row
 
 
+#: The largest CoR and energy ratio a run that is ``ok`` can give: a loop
+#: whose force passed DIVERGED_FORCE_RATIO times its undamped peak diverged.
+_MOST_COR = {"cor": DIVERGED_FORCE_RATIO, "energy_ratio": DIVERGED_FORCE_RATIO**2}
+
+
 def row_problem(spec: SweepSpec, row: dict[str, Any]) -> str | None:
     """Why a row read back from a campaign's file cannot be kept as run
     ``row["run"]`` of ``spec`` (``--resume``), or ``None``: a run outside the
@@ -95,6 +101,8 @@ def row_problem(spec: SweepSpec, row: dict[str, Any]) -> str | None:
             metric.source == SIMULATION and not math.isfinite(value)
         ):
             return f"an ok run with {name} = {value!r}"
+        elif name in ("cor", "energy_ratio") and not 0.0 <= value <= _MOST_COR[name]:
+            return f"an ok run with {name} = {value!r}, which no run gives"
     return None
 
 

@@ -26,10 +26,38 @@ Each result gets one outcome:
     CoR outside [0, 100], where the dict that holds it has no ``note``/``notes``
     saying why (nulls and infinities where the case's valid reference has
     them too, unless ``strict``, and numbers the case gave as input, are not counted);
+``bad_output``
+    what the case's ``post_check`` finds in its folder after the command
+    (a partial output left behind, a results file holding a bad row);
 ``wrong_refusal`` / ``wrong_accept``
-    refused a case that expects ``ok`` / accepted one that expects ``refuse``;
+    refused a case that expects ``ok`` / accepted one that expects ``refuse``
+    or ``fail``;
 ``ok``
     none of the above.
+
+Optional attributes of a case (a subclass of :class:`~tests.fuzz.corpus.Case`,
+e.g. ``tests.fuzz.surfaces.SurfaceCase``; a plain ``Case`` has none of them and
+is judged as before):
+
+``expect = "fail"``
+    the command cannot give a result: a clear refusal (exit 2, one line) or the
+    documented failed run (exit 1, one ``error:`` line); exit 0 is ``wrong_accept``;
+``baseline``
+    the valid case whose JSON shows where the command writes null or infinity
+    by design (instead of :func:`~tests.fuzz.corpus.nominal_case` of the command);
+``file_size_limit_bytes``
+    ``RLIMIT_FSIZE`` of the child with ``SIGXFSZ`` ignored: a write past it fails
+    with ``OSError`` (``EFBIG``), as on a full disk;
+``must_mention``
+    words the one line of a refusal or failure must hold (the file, the key);
+``ignore_lines``
+    regular expressions of documented informational stderr lines (not counted);
+``post_check``
+    ``post_check(folder, exit_code) -> str | None``, run on the case's folder
+    after the command; a string is the ``bad_output`` found;
+``gives_nonfinite``
+    the case's files give ``inf`` as a valid value (an ideal table): its echo,
+    as a string or null, is no finding (as for ``inf`` on the command line).
 """
 
 from __future__ import annotations
@@ -77,13 +105,25 @@ OUTCOMES = (
     "missing_output",
     "bad_stdout",
     "silent_nonfinite",
+    "bad_output",
     "wrong_refusal",
     "wrong_accept",
     "ok",
 )
 
 #: Commands with ``--no-progress``.
-NO_PROGRESS = frozenset({"reproduce", "margins", "compare", "diagnose", "compensators"})
+NO_PROGRESS = frozenset(
+    {
+        "reproduce",
+        "margins",
+        "compare",
+        "diagnose",
+        "compensators",
+        "simulate6",
+        "explain",
+        "sweep",
+    }
+)
 #: Commands with ``--json FILE``.
 WITH_JSON = frozenset(
     {
@@ -95,6 +135,9 @@ WITH_JSON = frozenset(
         "effects",
         "compensators",
         "diagram",
+        "simulate6",
+        "explain",
+        "sweep",
     }
 )
 #: Address space a case may take [bytes]: a runaway allocation fails in the case,
@@ -121,7 +164,23 @@ _WARM = (
 )
 _NOBODY = 65534
 _TQDM = re.compile(r"\d+%\||\|\s*\d+/\d+|\[\d+:\d+<|\d+(\.\d+)?(it|s)/(s|it)\]")
-_COR_OFF = {"error", "limit", "limited", "hz", "s", "delta", "std", "change", "diff"}
+_COR_OFF = {
+    "error",
+    "limit",
+    "limited",
+    "hz",
+    "s",
+    "delta",
+    "std",
+    "change",
+    "diff",
+    # a residual or a log of CoRs may be negative; a count of runs above/below 1 exceed 100
+    "residual",
+    "residuals",
+    "ln",
+    "above",
+    "below",
+}
 
 
 def default_timeout_s(command: str) -> float:
@@ -257,8 +316,12 @@ def _drop_file_override() -> None:
     os.setuid(_NOBODY)
 
 
-def _child(folder: Path, argv: list[str], unprivileged: bool) -> None:
-    """Run ``argv`` in this forked process and leave; never returns."""
+def _child(
+    folder: Path, argv: list[str], unprivileged: bool, file_size_limit: int | None = None
+) -> None:
+    """Run ``argv`` in this forked process and leave; never returns.
+
+    ``file_size_limit`` [bytes]: no file may grow past it (a full disk)."""
     code = 1
     try:
         os.setpgid(0, 0)
@@ -278,6 +341,9 @@ def _child(folder: Path, argv: list[str], unprivileged: bool) -> None:
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
         signal.signal(signal.SIGPIPE, signal.SIG_DFL)
         resource.setrlimit(resource.RLIMIT_AS, (MEMORY_LIMIT_BYTES, MEMORY_LIMIT_BYTES))
+        if file_size_limit is not None:  # a full disk: writes past it fail with EFBIG
+            signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+            resource.setrlimit(resource.RLIMIT_FSIZE, (file_size_limit, file_size_limit))
         if unprivileged:  # root reads a mode-000 file: give up that power so the mode holds
             _drop_file_override()
         sys.argv = ["hybridtable", *argv]
@@ -445,15 +511,34 @@ class _Raw:
     stderr: str
     json_text: str | None
     hung: bool
+    post_problem: str | None = None
 
 
 def _first(lines: list[str]) -> str:
     return lines[0][:240] if lines else ""
 
 
+def _unnamed(case: Case, line: str) -> str | None:
+    """The first of the case's ``must_mention`` words that ``line`` lacks."""
+    for word in getattr(case, "must_mention", ()):
+        if word.lower() not in line.lower():
+            return word
+    return None
+
+
 def _judge(raw: _Raw, allowed: set[str]) -> tuple[str, str]:
+    outcome, detail = _judge_run(raw, allowed)
+    if outcome == "ok" and raw.post_problem:
+        return "bad_output", raw.post_problem[:240]
+    return outcome, detail
+
+
+def _judge_run(raw: _Raw, allowed: set[str]) -> tuple[str, str]:
     case, argv = raw.case, raw.argv
     lines = refusal_lines(raw.stderr)
+    ignore = [re.compile(p) for p in getattr(case, "ignore_lines", ())]
+    if ignore:
+        lines = [line for line in lines if not any(p.search(line) for p in ignore)]
     if raw.hung:
         return "hang", f"killed after {raw.seconds:.0f} s; " + _first(lines)
     if "Traceback (most recent call last)" in raw.stderr:
@@ -464,7 +549,10 @@ def _judge(raw: _Raw, allowed: set[str]) -> tuple[str, str]:
         # A simulation that diverged, could not be simulated or never made a
         # contact: the documented exit 1, one line. Right where a clean result
         # or a refusal are both right; not a refusal of certainly invalid input.
-        if case.expect == "either":
+        if case.expect in ("either", "fail"):
+            missing = _unnamed(case, lines[0])
+            if missing is not None:
+                return "unclear_refusal", f"does not name {missing!r}: " + lines[0][:200]
             return "ok", lines[0][:240]
         if case.expect == "refuse":
             return "wrong_accept", "exit 1 (simulation failed), not refused: " + lines[0][:200]
@@ -478,6 +566,9 @@ def _judge(raw: _Raw, allowed: set[str]) -> tuple[str, str]:
             return "unclear_refusal", f"a line of {len(lines[0])} characters: {lines[0][:160]}"
         if case.expect == "ok":
             return "wrong_refusal", lines[0][:240]
+        missing = _unnamed(case, lines[0])
+        if missing is not None:
+            return "unclear_refusal", f"does not name {missing!r}: " + lines[0][:200]
         return "ok", lines[0][:240]
     # exit 0
     to_stdout = (
@@ -500,11 +591,12 @@ def _judge(raw: _Raw, allowed: set[str]) -> tuple[str, str]:
             return "missing_output", f"out.json is not JSON: {exc}"[:240]
     if data is not None:
         numbers, nonfinite = _argv_numbers(argv)
+        nonfinite = nonfinite or getattr(case, "gives_nonfinite", False)
         findings = json_findings(data, [*case.inputs, *numbers], allowed, nonfinite)
         if findings:
             more = f" (+{len(findings) - 1} more)" if len(findings) > 1 else ""
             return "silent_nonfinite", findings[0][:200] + more
-    if case.expect == "refuse":
+    if case.expect in ("refuse", "fail"):
         return "wrong_accept", "exit 0: " + _first(raw.stdout.splitlines())
     return "ok", _first(raw.stdout.splitlines())
 
@@ -534,7 +626,7 @@ def _start(index: int, case: Case, root: Path, timeout_s: float | None) -> _Runn
     sys.stderr.flush()
     pid = os.fork()
     if pid == 0:  # pragma: no cover - the child
-        _child(folder, argv, unprivileged)
+        _child(folder, argv, unprivileged, getattr(case, "file_size_limit_bytes", None))
     with contextlib.suppress(OSError):
         os.setpgid(pid, pid)
     now = time.monotonic()
@@ -572,6 +664,12 @@ def _collect(r: _Running, status: int, hung: bool) -> _Raw:
         json_text,
         hung,
     )
+    check = getattr(r.case, "post_check", None)
+    if check is not None and not hung:
+        try:
+            raw.post_problem = check(r.folder, raw.exit_code)
+        except Exception as exc:  # a broken check is a finding of the harness, not the tool
+            raw.post_problem = f"post_check raised {type(exc).__name__}: {exc}"
     return raw
 
 
@@ -617,7 +715,10 @@ def _execute(
 
 
 def _reference(case: Case) -> Case:
-    """The valid case that ``case`` spoils (see ``Case.reference``)."""
+    """The valid case that ``case`` spoils (see ``Case.reference``, and a case's ``baseline``)."""
+    baseline = getattr(case, "baseline", None)
+    if baseline is not None:
+        return baseline
     nominal = nominal_case(case.command)
     if case.reference is None:
         return nominal
@@ -630,8 +731,12 @@ def _reference(case: Case) -> Case:
     )
 
 
+def _ref_key(ref: Case) -> tuple[str, ...]:
+    return (ref.name, *ref.argv)
+
+
 def _key(case: Case) -> tuple[str, ...]:
-    return tuple(_reference(case).argv)
+    return _ref_key(_reference(case))
 
 
 def _baselines(cases: list[Case], jobs: int, root: Path, keep: bool) -> None:
@@ -640,15 +745,15 @@ def _baselines(cases: list[Case], jobs: int, root: Path, keep: bool) -> None:
     todo = {}
     for case in cases:
         ref = _reference(case)
-        if tuple(ref.argv) not in _BASELINES:
-            todo.setdefault(tuple(ref.argv), ref)
+        if _ref_key(ref) not in _BASELINES:
+            todo.setdefault(_ref_key(ref), ref)
     refs = list(todo.values())
 
     def store(i: int, raw: _Raw) -> None:
         data = None
         with contextlib.suppress(ValueError, TypeError):
             data = _load_json(raw.json_text or "")
-        _BASELINES[tuple(refs[i].argv)] = _nonfinite_paths(data) if data is not None else set()
+        _BASELINES[_ref_key(refs[i])] = _nonfinite_paths(data) if data is not None else set()
 
     _execute(refs, jobs, None, root, keep, store)
 
