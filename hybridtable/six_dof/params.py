@@ -10,6 +10,7 @@ The frames and equations are in ``docs/six_dof.md``.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -348,7 +349,7 @@ class DockingLoopParams:
             s(self, name, check_nonnegative(name, getattr(self, name)))
         if (
             isinstance(self.seed, bool)
-            or not isinstance(self.seed, int | float)
+            or not isinstance(self.seed, numbers.Real)  # numpy's integers too
             or not math.isfinite(self.seed)
             or int(self.seed) != self.seed
             or self.seed < 0
