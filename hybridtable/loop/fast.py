@@ -60,6 +60,7 @@ from hybridtable.loop.simulation import (
     expected_duration_s,
     separation_rule,
 )
+from hybridtable.loop.ticks import held_ticks
 from hybridtable.systems.sensor import continuous_delay_period, delay_samples
 
 __all__ = ["fast_unsupported", "simulate_fast"]
@@ -346,21 +347,63 @@ def _computer_period(params: HybridLoopParams) -> tuple[float, int]:
     return params.step_s, 0
 
 
-def _run_continuous(params: HybridLoopParams, h: float, n: int, rule: _StopRule):
-    """Tick log ``(v, f_act, f_comp)`` of a continuous loop (before each tick's update)."""
-    loop = _Continuous(params, h)
-    by_force = loop.by_force
-    lead_f, lead_prev = loop.lead_f, loop.lead_prev
-    contact, gate_open = loop.contact, loop.gate_open
-    undelayed, mode_of, mode_data = loop.undelayed, loop.mode_of, loop.mode_data
-    # Held: the force law is fixed over a tick by the held reading (no switch inside).
-    held, clamp = not loop.switches, loop.clamp
-    on = (True, False, loop.mdc)
-    step_on, (c0, c1, c2, c3, _) = mode_data(on)
-    step_off = mode_data(_OFF)[0]
+def _initial_state(params: HybridLoopParams, loop: _Continuous) -> tuple[float, ...]:
+    """``(p_des, v_des, p_act, v_act)`` at ``t = 0`` (an ideal table is the spacecraft)."""
     ic = params.initial_conditions()
     p, v = ic["p_des_m"], ic["v_des_m_per_s"]
     pa, va = (p, v) if loop.ideal else (ic["p_act_m"], ic["v_act_m_per_s"])
+    return p, v, pa, va
+
+
+def _run_held(params: HybridLoopParams, loop: _Continuous, n: int, rule: _StopRule):
+    """Tick log ``(v, f_act, f_comp)`` of a continuous loop whose force law holds over
+    each tick: :func:`~hybridtable.loop.ticks.held_ticks` between the stop rule's
+    checks."""
+    h = loop.h
+    on = (True, False, loop.mdc)
+    c0, c1, c2, c3, _ = loop.mode_data(on)[1]
+    e_on = tuple(float(x) for x in loop.exp(on, h)[:4].ravel())
+    e_off = tuple(float(x) for x in loop.exp(_OFF, h)[:4].ravel())
+    law = (c0, c1, c2, c3, loop.lead_f, loop.lead_prev, loop.k, loop.c)
+    law += (loop.law.force_deadband_n, float(loop.by_force), float(loop.clamp))
+    ticks, compiled = held_ticks(_contact_function(), _gate_function(loop.law.gate))
+    state = (*_initial_state(params, loop), 0.0)  # u: no held force before t = 0
+    on_now = loop.mode_of(state, False) == on
+    new = (lambda m: np.zeros(m)) if compiled else (lambda m: [0.0] * m)
+    F, vs, fas, fcs = new(n + 2 + 4096), new(4096), new(4096), new(4096)
+    k, checked, touched = 0, False, False
+    while True:
+        state, on_now, touched, k, f_act, f_comp, full = ticks(
+            state, on_now, touched, e_on, e_off, law, F, vs, fas, fcs, k, n, h, rule.due, checked
+        )
+        checked = False
+        if full:  # twice the room, the records kept
+            more = len(vs)
+            F, vs, fas, fcs = (_grown(x, more, compiled) for x in (F, vs, fas, fcs))
+            continue
+        rule.touched = touched
+        if rule.check_tick(k, f_act, F[k + 1], f_comp):
+            vs[k], fas[k], fcs[k] = state[1], f_act, f_comp
+            return vs[: k + 1], fas[: k + 1], fcs[: k + 1]
+        checked = True
+
+
+def _grown(x, m: int, compiled: bool):
+    """``x`` with room for ``m`` more numbers (zeros)."""
+    return np.concatenate([x, np.zeros(m)]) if compiled else x + [0.0] * m
+
+
+def _run_continuous(params: HybridLoopParams, h: float, n: int, rule: _StopRule):
+    """Tick log ``(v, f_act, f_comp)`` of a continuous loop (before each tick's update)."""
+    loop = _Continuous(params, h)
+    if not loop.switches:
+        return _run_held(params, loop, n, rule)
+    lead_f, lead_prev = loop.lead_f, loop.lead_prev
+    contact, gate_open = loop.contact, loop.gate_open
+    undelayed, mode_of, mode_data = loop.undelayed, loop.mode_of, loop.mode_data
+    on = (True, False, loop.mdc)
+    c0, c1, c2, c3, _ = mode_data(on)[1]
+    p, v, pa, va = _initial_state(params, loop)
     u = 0.0  # the held part of the force (none before t = 0)
     mode = mode_of((p, v, pa, va, u), False)
     F = [0.0] * (n + 2)  # F[j] = f_act(t_j) at index j + n + 2; zeros before t = 0
@@ -390,18 +433,10 @@ def _run_continuous(params: HybridLoopParams, h: float, n: int, rule: _StopRule)
             F.append(f_act)
             f_mea = F[k + 2]
             u, gate = lead_f * f_mea + lead_prev * F[k + 1], gate_open(f_mea)
-        if held:  # clamp here means no MDC term: the force is u
-            if (gate or not by_force) and not (clamp and u < 0.0):
-                mode = on
-                p, v, pa, va = step_on(p, v, pa, va, u)
-            else:
-                mode = _OFF
-                p, v, pa, va = step_off(p, v, pa, va, u)
-        else:
-            z = (p, v, pa, va, u)
-            (p, v, pa, va, u), mode = loop.interval(z, mode_of(z, gate), gate)
-            if mode == on:
-                mode = on
+        z = (p, v, pa, va, u)
+        (p, v, pa, va, u), mode = loop.interval(z, mode_of(z, gate), gate)
+        if mode == on:
+            mode = on
         k += 1
 
 
