@@ -15,13 +15,18 @@ plug-in and what it did:
   laws): :func:`simulation_failure` makes a
   :class:`~hybridtable.errors.SimulationError`, exit 1 (the run failed).
 
+What a user's code prints while it is called here goes to standard error, so
+a command's ``--json -`` output stays JSON.
+
 Our own errors raised on purpose by a user's code (a ``ParameterError`` for a
 value it refuses) pass through unchanged. ``KeyboardInterrupt`` is never caught.
 """
 
 from __future__ import annotations
 
+import contextlib
 import math
+import sys
 import traceback
 from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
@@ -61,9 +66,11 @@ def _user_frame(err: BaseException) -> str:
 
 def call_user(who: str, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
     """``fn(*args, **kwargs)``, a user's function; any exception or
-    ``sys.exit`` it raises becomes one :class:`PluginError` line naming ``who``."""
+    ``sys.exit`` it raises becomes one :class:`PluginError` line naming ``who``.
+    What it prints goes to standard error: a command's ``--json -`` stays JSON."""
     try:
-        return fn(*args, **kwargs)
+        with contextlib.redirect_stdout(sys.stderr):
+            return fn(*args, **kwargs)
     except _OURS:
         raise
     except KeyboardInterrupt:

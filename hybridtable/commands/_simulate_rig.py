@@ -238,7 +238,7 @@ def run_model(args: argparse.Namespace, model) -> dict:
         modelled = _metrics(simulate_rig_contact(info, phys))
         nominal = _metrics(simulate_rig_contact(info))
         row = {
-            "run_id": mrun.run_id if mrun else None,
+            "run_id": mrun.run_id if mrun else info.run_id,
             "compensator": info.compensator,
             "initial_velocity_m_per_s": info.initial_velocity_m_per_s,
             **modelled,

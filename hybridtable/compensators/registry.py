@@ -12,14 +12,16 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from pydrake.systems.framework import System
+from pydrake.systems.framework import DiagramBuilder, System
 
 from hybridtable._lazy import register_entry_points
+from hybridtable._plugins import PluginError, call_user
 from hybridtable._validation import check_choice
 from hybridtable.compensators.online import make_online_sdmdc
 from hybridtable.compensators.paper import COMPENSATORS, paper_compensator
 from hybridtable.compensators.polynomial import make_polynomial
 from hybridtable.compensators.smith import make_smith, make_smith_online
+from hybridtable.laws.compiled import LawSystem
 
 __all__ = [
     "CompensatorFactory",
@@ -92,6 +94,35 @@ def compensator_factory(name: str) -> CompensatorFactory:
     return _REGISTRY[name]
 
 
+def _checked(system: Any, who: str) -> System:
+    """A user's compensator ``system`` with its ``compensated_force`` passed through
+    a law that refuses a non-finite value (:class:`~hybridtable.laws.compiled.LawSystem`):
+    a NaN would otherwise reach the spacecraft's integrator, whose error control
+    then shrinks its step without end."""
+    if not isinstance(system, System):
+        raise PluginError(f"{who}'s factory returned {type(system).__name__}, not a Drake system")
+    if not system.HasOutputPort("compensated_force"):
+        names = [system.get_output_port(i).get_name() for i in range(system.num_output_ports())]
+        raise PluginError(f"{who} has no output port 'compensated_force' (its outputs: {names})")
+    builder = DiagramBuilder()
+    inner = builder.AddNamedSystem("user_compensator", system)
+    check = builder.AddNamedSystem(
+        "finite_force",
+        LawSystem({"force": 1}, {"force": lambda s: s["force"][0]}, {}, {"force": 1}),
+    )
+    builder.Connect(inner.GetOutputPort("compensated_force"), check.GetInputPort("force"))
+    for i in range(inner.num_input_ports()):
+        builder.ExportInput(inner.get_input_port(i), inner.get_input_port(i).get_name())
+    builder.ExportOutput(check.GetOutputPort("force"), "compensated_force")
+    for i in range(inner.num_output_ports()):
+        port = inner.get_output_port(i)
+        if port.get_name() != "compensated_force":
+            builder.ExportOutput(port, port.get_name())
+    diagram = builder.Build()
+    diagram.set_name(system.get_name() or "compensator")
+    return diagram
+
+
 def make_compensator(
     params: Any, derivative_period_s: float | None, system: System | None = None
 ) -> System:
@@ -100,7 +131,13 @@ def make_compensator(
     passivity guard (:mod:`hybridtable.compensators.passivity`) when
     ``params.passivity`` is true."""
     if system is None:
-        system = compensator_factory(params.compensator)(params, derivative_period_s)
+        factory = compensator_factory(params.compensator)
+        if factory is BUILTIN.get(params.compensator):
+            system = factory(params, derivative_period_s)
+        else:  # a user's: guarded, and its force checked before the spacecraft
+            who = f"compensator {params.compensator!r}"
+            system = call_user(f"{who}'s factory", factory, params, derivative_period_s)
+            system = _checked(system, who)
     if getattr(params, "passivity", False):
         # Imported here, not at the top: a loop without the guard never pays for it.
         from hybridtable.compensators.passivity import passivity_guarded

@@ -82,8 +82,11 @@ def model_from_json(data: Any, where: str) -> RigModel:
         if not isinstance(raw, dict) or not isinstance(raw.get("run_id"), str):
             raise ParameterError(f"{w}: must be an object with a run_id")
         cor = raw.get("cor_measured")
-        if cor is not None and not _finite(cor):
-            raise ParameterError(f"{w}: cor_measured must be a number or null")
+        if cor is not None and not (_finite(cor) and 0.0 <= float(cor) <= 100.0):
+            raise ParameterError(
+                f"{w}: cor_measured must be a number between 0 and 100 (a CoR), or null; "
+                f"got {cor!r}"
+            )
         runs.append(
             ModelRun(
                 raw["run_id"],

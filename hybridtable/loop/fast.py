@@ -35,9 +35,7 @@ the first tick at or after each of its check times.
 
 from __future__ import annotations
 
-import functools
 import math
-import types
 from dataclasses import replace
 
 import numpy as np
@@ -47,8 +45,6 @@ from scipy.optimize import brentq
 from hybridtable.compensators.paper import COMPENSATORS, compensation_law
 from hybridtable.errors import ParameterError, SimulationError
 from hybridtable.laws.compensation import CompensationLaw, backward_difference, compensate
-from hybridtable.laws.compiled import python_function
-from hybridtable.laws.contact import spring_contact_force
 from hybridtable.laws.separation import SeparationRule
 from hybridtable.laws.spacecraft import computer_step
 from hybridtable.laws.table import second_order_matrices, second_order_tick
@@ -60,7 +56,13 @@ from hybridtable.loop.simulation import (
     expected_duration_s,
     separation_rule,
 )
-from hybridtable.loop.ticks import held_ticks
+from hybridtable.loop.ticks import (
+    bound,
+    compensator_function,
+    contact_function,
+    gate_function,
+    held_ticks,
+)
 from hybridtable.systems.sensor import continuous_delay_period, delay_samples
 
 __all__ = ["fast_unsupported", "simulate_fast"]
@@ -124,42 +126,6 @@ def _law(params: HybridLoopParams) -> tuple[CompensationLaw, float, float | None
         law = replace(law, motion_correction=False)
     c = cp.damping_n_s_per_m
     return law, cp.stiffness_n_per_m, (c if c > 0.0 else None)
-
-
-def _bound(function, *constants):
-    """``function`` with its trailing arguments bound to ``constants`` (its code
-    is compiled once; binding is as cheap as a closure, and calls stay plain)."""
-    return types.FunctionType(function.__code__, function.__globals__, None, constants)
-
-
-@functools.cache
-def _contact_function():
-    """The contact law as one plain function ``(p, v, k, c) -> f`` (traced once:
-    :func:`~hybridtable.laws.compiled.python_function`)."""
-    return python_function(lambda p, v, k, c: spring_contact_force(k, c, p, v), "pvkc")
-
-
-@functools.cache
-def _gate_function(gate: str):
-    """The compensator's gate ``(level, dead band) -> open`` as a plain function."""
-    return python_function(
-        lambda f, db: CompensationLaw(force_deadband_n=db, gate=gate).gate_open(f), ("f", "db")
-    )
-
-
-@functools.cache
-def _compensator_function(lead: bool, mdc: bool, gate: str, clamp: bool, damping: bool):
-    """The sampled rig computer's compensation law for one set of switches, as a
-    plain function ``(f_mea, prev, p, v, p_act, v_act, T_lead, h, dead band, k, c)
-    -> f_comp`` (traced once per set, its constants as arguments)."""
-
-    def law(f, prev, p, v, pa, va, lead_s, h, db, k, c):
-        switches = CompensationLaw(lead_s if lead else 0.0, mdc, db, gate, clamp)
-        rate = backward_difference(f, prev, h)
-        return compensate(switches, f, rate, p - pa, v - va, k, c if damping else None, pa > 0.0)
-
-    names = ("f", "prev", "p", "v", "pa", "va", "lead", "h", "db", "k", "c")
-    return python_function(law, names)
 
 
 def _rows(law: CompensationLaw, h: float, k: float, c: float | None, basis: np.ndarray):
@@ -226,8 +192,8 @@ class _Continuous:
         self.b = np.array([0.0, -1.0 / params.spacecraft_mass_kg, 0.0, 0.0])
         self.g_raw = np.array([0.0, 0.0, self.k, self.c, 0.0])  # k p_act + c v_act
         # The contact and the gate as plain functions (the laws, compiled once).
-        self.contact = _bound(_contact_function(), self.k, self.c)
-        self.gate_open = _bound(_gate_function(law.gate), law.force_deadband_n)
+        self.contact = bound(contact_function(), self.k, self.c)
+        self.gate_open = bound(gate_function(law.gate), law.force_deadband_n)
         self.cache: dict[tuple, tuple] = {}
         # The switching functions (functional of z, offset) whose signs set the mode.
         sig = []
@@ -366,7 +332,7 @@ def _run_held(params: HybridLoopParams, loop: _Continuous, n: int, rule: _StopRu
     e_off = tuple(float(x) for x in loop.exp(_OFF, h)[:4].ravel())
     law = (c0, c1, c2, c3, loop.lead_f, loop.lead_prev, loop.k, loop.c)
     law += (loop.law.force_deadband_n, float(loop.by_force), float(loop.clamp))
-    ticks, compiled = held_ticks(_contact_function(), _gate_function(loop.law.gate))
+    ticks, compiled = held_ticks(contact_function(), gate_function(loop.law.gate))
     state = (*_initial_state(params, loop), 0.0)  # u: no held force before t = 0
     on_now = loop.mode_of(state, False) == on
     new = (lambda m: np.zeros(m)) if compiled else (lambda m: [0.0] * m)
@@ -445,10 +411,10 @@ def _run_sampled(params: HybridLoopParams, h: float, n_delay: int, rule: _StopRu
     computed, and the spacecraft state after its update)."""
     law, kc, cc = _law(params)
     k_con, c_con = params.contact_stiffness_n_per_m, params.contact_damping_n_s_per_m
-    contact = _bound(_contact_function(), k_con, c_con)
+    contact = bound(contact_function(), k_con, c_con)
     switches = (law.has_lead, law.motion_correction, law.gate, law.clamp_nonnegative)
-    compensator = _bound(
-        _compensator_function(*switches, cc is not None),
+    compensator = bound(
+        compensator_function(*switches, cc is not None),
         *(law.lead_time_s, h, law.force_deadband_n, kc, 0.0 if cc is None else cc),
     )
     A, B = computer_step(params.spacecraft_mass_kg, h)  # the rig computer's model, one tick

@@ -1,4 +1,10 @@
-"""The fast engine's held ticks: one loop, run by Python or compiled by numba when worth it.
+"""The fast engine's laws as plain functions, and its held ticks: one loop, run by Python or
+compiled by numba when worth it.
+
+The laws (the contact, the gate, the sampled compensator) are traced once from
+their definitions in :mod:`hybridtable.laws` into plain functions
+(:func:`~hybridtable.laws.compiled.python_function`), which the fast engine
+calls and numba compiles.
 
 A continuous loop whose force law cannot switch inside a tick (the gate and the
 clamp read only the held samples) is the campaign workhorse: ``explain``
@@ -23,10 +29,23 @@ its record arrays are full; the caller then checks, grows or resumes.
 from __future__ import annotations
 
 import functools
+import types
 from collections.abc import Callable
 from typing import Any
 
-__all__ = ["COMPILE_AFTER_RUNS", "held_ticks", "compiled_available"]
+from hybridtable.laws.compensation import CompensationLaw, backward_difference, compensate
+from hybridtable.laws.compiled import python_function
+from hybridtable.laws.contact import spring_contact_force
+
+__all__ = [
+    "COMPILE_AFTER_RUNS",
+    "bound",
+    "compensator_function",
+    "compiled_available",
+    "contact_function",
+    "gate_function",
+    "held_ticks",
+]
 
 #: Runs a process makes with the Python loop before it compiles the loop: a run
 #: of the Python loop costs ~20 ms, compiling ~1 s.
@@ -90,6 +109,42 @@ def _loop(contact: Callable[..., float], gate_open: Callable[..., bool]):
             k += 1
 
     return ticks
+
+
+def bound(function, *constants):
+    """``function`` with its trailing arguments bound to ``constants`` (its code
+    is compiled once; binding is as cheap as a closure, and calls stay plain)."""
+    return types.FunctionType(function.__code__, function.__globals__, None, constants)
+
+
+@functools.cache
+def contact_function():
+    """The contact law as one plain function ``(p, v, k, c) -> f`` (traced once:
+    :func:`~hybridtable.laws.compiled.python_function`)."""
+    return python_function(lambda p, v, k, c: spring_contact_force(k, c, p, v), "pvkc")
+
+
+@functools.cache
+def gate_function(gate: str):
+    """The compensator's gate ``(level, dead band) -> open`` as a plain function."""
+    return python_function(
+        lambda f, db: CompensationLaw(force_deadband_n=db, gate=gate).gate_open(f), ("f", "db")
+    )
+
+
+@functools.cache
+def compensator_function(lead: bool, mdc: bool, gate: str, clamp: bool, damping: bool):
+    """The sampled rig computer's compensation law for one set of switches, as a
+    plain function ``(f_mea, prev, p, v, p_act, v_act, T_lead, h, dead band, k, c)
+    -> f_comp`` (traced once per set, its constants as arguments)."""
+
+    def law(f, prev, p, v, pa, va, lead_s, h, db, k, c):
+        switches = CompensationLaw(lead_s if lead else 0.0, mdc, db, gate, clamp)
+        rate = backward_difference(f, prev, h)
+        return compensate(switches, f, rate, p - pa, v - va, k, c if damping else None, pa > 0.0)
+
+    names = ("f", "prev", "p", "v", "pa", "va", "lead", "h", "db", "k", "c")
+    return python_function(law, names)
 
 
 @functools.cache

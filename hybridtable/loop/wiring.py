@@ -13,6 +13,7 @@ from collections.abc import Iterable, Mapping
 from pydrake.systems.framework import DiagramBuilder, System
 
 from hybridtable._components import Block, connect_input
+from hybridtable.errors import ParameterError
 
 __all__ = ["Edge", "LOOP_WIRING", "PORT_SIZES", "edge", "channel_wiring", "connect"]
 
@@ -72,4 +73,10 @@ def connect(
     """Connect ``systems`` (by name; whole systems or the flat blocks of
     :func:`~hybridtable._components.add_component`) in ``builder`` along ``edges``."""
     for src, out_port, dst, in_port in edges:
-        connect_input(builder, systems[src].GetOutputPort(out_port), systems[dst], in_port)
+        try:
+            connect_input(builder, systems[src].GetOutputPort(out_port), systems[dst], in_port)
+        except RuntimeError as err:  # a given system without the loop's ports (Drake says which)
+            raise ParameterError(
+                f"cannot wire the loop's {src}.{out_port} to {dst}.{in_port}: {err} "
+                f"(a {dst} must have the ports in docs/plugins.md)"
+            ) from None

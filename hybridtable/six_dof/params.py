@@ -23,7 +23,7 @@ from hybridtable._validation import (
     check_positive_or_inf,
 )
 from hybridtable.errors import ParameterError
-from hybridtable.limits import check_plausible
+from hybridtable.limits import LIMITS, check_plausible
 from hybridtable.loop.params import believed
 
 __all__ = [
@@ -341,6 +341,14 @@ class DockingLoopParams:
             if K.shape != (6, 6) or not np.all(np.isfinite(K)):
                 raise ParameterError(
                     f"compensator_stiffness_matrix must be a finite 6x6 matrix (got shape {K.shape})"
+                )
+            most = LIMITS["compensator_stiffness_n_per_m"].high
+            if np.any(np.abs(K) > most):
+                i, j = np.unravel_index(int(np.argmax(np.abs(K))), K.shape)
+                raise ParameterError(
+                    f"compensator_stiffness_matrix ([compensator] stiffness_matrix of a scenario) "
+                    f"entries must be at most {most:g} in magnitude (N/m, N m/rad; no docking "
+                    f"contact is stiffer); got {K[i, j]:g} at row {i}, column {j}"
                 )
             s(self, "compensator_stiffness_matrix", tuple(map(tuple, K.tolist())))
         if self.stiffness_model == "given" and self.compensator_stiffness_matrix is None:

@@ -169,6 +169,7 @@ def simulate6(
         end_tolerance_s=0.5 * h,
     )
     log = loop.logger.FindLog(context)
+    seen = 0
     while True:
         t = rule.next_check_s
         try:
@@ -177,12 +178,23 @@ def simulate6(
             raise simulation_failure(err, "the 6-DoF simulation failed") from None
         data = log.data()
         force = np.linalg.norm(data[27:30], axis=0)
+        # The divergence stop reads every tick since the last check: the contact's
+        # and the compensator's force, and the compensator's moment over the port's
+        # lever arm (a compensator can diverge while the body flies off the contact).
+        fresh = data[:, seen:]
+        seen = data.shape[1]
+        lever = max(params.spacecraft.port_distance_m, 1e-3)
+        loudest = max(
+            float(np.max(np.linalg.norm(fresh[27:30], axis=0), initial=0.0)),
+            float(np.max(np.linalg.norm(fresh[39:42], axis=0), initial=0.0)),
+            float(np.max(np.linalg.norm(fresh[36:39], axis=0), initial=0.0)) / lever,
+        )
         quiet = (force == 0.0) & ~np.any(data[36:42] != 0.0, axis=0)
         loud = np.flatnonzero(~quiet)
         touched = bool(np.any(force > 0.0))  # the contact starts with a contact force
         ended = rule.check(
             simulator.get_num_steps_taken(),
-            float(np.max(np.linalg.norm(data[24:30][3:, -quiet_ticks:], axis=0), initial=0.0)),
+            loudest,
             active=touched and bool(loud.size) and loud[-1] == data.shape[1] - 1,
             touched=touched,
             finite=bool(np.all(np.isfinite(data[:, -quiet_ticks:]))),
