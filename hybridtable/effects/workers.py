@@ -5,6 +5,7 @@ Every job gets the call's ``shared`` inputs (an evaluator, a base fit, the
 effects of a table): they are held in this module while the pool runs, and
 forked workers inherit them, so nothing of them (no Drake object) is pickled;
 the plug-in effects registered in this process are inherited the same way.
+Each worker's BLAS runs one thread (:func:`one_thread`).
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ import sys
 from collections.abc import Callable, Sequence
 from typing import Any
 
-__all__ = ["DEFAULT_WORKERS", "pool_map", "worker_count"]
+__all__ = ["DEFAULT_WORKERS", "one_thread", "pool_map", "worker_count"]
 
 
 #: Processes a fit uses when the user names none (at most the CPUs).
@@ -29,6 +30,16 @@ def worker_count(workers: int | None) -> int:
 
 #: The ``shared`` inputs of the running :func:`pool_map` calls (innermost last).
 _SHARED: list[Any] = []
+
+
+def one_thread() -> None:
+    """Limit this process's BLAS to one thread. The fits multiply matrices of a
+    few rows; each worker is already one of the CPUs, and BLAS threads on top of
+    them spin against each other (Table 1 on two cores: 73 s with two BLAS
+    threads a worker, 16 s with one)."""
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(1)
 
 
 def _call(item: tuple[Callable[[Any, Any], Any], Any]) -> Any:
@@ -52,15 +63,20 @@ def pool_map(
     import multiprocessing as mp
 
     forked = workers > 1 and len(jobs) > 1 and "fork" in mp.get_all_start_methods()
-    pool = None
+    pool = limits = None
     _SHARED.append(shared)
     try:
         if forked:
             from concurrent.futures import ProcessPoolExecutor
 
-            pool = ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("fork"))
+            pool = ProcessPoolExecutor(
+                max_workers=workers, mp_context=mp.get_context("fork"), initializer=one_thread
+            )
             results = pool.map(_call, [(func, j) for j in jobs])
-        else:
+        else:  # here, with one BLAS thread while the jobs run
+            from threadpoolctl import threadpool_limits
+
+            limits = threadpool_limits(1)
             results = (func(shared, j) for j in jobs)
         if progress:
             from tqdm import tqdm
@@ -78,3 +94,5 @@ def pool_map(
         _SHARED.pop()
         if pool is not None:
             pool.shutdown()
+        if limits is not None:
+            limits.restore_original_limits()

@@ -100,11 +100,21 @@ class ModelFit:
         return " + ".join(self.effects) if self.effects else "nothing missing"
 
     def to_dict(self) -> dict:
-        """JSON-ready summary."""
+        """JSON-ready summary: ``std`` holds the standard errors the table determines;
+        ``undetermined`` (with a ``note``) names the parameters it does not."""
+        undetermined = [k for k, v in self.std.items() if v is None]
+        note = {}
+        if undetermined:
+            note["note"] = (
+                f"the table does not determine {', '.join(undetermined)}: the rows' CoR does "
+                "not move with it independently of the others, so it has no standard error"
+            )
         return {
             "effects": list(self.effects),
             "values": self.values,
-            "std": self.std,
+            "std": {k: v for k, v in self.std.items() if v is not None},
+            "undetermined": undetermined,
+            **note,
             "at_bound": list(self.at_bound),
             "predicted_cor": [float(x) for x in self.predicted_cor],
             "residuals_cor": [float(x) for x in self.predicted_cor - self.measured_cor],

@@ -247,8 +247,13 @@ class CorModel:
         return self.predict_values(cases, self.values(u))
 
     def predict_values(self, cases: Sequence[Case], values: Mapping[str, float]) -> np.ndarray:
-        """ln CoR of each case at parameter ``values`` (missing: null)."""
-        return np.array([self._ln_cor(c, dict(values)) for c in cases])
+        """ln CoR of each case at parameter ``values`` (missing: null); rows of the
+        same conditions are one run (a long table of few conditions costs those)."""
+        values, memo = dict(values), {}
+        for c in cases:
+            if c not in memo:
+                memo[c] = self._ln_cor(c, values)
+        return np.array([memo[c] for c in cases])
 
     def _ln_cor(self, case: Case, values: dict[str, float]) -> float:
         try:

@@ -207,6 +207,9 @@ def trends(
 ) -> list[dict]:
     """Rows at the same compensator and contact frequency whose CoR moves with a condition.
 
+    Repeated rows of the same conditions count as one (their mean); a pair
+    names the first row of each.
+
     For the stiffness and the velocity: the pairs of rows that differ in it
     (same compensator and f_con), the measured change of ln CoR from the lower
     to the higher value, and the best model's. Flagged when every pair moves
@@ -215,15 +218,22 @@ def trends(
     that move the pairs that way at a size that keeps the CoRs within
     :data:`WINDOW_LN` of the table's.
     """
+    # Repeated rows of the same conditions are one point: their mean, its noise.
+    groups: dict[Case, list[int]] = {}
+    for i, case in enumerate(cases):
+        groups.setdefault(case, []).append(i)
+    distinct, rows = list(groups), [g[0] for g in groups.values()]
+    ym = np.array([float(np.mean(y[g])) for g in groups.values()])
+    sm = np.array([math.sqrt(float(np.sum(sigma[g] ** 2))) / len(g) for g in groups.values()])
     out = []
     for field, word in (
         ("contact_stiffness_n_per_m", "stiffer spring"),
         ("initial_velocity_m_per_s", "faster approach"),
     ):
         pairs = []
-        for i in range(len(cases)):
-            for j in range(i + 1, len(cases)):
-                (ci, ki), (cj, kj) = cases[i], cases[j]
+        for i in range(len(distinct)):
+            for j in range(i + 1, len(distinct)):
+                (ci, ki), (cj, kj) = distinct[i], distinct[j]
                 if ci != cj or ki.contact_frequency_hz != kj.contact_frequency_hz:
                     continue
                 xi, xj = getattr(ki, field), getattr(kj, field)
@@ -233,15 +243,15 @@ def trends(
                 pairs.append((lo, hi))
         if len(pairs) < 3:
             continue
-        d = np.array([y[h] - y[lo] for lo, h in pairs])
-        dp = np.array([predicted[h] - predicted[lo] for lo, h in pairs])
-        s = np.array([math.hypot(sigma[h], sigma[lo]) for lo, h in pairs])
+        d = np.array([ym[h] - ym[lo] for lo, h in pairs])
+        dp = np.array([predicted[rows[h]] - predicted[rows[lo]] for lo, h in pairs])
+        s = np.array([math.hypot(sm[h], sm[lo]) for lo, h in pairs])
         same = bool(np.all(d < 0) or np.all(d > 0))
         miss = float(np.sum(d - dp) / math.sqrt(np.sum(s**2)))
         sign = 1.0 if np.mean(d) > 0 else -1.0
         can = []
-        lows = [cases[lo] for lo, _ in pairs]
-        highs = [cases[h] for _, h in pairs]
+        lows = [distinct[lo] for lo, _ in pairs]
+        highs = [distinct[h] for _, h in pairs]
         for e in effects:
             model = CorModel((e,))
             a, b = model.bounds()
@@ -260,7 +270,7 @@ def trends(
         out.append(
             {
                 "condition": field,
-                "pairs": [[int(lo), int(h)] for lo, h in pairs],
+                "pairs": [[rows[lo], rows[h]] for lo, h in pairs],
                 "measured_change": [float(x) for x in d],
                 "best_model_change": [float(x) for x in dp],
                 "all_same_way": same,

@@ -36,6 +36,7 @@ from hybridtable.systems.table import SecondOrderTable
 __all__ = [
     "HybridLoop",
     "add_hybrid_loop",
+    "default_sensor",
     "build_hybrid_loop",
     "LOGGED",
     "LOG_ROWS",
@@ -102,6 +103,14 @@ class HybridLoop:
             part.set_initial_state(sub, *state)
 
 
+def default_sensor(params: HybridLoopParams) -> ForceSensorDelay:
+    """The loop's sensor when none is given: the delay of ``params``, sampled at the
+    rig computer's rate, or the continuous delay line of a continuous computer."""
+    if params.sample_period_s is None:
+        return ForceSensorDelay(params.rig.sensor, "continuous", params.step_s)
+    return ForceSensorDelay(params.rig.sensor, "sampled", params.sample_period_s)
+
+
 def add_hybrid_loop(
     builder: DiagramBuilder,
     params: HybridLoopParams,
@@ -142,25 +151,22 @@ def add_hybrid_loop(
         1.4 times as long). ``False`` adds each
         as its own diagram (one box a component in a drawing).
     """
-    sensor_backend = sensor
     h_sample = params.sample_period_s
     if h_sample is None:
         if params.sensor_delay_s > 0.0:
             h_computer, _ = continuous_delay_period(params.sensor_delay_s, params.step_s)
         else:
             h_computer = params.step_s
-        sensor = ForceSensorDelay(params.rig.sensor, "continuous", params.step_s)
         spacecraft = Spacecraft(params.plant.spacecraft)
     else:
         h_computer = h_sample
-        sensor = ForceSensorDelay(params.rig.sensor, "sampled", h_sample)
         spacecraft = Spacecraft(params.plant.spacecraft, sample_period_s=h_sample)
     spacecraft = add_component(builder, "spacecraft", spacecraft, flat)
     table = add_component(builder, "table", table or SecondOrderTable(params.plant.table), flat)
     contact = add_component(
         builder, "contact", contact or UnilateralSpringContact(params.plant.contact), flat
     )
-    sensor = add_component(builder, "force_sensor", sensor_backend or sensor, flat)
+    sensor = add_component(builder, "force_sensor", sensor or default_sensor(params), flat)
     compensator = add_component(
         builder, "compensator", make_compensator(params, h_computer, compensator), flat
     )

@@ -336,7 +336,7 @@ def _run_held(params: HybridLoopParams, loop: _Continuous, n: int, rule: _StopRu
     state = (*_initial_state(params, loop), 0.0)  # u: no held force before t = 0
     on_now = loop.mode_of(state, False) == on
     new = (lambda m: np.zeros(m)) if compiled else (lambda m: [0.0] * m)
-    F, vs, fas, fcs = new(n + 2 + 4096), new(4096), new(4096), new(4096)
+    F, vs, fas, fcs = new(n + 2 + 16384), new(16384), new(16384), new(16384)
     k, checked, touched = 0, False, False
     while True:
         state, on_now, touched, k, f_act, f_comp, full = ticks(

@@ -26,12 +26,11 @@ import numpy as np
 from pydrake.systems.framework import DiagramBuilder, System
 
 from hybridtable.errors import MeasurementError, ParameterError, SimulationError
-from hybridtable.loop.builder import add_hybrid_loop
+from hybridtable.loop.builder import add_hybrid_loop, default_sensor
 from hybridtable.loop.params import HybridLoopParams
 from hybridtable.loop.simulation import SimulationResult, run_loop
 from hybridtable.measurement.run_format import Run, RunInfo
 from hybridtable.systems.contact import UnilateralSpringContact
-from hybridtable.systems.sensor import ForceSensorDelay
 from hybridtable.systems.table import SecondOrderTable
 
 __all__ = [
@@ -149,7 +148,7 @@ class RigPhysics:
     def make_sensor(self, params: HybridLoopParams) -> System:
         if self.sensor:
             return self.sensor(params)
-        return ForceSensorDelay(params.rig.sensor, "sampled", params.sample_period_s)
+        return default_sensor(params)
 
 
 def rig_params(info: RunInfo, source: str | None = None) -> HybridLoopParams:
