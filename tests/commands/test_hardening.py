@@ -7,6 +7,7 @@ import json
 import math
 from pathlib import Path
 
+import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
@@ -93,6 +94,11 @@ def test_a_model_file_whose_computer_runs_no_compensator_is_refused(tmp_path, ca
     bad.write_text(json.dumps(doc))
     text = _error(capsys, ["simulate", "--model", str(bad)])
     assert "nominal.spacecraft_mass_kg is an integer of 401 digits" in text
+    doc = json.loads(model.read_text())
+    doc["runs"][0]["cor_measured"] = -1.0
+    bad.write_text(json.dumps(doc))
+    text = _error(capsys, ["simulate", "--model", str(bad)])
+    assert "runs[0]: cor_measured must be a number between 0 and 100" in text
 
 
 def test_a_six_dof_misalignment_is_said_in_the_files_degrees(tmp_path, capsys):
@@ -124,3 +130,49 @@ def test_a_spinning_port_is_not_passed_off_as_a_bounce(tmp_path, capsys):
     assert doc["margins"]["stable"] is False
     assert doc["cor_normal"] > 10 and "the body's spin" in doc["note"]
     assert "note: cor_normal" in capsys.readouterr().out
+
+
+def test_a_six_dof_given_stiffness_beyond_any_contact_is_refused(tmp_path, capsys):
+    scenario = tmp_path / "stiff.toml"
+    rows = ", ".join(
+        "[" + ", ".join("1e30" if i == j else "0.0" for j in range(6)) + "]" for i in range(6)
+    )
+    scenario.write_text(
+        OFFSET.read_text().replace(
+            'stiffness_model = "linearized"',
+            f'stiffness_model = "given"\nstiffness_matrix = [{rows}]',
+        )
+    )
+    text = _error(capsys, ["simulate6", str(scenario)])
+    assert "stiffness_matrix" in text and "at most 1e+10" in text and "got 1e+30" in text
+
+
+def test_explain_runs_repeated_rows_once_and_reads_them_as_one_point(monkeypatch):
+    from hybridtable.effects.registry import get_effect
+    from hybridtable.explain import patterns
+    from hybridtable.explain.model import CorModel, EffectAt, table_scale
+    from hybridtable.explain.table import read_cor_table
+
+    table = read_cor_table(ROOT / "examples" / "explain" / "table4_experiment_sdmdc.csv")
+    cases = [(r.compensator, r.conditions) for r in table.rows]
+    repeated = [c for c in cases for _ in range(50)]  # 400 rows, 8 conditions
+    calls = []
+    model = CorModel(())
+    real = model._ln_cor
+    monkeypatch.setattr(model, "_ln_cor", lambda c, v: calls.append(c) or real(c, v))
+    once = model.predict_values(repeated, {})
+    assert len(calls) == len(cases)
+    np.testing.assert_array_equal(once, np.repeat(model.predict_values(cases, {}), 50))
+    # the trends of the repeated table are the table's, its pairs naming first rows
+    y = np.log([r.cor for r in table.rows])
+    sigma = np.full(len(y), 0.01)
+    effects = [EffectAt(get_effect("lead_time_error"), table_scale(cases))]
+    alone = patterns.trends(cases, y, sigma, once[::50], effects)
+    many = patterns.trends(
+        repeated, np.repeat(y, 50), np.repeat(sigma, 50) * math.sqrt(50), once, effects
+    )
+    assert len(alone) == len(many) > 0
+    for a, b in zip(alone, many, strict=True):
+        np.testing.assert_allclose(a["measured_change"], b["measured_change"], rtol=1e-12)
+        assert a["miss_sigma"] == pytest.approx(b["miss_sigma"], rel=1e-9)
+    assert [t["pairs"] for t in many] == [[[50 * a, 50 * b] for a, b in t["pairs"]] for t in alone]

@@ -5,6 +5,7 @@ that outputs NaN in a run, exit 1 at once (:mod:`hybridtable._plugins`)."""
 
 from __future__ import annotations
 
+import json
 import textwrap
 import time
 from pathlib import Path
@@ -129,3 +130,92 @@ def test_diagnose_and_explain_stop_on_a_failing_plugin(plugin, capsys):
     argv = ["explain", str(TABLE3), "--plugin", f"{plugin}:RAISES"]
     text = _one_line(capsys, [*argv, "--effects", "guard_raises", "--no-progress"], 2)
     assert "apply raised RuntimeError" in text
+
+
+#: A plug-in that registers compensators (docs/compensators.md) which misbehave.
+COMPENSATORS = textwrap.dedent(
+    '''
+    import math
+    from pydrake.systems.framework import LeafSystem
+    from hybridtable.compensators.registry import register_compensator
+
+    print("a plug-in that talks while it loads")
+
+    class NanAfter(LeafSystem):
+        """The measured force, then NaN from 20 ms on."""
+        def __init__(self):
+            super().__init__()
+            self.DeclareVectorInputPort("measured_force", 1)
+            self.DeclareVectorInputPort("measured_force_rate", 1)
+            self.DeclareVectorInputPort("table_motion", 3)
+            self.DeclareVectorInputPort("commanded_state", 2)
+            def out(context, output):
+                f = float(self.get_input_port(0).Eval(context)[0])
+                output.SetFromVector([math.nan if context.get_time() > 0.02 else f])
+            self.DeclareVectorOutputPort("compensated_force", 1, out)
+
+    for name, factory in (("guard_nan", lambda p, h: NanAfter()),
+                          ("guard_none", lambda p, h: None),
+                          ("guard_raises", lambda p, h: 1 / 0)):
+        register_compensator(name, factory, replace=True)
+    '''
+)
+
+
+@pytest.fixture
+def compensators(tmp_path):
+    """The compensators beside the effects of :data:`PLUGIN` (``--plugin FILE:RAISES``)."""
+    path = tmp_path / "compensators.py"
+    path.write_text(PLUGIN + COMPENSATORS, encoding="utf-8")
+    yield path
+    for name in list(registry.EFFECTS):
+        if name.startswith("guard_"):
+            registry.unregister_effect(name)
+
+
+@pytest.mark.parametrize(
+    "name, code, words",
+    [
+        ("guard_nan", 1, "is not finite"),
+        ("guard_none", 2, "compensator 'guard_none''s factory returned NoneType, not a Drake"),
+        ("guard_raises", 2, "compensator 'guard_raises''s factory raised ZeroDivisionError"),
+    ],
+)
+def test_a_plugin_compensator_that_fails_is_one_line(compensators, capsys, name, code, words):
+    argv = ["simulate", "--plugin", f"{compensators}:RAISES", "--compensator", name]
+    text = _one_line(capsys, [*argv, "--initial-velocity-m-per-s", "0.2"], code)
+    assert words in text
+
+
+def test_a_plugins_print_leaves_json_on_stdout_alone(compensators, capsys):
+    assert main(["effects", "--plugin", f"{compensators}:NAN_SENSOR", "--json", "-"]) == 0
+    out, err = capsys.readouterr()
+    json.loads(out)
+    assert "a plug-in that talks" in err
+
+
+def test_a_given_system_without_the_loops_ports_names_the_connection(tmp_path, capsys):
+    path = tmp_path / "wrong.py"
+    path.write_text(
+        PLUGIN
+        + textwrap.dedent(
+            """
+            class TwoWide(LeafSystem):
+                def __init__(self):
+                    super().__init__()
+                    self.DeclareVectorInputPort("force", 1)
+                    self.DeclareVectorOutputPort(
+                        "measured_force", 2, lambda c, o: o.SetFromVector([0.0, 0.0]))
+
+            WIDE = _effect("guard_wide",
+                           lambda spec, v, s: spec.wrap("sensor", lambda p, sensor: TwoWide()))
+            """
+        ),
+        encoding="utf-8",
+    )
+    argv = ["simulate", "--plugin", f"{path}:WIDE", "--add", "guard_wide:gain=1"]
+    text = _one_line(capsys, [*argv, "--sample-rate-hz", "1000"], 2)
+    assert "cannot wire the loop's force_sensor.measured_force to compensator" in text
+    for name in list(registry.EFFECTS):
+        if name.startswith("guard_"):
+            registry.unregister_effect(name)
