@@ -33,6 +33,8 @@ from hybridtable.errors import WriteError
 
 __all__ = [
     "overwrite_policy",
+    "command_outputs",
+    "keep_output",
     "write_text_atomic",
     "write_bytes_atomic",
     "atomic_path",
@@ -76,6 +78,53 @@ def overwrite_policy(replace: bool) -> Iterator[None]:
         _REPLACE.pop()
 
 
+#: The outputs the running command created (none was there before), innermost
+#: :func:`command_outputs` last; None outside one.
+_CREATED: list[list[Path] | None] = [None]
+
+
+def _created(target: Path) -> None:
+    if _CREATED[-1] is not None:
+        _CREATED[-1].append(target)
+
+
+def keep_output(path: str | Path) -> None:
+    """Keep ``path`` even if its command fails later (a campaign's results, which
+    ``--resume`` continues)."""
+    if _CREATED[-1] is not None:
+        _CREATED[-1][:] = [p for p in _CREATED[-1] if p != Path(path)]
+
+
+@contextlib.contextmanager
+def command_outputs() -> Iterator[None]:
+    """One command's outputs are all written or none is new: when the block raises,
+    the outputs it created (where none was before) are removed, and the error
+    names them. An output that replaced a file (``--force``) stays replaced."""
+    _CREATED.append([])
+    try:
+        yield
+    except BaseException as err:
+        removed = []
+        for path in reversed(_CREATED[-1]):
+            try:
+                if path.is_dir() and not path.is_symlink():
+                    shutil.rmtree(path)
+                else:
+                    path.unlink()
+                removed.append(str(path))
+            except OSError:
+                pass
+        if removed and err.args and isinstance(err.args[0], str):
+            err.args = (
+                f"{err.args[0]}; the command's other new outputs were removed: "
+                f"{', '.join(reversed(removed))}",
+                *err.args[1:],
+            )
+        raise
+    finally:
+        _CREATED.pop()
+
+
 def _write_failed(target: Path, err: OSError | WriteError) -> WriteError:
     if isinstance(err, WriteError):  # a file of a staged folder: said as the folder
         why = err.why
@@ -89,7 +138,10 @@ def _write_failed(target: Path, err: OSError | WriteError) -> WriteError:
 def _publish(tmp: str, target: Path, replace: bool) -> None:
     """Move the finished ``tmp`` to ``target``: replacing, or only if no file is there."""
     if replace:
+        existed = os.path.lexists(target)
         os.replace(tmp, target)
+        if not existed:
+            _created(target)
         return
     try:
         os.link(tmp, target)
@@ -102,6 +154,7 @@ def _publish(tmp: str, target: Path, replace: bool) -> None:
         if os.path.lexists(target):
             raise WriteError(f"{target} exists now; nothing was written") from None
         os.replace(tmp, target)
+    _created(target)
 
 
 @contextlib.contextmanager
@@ -182,6 +235,7 @@ def staged_folder(path: str | Path) -> Iterator[Staging]:
         os.chmod(stage, 0o777 & ~_umask())
         if not target.exists():
             os.replace(stage, target)
+            _created(target)
             return
         for src in sorted(stage.rglob("*")):
             dst = target / src.relative_to(stage)

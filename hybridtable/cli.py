@@ -15,7 +15,7 @@ import argparse
 import os
 import sys
 
-from hybridtable._files import overwrite_policy
+from hybridtable._files import command_outputs, overwrite_policy
 from hybridtable.commands import (
     compare,
     compensators,
@@ -145,7 +145,7 @@ def main(argv: list[str] | None = None) -> int:
     stdout = sys.stdout
     sys.stdout = reader = _ReaderMayLeave(stdout)
     try:
-        with overwrite_policy(bool(getattr(args, "force", False))):
+        with overwrite_policy(bool(getattr(args, "force", False))), command_outputs():
             code = int(args.func(args) or 0)
         # The files are written; only what went to the console was lost.
         return 141 if reader.gone and getattr(args, "json", None) == "-" else code

@@ -90,6 +90,8 @@ import pytest  # noqa: E402
 from hybridtable._files import (  # noqa: E402
     MAX_NESTING,
     atomic_path,
+    command_outputs,
+    keep_output,
     overwrite_policy,
     read_user_json,
     read_user_toml,
@@ -173,3 +175,37 @@ def test_a_full_disk_is_one_line_and_leaves_nothing(tmp_path, argv, output):
     assert len(lines) == 1 and "Traceback" not in done.stderr
     assert f"could not write {output}" in lines[0] and "nothing of it was written" in lines[0]
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.slow
+def test_a_command_whose_later_output_fails_removes_its_earlier_ones(tmp_path):
+    """All of a command's new outputs or none: the JSON written before the plot
+    that filled the disk goes too, and the line says so."""
+    done = subprocess.run(
+        [sys.executable, "-m", "hybridtable.cli", "simulate", "--json", "out.json"]
+        + ["--plot", "fig.png"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        preexec_fn=_small_disk,
+        timeout=600,
+        env={**os.environ, "PYTHONPATH": str(ROOT), "MPLBACKEND": "Agg"},
+    )
+    lines = [line for line in done.stderr.splitlines() if "error:" in line]
+    assert done.returncode == 1 and len(lines) == 1, done.stderr[-2000:]
+    assert "could not write fig.png" in lines[0]
+    assert "other new outputs were removed: out.json" in lines[0]
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_command_outputs_keeps_what_it_replaced_and_what_it_is_told_to_keep(tmp_path):
+    old, new, kept = tmp_path / "old.json", tmp_path / "new.json", tmp_path / "rows.parquet"
+    old.write_text("before")
+    with pytest.raises(RuntimeError, match="new outputs were removed: .*new.json"):
+        with overwrite_policy(True), command_outputs():
+            write_text_atomic(old, "replaced")
+            write_text_atomic(new, "new")
+            write_text_atomic(kept, "rows")
+            keep_output(kept)
+            raise RuntimeError("the next step failed")
+    assert old.read_text() == "replaced" and kept.exists() and not new.exists()

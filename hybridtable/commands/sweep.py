@@ -165,10 +165,17 @@ def run(args: argparse.Namespace) -> int:
     figures: list[str] = []
     if args.report and table.num_rows:
         from hybridtable._files import staged_folder
+        from hybridtable.errors import WriteError
         from hybridtable.reports.sweep import write_report
 
-        with staged_folder(args.report) as stage:
-            written = write_report(table, spec, summary, stage.path)
+        try:
+            with staged_folder(args.report) as stage:
+                written = write_report(table, spec, summary, stage.path)
+        except WriteError as err:  # the campaign's rows are written: say where they are
+            raise WriteError(
+                f"{err}; the campaign's {table.num_rows} rows are complete in {args.out} "
+                "(--resume --report writes the report once there is room)"
+            ) from None
         figures = [str(stage.final(f)) for f in written]
     if not quiet:
         print(format_summary(spec.name, summary, spec.metrics))

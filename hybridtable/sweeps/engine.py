@@ -34,6 +34,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from hybridtable._files import keep_output
 from hybridtable.errors import CommandError
 from hybridtable.sweeps.plan import SweepSpec
 from hybridtable.sweeps.runner import blank_row, row_problem, run_many
@@ -246,6 +247,7 @@ def run_campaign(
         # on one new --out, the second stops here instead of replacing the
         # first's rows later (WriteError). From here on the file is ours.
         write_results(path, spec, [])
+        keep_output(path)  # its rows stay if the command fails later (--resume goes on)
     try:
         return _campaign(
             spec,
