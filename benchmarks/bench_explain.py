@@ -1,60 +1,68 @@
-"""Benchmark: wall time of ``explain`` on the paper's tables, serial against parallel.
+"""Benchmark: wall time of ``hybridtable explain`` on the shipped CoR tables, as a user runs it.
 
-Explains each example table (``examples/explain/``) with ``workers=1`` and with
-``workers=N`` in one run, the engine's cache cleared before each, and prints the
-wall and process CPU time, the number of models fitted and the ratio serial /
-parallel. Target: Table 3 (4 rows, continuous rig computer) under 30 s serial
-on a 2-core machine; the parallel ratio close to the number of cores.
+Each table is explained by a fresh ``python -m hybridtable.cli explain TABLE``
+process with the default workers (the fast engine compiles its held ticks in
+each process, so a warm process would flatter it). With ``--old DIR`` (a
+checkout of an older commit, e.g. ``git worktree add /tmp/old eae8025``) the
+same commands run on that code too, alternately, in the same run, and the
+ratio old / new is printed. Target (issue 34): each shipped table at most
+30 s on the 2-core machine.
 
-Usage: python benchmarks/bench_explain.py [--jobs N] [--tables NAME ...] [--json FILE]
+Usage: python benchmarks/bench_explain.py [--old DIR] [--repeat N] [--tables NAME ...]
+       [--workers N] [--json FILE]
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
+import statistics
+import subprocess
+import sys
 import time
 from pathlib import Path
 
-from hybridtable.explain.explain import explain_table
-from hybridtable.explain.model import _ln_cor_of
-from hybridtable.explain.table import read_cor_table
-
-ROOT = Path(__file__).resolve().parents[1] / "examples" / "explain"
+ROOT = Path(__file__).resolve().parents[1]
+TABLES = ROOT / "examples" / "explain"
+TARGET_S = 30.0
 
 
-def _time(table, jobs: int) -> tuple[float, float, int]:
-    _ln_cor_of.cache_clear()
-    wall, cpu = time.perf_counter(), time.process_time()
-    expl = explain_table(table, workers=jobs)
-    return time.perf_counter() - wall, time.process_time() - cpu, len(expl.fits)
+def _time(code: Path, table: Path, workers: int | None) -> float:
+    argv = [sys.executable, "-m", "hybridtable.cli", "explain", str(table), "--no-progress"]
+    if workers is not None:
+        argv += ["--workers", str(workers)]
+    env = {**os.environ, "PYTHONPATH": str(code), "MPLBACKEND": "Agg"}
+    start = time.perf_counter()
+    subprocess.run(argv, env=env, cwd=code, check=True, capture_output=True)
+    return time.perf_counter() - start
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--jobs", type=int, default=2)
-    ap.add_argument("--tables", nargs="*", default=["table3_experiment", "table1_simulation"])
-    ap.add_argument("--json")
+    ap.add_argument("--old", type=Path, help="a checkout of the commit to compare with")
+    ap.add_argument("--repeat", type=int, default=1, help="runs of each command (median)")
+    ap.add_argument("--workers", type=int, help="explain's --workers (default: its own)")
+    ap.add_argument("--tables", nargs="*", default=sorted(p.stem for p in TABLES.glob("*.csv")))
+    ap.add_argument("--json", help="write the figures to this file")
     args = ap.parse_args()
     out = {}
     for name in args.tables:
-        table = read_cor_table(ROOT / f"{name}.csv")
-        serial = _time(table, 1)
-        parallel = _time(table, args.jobs)
-        out[name] = {
-            "rows": len(table.rows),
-            "models": serial[2],
-            "serial_wall_s": serial[0],
-            "serial_cpu_s": serial[1],
-            "parallel_wall_s": parallel[0],
-            "jobs": args.jobs,
-            "speed_up": serial[0] / parallel[0],
-        }
-        print(
-            f"{name}: {len(table.rows)} rows, {serial[2]} models: serial {serial[0]:.1f} s "
-            f"(CPU {serial[1]:.1f} s), {args.jobs} jobs {parallel[0]:.1f} s, "
-            f"speed-up {serial[0] / parallel[0]:.2f}"
-        )
+        table = TABLES / f"{name}.csv"
+        new, old = [], []
+        for _ in range(args.repeat):
+            new.append(_time(ROOT, table, args.workers))
+            if args.old is not None:
+                old.append(_time(args.old, table, args.workers))
+        row = {"new_s": statistics.median(new), "within_target": max(new) <= TARGET_S}
+        line = f"{name}: {row['new_s']:.1f} s"
+        if old:
+            row["old_s"] = statistics.median(old)
+            row["old_over_new"] = row["old_s"] / row["new_s"]
+            line += f", old {row['old_s']:.1f} s, {row['old_over_new']:.1f}x faster"
+        line += f" (target {TARGET_S:g} s: {'met' if row['within_target'] else 'NOT met'})"
+        print(line, flush=True)
+        out[name] = row
     if args.json:
         Path(args.json).write_text(json.dumps(out, indent=1))
 

@@ -111,23 +111,30 @@ def _json_document(args, spec, summary, result, figures) -> dict:
         ]
         if unset:
             row["note"] = f"{', '.join(unset)} null: the run {row['status']} ({row['message']})"
-    return {
-        "verdict": verdict(spec.name, summary),
-        "spec": doc_spec,
-        "out": str(args.out),
-        "complete": result.complete,
-        "interrupted": result.interrupted,
-        "resumed": result.resumed,
-        "rerun": [{"run": run, "why": why} for run, why in result.rerun],
-        "workers": result.workers,
-        "scheduler": result.scheduler,
-        "dashboard": result.dashboard,
-        "wall_time_s": result.wall_time_s,
-        "compute_time_s": result.compute_time_s,
-        "retried_runs": result.retried,
-        "figures": figures,
-        **summary,
+    idle = {  # a resume with every row already in the file starts no cluster
+        "dashboard": "dashboard null: no Dask cluster ran (nothing was left to run)",
+        "scheduler": "scheduler null: no Dask cluster ran (nothing was left to run)",
     }
+    return note_unset(
+        {
+            "verdict": verdict(spec.name, summary),
+            "spec": doc_spec,
+            "out": str(args.out),
+            "complete": result.complete,
+            "interrupted": result.interrupted,
+            "resumed": result.resumed,
+            "rerun": [{"run": run, "why": why} for run, why in result.rerun],
+            "workers": result.workers,
+            "scheduler": result.scheduler,
+            "dashboard": result.dashboard,
+            "wall_time_s": result.wall_time_s,
+            "compute_time_s": result.compute_time_s,
+            "retried_runs": result.retried,
+            "figures": figures,
+            **summary,
+        },
+        idle if result.written == result.resumed else {},
+    )
 
 
 def run(args: argparse.Namespace) -> int:
