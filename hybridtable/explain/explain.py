@@ -33,6 +33,7 @@ from hybridtable.explain.model import EffectAt, loop_of, table_scale
 from hybridtable.explain.patterns import WINDOW_LN, interactions, readings, trends
 from hybridtable.explain.separate import LOOKALIKE_BIC, lookalikes, separating_runs
 from hybridtable.explain.table import CorTable
+from hybridtable.loop.fast import prepare_fast
 
 __all__ = ["ALPHA", "MAX_DISTINCT_ROWS", "MODEL_ERROR_LN", "Explanation", "explain_table"]
 
@@ -222,6 +223,8 @@ def explain_table(
         )
     rig = table_scale(cases)
     effects, cannot_run = _runnable([EffectAt(e, rig) for e in effects], cases)
+    if workers > 1:  # compiled once here, inherited by every forked worker
+        prepare_fast(cond.loop_params(comp) for comp, cond in dict.fromkeys(cases))
     fits, not_fitted = fit_models(
         effects, cases, y, sigma, max_effects, progress=progress, workers=workers
     )

@@ -36,6 +36,7 @@ the first tick at or after each of its check times.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import replace
 
 import numpy as np
@@ -57,17 +58,21 @@ from hybridtable.loop.simulation import (
     separation_rule,
 )
 from hybridtable.loop.ticks import (
+    CONTACT,
+    MDC,
+    OFF,
+    ON,
     bound,
     compensator_function,
+    compile_loops,
     contact_function,
-    gate_function,
-    held_ticks,
+    mode_function,
+    tick_law,
+    tick_loop,
 )
 from hybridtable.systems.sensor import continuous_delay_period, delay_samples
 
-__all__ = ["fast_unsupported", "simulate_fast"]
-
-_OFF = (False, False, False)  # mode (force on, contact term, MDC term)
+__all__ = ["fast_unsupported", "prepare_fast", "simulate_fast"]
 
 
 def fast_unsupported(params: HybridLoopParams) -> str | None:
@@ -191,10 +196,7 @@ class _Continuous:
         self.a = a
         self.b = np.array([0.0, -1.0 / params.spacecraft_mass_kg, 0.0, 0.0])
         self.g_raw = np.array([0.0, 0.0, self.k, self.c, 0.0])  # k p_act + c v_act
-        # The contact and the gate as plain functions (the laws, compiled once).
-        self.contact = bound(contact_function(), self.k, self.c)
-        self.gate_open = bound(gate_function(law.gate), law.force_deadband_n)
-        self.cache: dict[tuple, tuple] = {}
+        self.cache: dict[int, tuple] = {}
         # The switching functions (functional of z, offset) whose signs set the mode.
         sig = []
         if self.undelayed or not self.by_force:
@@ -206,21 +208,26 @@ class _Continuous:
             sig += [(self.force_row(m), 0.0) for m in self.modes_on()]
         self.sigmas = sig
         self.switches = self.undelayed or (self.mdc and (self.clamp or not self.by_force))
+        self._mode = mode_function(law.gate, law.motion_correction)
+        self._law = tick_law(self)
+        self._rows = [(0.0,) * 5] * 8  # the force of each mode over z
+        for mode in self.modes_on():
+            self._rows[mode] = tuple(self.force_row(mode).tolist())
 
-    def modes_on(self) -> list[tuple]:
+    def modes_on(self) -> list[int]:
         """The modes with a force (contact term only without delay, MDC term if any)."""
-        contacts, mdcs = dict.fromkeys((False, self.undelayed)), dict.fromkeys((False, self.mdc))
-        return [(True, c, m) for c in contacts for m in mdcs]
+        contacts = dict.fromkeys((0, CONTACT if self.undelayed else 0))
+        mdcs = dict.fromkeys((0, MDC if self.mdc else 0))
+        return [ON + c + m for c in contacts for m in mdcs]
 
-    def force_row(self, mode) -> np.ndarray:
+    def force_row(self, mode: int) -> np.ndarray:
         """The compensated force of ``mode`` as a functional of ``z`` (N)."""
-        on, contact, mdc = mode
         row = np.zeros(5)
-        if on:
+        if mode & ON:
             row[4] = 1.0
-            if contact:  # no delay: the measured force is the contact's
+            if mode & CONTACT:  # no delay: the measured force is the contact's
                 row += self.lead_f * self.g_raw
-            if mdc:
+            if mode & MDC:
                 row += self.g_mdc
         return row
 
@@ -238,7 +245,7 @@ class _Continuous:
             e[2:4] = e[0:2]  # keeps p_act == p_des bit for bit
         return e
 
-    def mode_data(self, mode):
+    def mode_data(self, mode: int):
         """(exact step over h, force row as a tuple) of ``mode``, cached."""
         if mode not in self.cache:
             self.cache[mode] = (
@@ -247,21 +254,20 @@ class _Continuous:
             )
         return self.cache[mode]
 
-    def mode_of(self, z, gate: bool):
-        """The force law's mode at ``z`` (``gate``: the held reading is above the deadband)."""
-        p, v, pa, va, u = z
-        contact = False
-        if self.undelayed:
-            raw = self.contact(pa, va)
-            contact = raw > 0.0
-            gate = contact and self.gate_open(raw)
-        if self.by_force and not gate:
-            return _OFF
-        mdc = self.mdc and self.law.corrects_motion(pa > 0.0)
-        mode = (True, contact, mdc)
-        if self.clamp and sum(f * x for f, x in zip(self.mode_data(mode)[1], z, strict=True)) < 0.0:
-            return _OFF
-        return mode
+    def tables(self, compiled: bool):
+        """The tick loop's steps over h and force rows of the modes it can reach,
+        indexed by the mode (zeros elsewhere); arrays for a compiled loop. A held
+        loop reaches only "off" and the force with its MDC term, if any."""
+        modes = self.modes_on() if self.switches else [ON + (MDC if self.mdc else 0)]
+        steps = [(0.0,) * 20] * 8
+        for mode in (OFF, *modes):
+            steps[mode] = tuple(float(x) for x in self.exp(mode, self.h)[:4].ravel())
+        return (np.array(steps), np.array(self._rows)) if compiled else (steps, self._rows)
+
+    def mode_of(self, z, gate: bool) -> int:
+        """The force law's mode at ``z`` (``gate``: the held reading is above the
+        deadband): :func:`~hybridtable.loop.ticks.mode_function`, the tick loop's."""
+        return self._mode(*z, gate, self._rows, self._law)
 
     def interval(self, z, mode, gate: bool):
         """State after one tick from ``z`` in ``mode``, with every switch located; and
@@ -321,89 +327,44 @@ def _initial_state(params: HybridLoopParams, loop: _Continuous) -> tuple[float, 
     return p, v, pa, va
 
 
-def _run_held(params: HybridLoopParams, loop: _Continuous, n: int, rule: _StopRule):
-    """Tick log ``(v, f_act, f_comp)`` of a continuous loop whose force law holds over
-    each tick: :func:`~hybridtable.loop.ticks.held_ticks` between the stop rule's
-    checks."""
-    h = loop.h
-    on = (True, False, loop.mdc)
-    c0, c1, c2, c3, _ = loop.mode_data(on)[1]
-    e_on = tuple(float(x) for x in loop.exp(on, h)[:4].ravel())
-    e_off = tuple(float(x) for x in loop.exp(_OFF, h)[:4].ravel())
-    law = (c0, c1, c2, c3, loop.lead_f, loop.lead_prev, loop.k, loop.c)
-    law += (loop.law.force_deadband_n, float(loop.by_force), float(loop.clamp))
-    ticks, compiled = held_ticks(contact_function(), gate_function(loop.law.gate))
+def _run_continuous(params: HybridLoopParams, h: float, n: int, rule: _StopRule):
+    """Tick log ``(v, f_act, f_comp)`` of a continuous loop (before each tick's update):
+    :func:`~hybridtable.loop.ticks.tick_loop` between the stop rule's checks, and
+    :meth:`_Continuous.interval` where the force law switches inside a tick."""
+    loop = _Continuous(params, h)
+    ticks, compiled = tick_loop(loop.law.gate, loop.law.motion_correction)
+    steps, rows = loop.tables(compiled)
+    law = tick_law(loop)
     state = (*_initial_state(params, loop), 0.0)  # u: no held force before t = 0
-    on_now = loop.mode_of(state, False) == on
+    mode = loop.mode_of(state, False)
+    # Room for the records: a compiled loop's zeros are not touched until written.
+    room = 1 << 17 if compiled else 1 << 14
     new = (lambda m: np.zeros(m)) if compiled else (lambda m: [0.0] * m)
-    F, vs, fas, fcs = new(n + 2 + 16384), new(16384), new(16384), new(16384)
+    F, vs, fas, fcs = new(n + 2 + room), new(room), new(room), new(room)
     k, checked, touched = 0, False, False
     while True:
-        state, on_now, touched, k, f_act, f_comp, full = ticks(
-            state, on_now, touched, e_on, e_off, law, F, vs, fas, fcs, k, n, h, rule.due, checked
+        state, mode, touched, k, f_act, f_comp, why, gate = ticks(
+            state, mode, touched, steps, rows, law, F, vs, fas, fcs, k, n, h, rule.due, checked
         )
         checked = False
-        if full:  # twice the room, the records kept
+        if why == 1:  # twice the room, the records kept
             more = len(vs)
             F, vs, fas, fcs = (_grown(x, more, compiled) for x in (F, vs, fas, fcs))
-            continue
-        rule.touched = touched
-        if rule.check_tick(k, f_act, F[k + 1], f_comp):
-            vs[k], fas[k], fcs[k] = state[1], f_act, f_comp
-            return vs[: k + 1], fas[: k + 1], fcs[: k + 1]
-        checked = True
+        elif why == 2:  # the mode switches inside tick k: located on the exact trajectory
+            state, mode = loop.interval(state, mode, gate)
+            k += 1
+        else:
+            rule.touched = touched
+            f_mea = f_act if loop.undelayed else F[k + 1]
+            if rule.check_tick(k, f_act, f_mea, f_comp):
+                vs[k], fas[k], fcs[k] = state[1], f_act, f_comp
+                return vs[: k + 1], fas[: k + 1], fcs[: k + 1]
+            checked = True
 
 
 def _grown(x, m: int, compiled: bool):
     """``x`` with room for ``m`` more numbers (zeros)."""
     return np.concatenate([x, np.zeros(m)]) if compiled else x + [0.0] * m
-
-
-def _run_continuous(params: HybridLoopParams, h: float, n: int, rule: _StopRule):
-    """Tick log ``(v, f_act, f_comp)`` of a continuous loop (before each tick's update)."""
-    loop = _Continuous(params, h)
-    if not loop.switches:
-        return _run_held(params, loop, n, rule)
-    lead_f, lead_prev = loop.lead_f, loop.lead_prev
-    contact, gate_open = loop.contact, loop.gate_open
-    undelayed, mode_of, mode_data = loop.undelayed, loop.mode_of, loop.mode_data
-    on = (True, False, loop.mdc)
-    c0, c1, c2, c3, _ = mode_data(on)[1]
-    p, v, pa, va = _initial_state(params, loop)
-    u = 0.0  # the held part of the force (none before t = 0)
-    mode = mode_of((p, v, pa, va, u), False)
-    F = [0.0] * (n + 2)  # F[j] = f_act(t_j) at index j + n + 2; zeros before t = 0
-    vs, fas, fcs = [], [], []
-    k, due = 0, rule.due
-    while True:
-        f_act = contact(pa, va)
-        if mode is on:
-            f_comp = c0 * p + c1 * v + c2 * pa + c3 * va + u
-        elif mode == _OFF:
-            f_comp = 0.0
-        else:
-            row = mode_data(mode)[1]
-            f_comp = row[0] * p + row[1] * v + row[2] * pa + row[3] * va + row[4] * u
-        vs.append(v)
-        fas.append(f_act)
-        fcs.append(f_comp)
-        if f_act > 0.0:
-            rule.touched = True
-        if k * h >= due:
-            if rule.check_tick(k, f_act, f_act if undelayed else F[k + 1], f_comp):
-                return vs, fas, fcs
-            due = rule.due
-        if undelayed:  # the force rows hold lead_f f_act(t); u the previous sample's part
-            u, gate = lead_prev * f_act, False
-        else:
-            F.append(f_act)
-            f_mea = F[k + 2]
-            u, gate = lead_f * f_mea + lead_prev * F[k + 1], gate_open(f_mea)
-        z = (p, v, pa, va, u)
-        (p, v, pa, va, u), mode = loop.interval(z, mode_of(z, gate), gate)
-        if mode == on:
-            mode = on
-        k += 1
 
 
 def _run_sampled(params: HybridLoopParams, h: float, n_delay: int, rule: _StopRule):
@@ -453,6 +414,18 @@ def _run_sampled(params: HybridLoopParams, h: float, n_delay: int, rule: _StopRu
         fas.append(f_act)
         fcs.append(f_comp)
         k += 1
+
+
+def prepare_fast(runs: Iterable[HybridLoopParams]) -> int:
+    """Compile now the tick loops these runs need (a process about to fork the
+    workers that run them compiles once for all: :func:`~hybridtable.loop.ticks.compile_loops`).
+    Returns how many loops were compiled."""
+    variants = []
+    for params in runs:
+        if fast_unsupported(params) is None:
+            law = _law(params)[0]
+            variants.append((law.gate, law.motion_correction))
+    return compile_loops(variants)
 
 
 def simulate_fast(params: HybridLoopParams) -> ContactMetrics:

@@ -33,18 +33,28 @@ import types
 from collections.abc import Callable
 from typing import Any
 
+import numpy as np
+
 from hybridtable.laws.compensation import CompensationLaw, backward_difference, compensate
 from hybridtable.laws.compiled import python_function
 from hybridtable.laws.contact import spring_contact_force
 
 __all__ = [
     "COMPILE_AFTER_RUNS",
+    "OFF",
+    "ON",
+    "CONTACT",
+    "MDC",
     "bound",
     "compensator_function",
+    "compile_loops",
     "compiled_available",
     "contact_function",
+    "corrects_function",
     "gate_function",
-    "held_ticks",
+    "mode_function",
+    "tick_law",
+    "tick_loop",
 ]
 
 #: Runs a process makes with the Python loop before it compiles the loop: a run
@@ -63,52 +73,104 @@ def compiled_available() -> bool:
     return True
 
 
-def _loop(contact: Callable[..., float], gate_open: Callable[..., bool]):
-    """The held-tick loop over the traced ``contact (p, v, k, c)`` and ``gate_open
-    (f, dead band)`` laws (plain functions, or numba's compilations of them)."""
+#: A mode of the continuous loop between switches, as bits of an int: the force
+#: acts (1), with the contact's own term (2: no delay), with the MDC term (4).
+OFF, ON, CONTACT, MDC = 0, 1, 2, 4
 
-    def ticks(state, on, touched, e_on, e_off, law, F, vs, fas, fcs, k, n, h, due, checked):
+
+def _mode(contact, gate_open, corrects):
+    """``mode(p, v, pa, va, u, gate, rows, law) -> int``: the force law's mode at the
+    state ``(p, v, pa, va, u)`` with the held reading's gate ``gate``
+    (:meth:`hybridtable.loop.fast._Continuous.mode_of`); ``rows[m]``: the force
+    of mode ``m`` over the state; ``law``: the loop's numbers (:func:`tick_law`)."""
+
+    def mode(p, v, pa, va, u, gate, rows, law):
+        _, _, k_con, c_con, db, by_force, clamp, undelayed, mdc_on, _ = law
+        touching = False
+        if undelayed != 0.0:  # the gate reads the contact's own force, now
+            raw = contact(pa, va, k_con, c_con)
+            touching = raw > 0.0
+            gate = touching and gate_open(raw, db)
+        if by_force != 0.0 and not gate:
+            return OFF
+        code = ON
+        if touching:
+            code += CONTACT
+        if mdc_on != 0.0 and corrects(pa):
+            code += MDC
+        if clamp != 0.0:
+            r0, r1, r2, r3, r4 = rows[code]
+            if r0 * p + r1 * v + r2 * pa + r3 * va + r4 * u < 0.0:
+                return OFF
+        return code
+
+    return mode
+
+
+def _loop(mode_of, contact, gate_open):
+    """The tick loop over the traced ``contact (p, v, k, c)`` and ``gate_open
+    (f, dead band)`` laws and the mode rule ``mode_of`` (plain functions, or
+    numba's compilations of them)."""
+
+    def ticks(state, mode, touched, steps, rows, law, F, vs, fas, fcs, k, n, h, due, checked):
         p, v, pa, va, u = state
-        a0, a1, a2, a3, a4, b0, b1, b2, b3, b4, g0, g1, g2, g3, g4, d0, d1, d2, d3, d4 = e_on
-        x0, x1, x2, x3, x4, y0, y1, y2, y3, y4, w0, w1, w2, w3, w4, z0, z1, z2, z3, z4 = e_off
-        c0, c1, c2, c3, lead_f, lead_prev, k_con, c_con, db, by_force, clamp = law
+        lead_f, lead_prev, k_con, c_con, db, by_force, clamp, undelayed, _, switches = law
+        held_on = ON + (MDC if law[8] != 0.0 else 0)
         cap = len(vs)
         while True:
             if k >= cap:  # out of room: the caller grows the records
-                return (p, v, pa, va, u), on, touched, k, 0.0, 0.0, 1
+                return (p, v, pa, va, u), mode, touched, k, 0.0, 0.0, 1, False
             f_act = contact(pa, va, k_con, c_con)
-            f_comp = (c0 * p + c1 * v + c2 * pa + c3 * va + u) if on else 0.0
+            if mode == OFF:
+                f_comp = 0.0
+            else:
+                r0, r1, r2, r3, r4 = rows[mode]
+                f_comp = r0 * p + r1 * v + r2 * pa + r3 * va + r4 * u
             if f_act > 0.0:
                 touched = True
             if k * h >= due and not checked:  # the stop rule's check, before the record
-                return (p, v, pa, va, u), on, touched, k, f_act, f_comp, 0
+                return (p, v, pa, va, u), mode, touched, k, f_act, f_comp, 0, False
             checked = False
             vs[k] = v
             fas[k] = f_act
             fcs[k] = f_comp
             F[k + n + 2] = f_act
-            f_mea = F[k + 2]
-            u = lead_f * f_mea + lead_prev * F[k + 1]
-            gate = gate_open(f_mea, db)
-            if (gate or by_force == 0.0) and not (clamp != 0.0 and u < 0.0):
-                on = True
-                p, v, pa, va = (
-                    a0 * p + a1 * v + a2 * pa + a3 * va + a4 * u,
-                    b0 * p + b1 * v + b2 * pa + b3 * va + b4 * u,
-                    g0 * p + g1 * v + g2 * pa + g3 * va + g4 * u,
-                    d0 * p + d1 * v + d2 * pa + d3 * va + d4 * u,
-                )
+            if undelayed != 0.0:  # the force rows hold lead_f f_act(t); u the last sample's part
+                u = lead_prev * f_act
+                gate = False
             else:
-                on = False
-                p, v, pa, va = (
-                    x0 * p + x1 * v + x2 * pa + x3 * va + x4 * u,
-                    y0 * p + y1 * v + y2 * pa + y3 * va + y4 * u,
-                    w0 * p + w1 * v + w2 * pa + w3 * va + w4 * u,
-                    z0 * p + z1 * v + z2 * pa + z3 * va + z4 * u,
-                )
+                f_mea = F[k + 2]
+                u = lead_f * f_mea + lead_prev * F[k + 1]
+                gate = gate_open(f_mea, db)
+            if switches == 0.0:  # held: the gate and the clamp read the held samples only
+                if (gate or by_force == 0.0) and not (clamp != 0.0 and u < 0.0):
+                    mode = held_on
+                else:
+                    mode = OFF
+            else:
+                mode = mode_of(p, v, pa, va, u, gate, rows, law)
+            a0, a1, a2, a3, a4, b0, b1, b2, b3, b4, g0, g1, g2, g3, g4, d0, d1, d2, d3, d4 = steps[
+                mode
+            ]
+            p1 = a0 * p + a1 * v + a2 * pa + a3 * va + a4 * u
+            v1 = b0 * p + b1 * v + b2 * pa + b3 * va + b4 * u
+            pa1 = g0 * p + g1 * v + g2 * pa + g3 * va + g4 * u
+            va1 = d0 * p + d1 * v + d2 * pa + d3 * va + d4 * u
+            if switches != 0.0 and mode_of(p1, v1, pa1, va1, u, gate, rows, law) != mode:
+                # the mode switches inside the tick: the caller locates the switch
+                return (p, v, pa, va, u), mode, touched, k, f_act, f_comp, 2, gate
+            p, v, pa, va = p1, v1, pa1, va1
             k += 1
 
     return ticks
+
+
+def tick_law(loop) -> tuple[float, ...]:
+    """The numbers the tick loop reads of a :class:`~hybridtable.loop.fast._Continuous`:
+    ``(lead_f, lead_prev, k, c, dead band, by_force, clamp, undelayed, mdc, switches)``."""
+    flags = (loop.by_force, loop.clamp, loop.undelayed, loop.mdc, loop.switches)
+    numbers = (loop.lead_f, loop.lead_prev, loop.k, loop.c, loop.law.force_deadband_n)
+    return numbers + tuple(float(f) for f in flags)
 
 
 def bound(function, *constants):
@@ -147,31 +209,91 @@ def compensator_function(lead: bool, mdc: bool, gate: str, clamp: bool, damping:
     return python_function(law, names)
 
 
+def _corrects(motion_correction: bool, gate: str):
+    return python_function(
+        lambda pa: CompensationLaw(motion_correction=motion_correction, gate=gate).corrects_motion(
+            pa > 0.0
+        ),
+        ("pa",),
+    )
+
+
 @functools.cache
-def _compiled(contact: Callable[..., float], gate_open: Callable[..., bool]):
+def corrects_function(motion_correction: bool, gate: str):
+    """Whether the MDC term acts at the table position ``pa`` (``corrects_motion``)."""
+    return _corrects(motion_correction, gate)
+
+
+@functools.cache
+def mode_function(gate: str, motion_correction: bool):
+    """The mode rule (:func:`_mode`) over the traced laws, as plain Python."""
+    return _mode(
+        contact_function(), gate_function(gate), corrects_function(motion_correction, gate)
+    )
+
+
+#: The loops compiled in this process (inherited by its forked workers).
+_COMPILED: dict[tuple[str, bool], Callable[..., Any]] = {}
+
+
+def _compiled(gate: str, motion_correction: bool):
+    key = (gate, motion_correction)
+    if key not in _COMPILED:
+        loop = _compile(gate, motion_correction)
+        # numba compiles at the first call: one that stops at once, with the types
+        # of every later call (the check is due at t = 0)
+        zeros = np.zeros
+        law = (0.0,) * 10
+        loop((0.0,) * 5, OFF, False, zeros((8, 20)), zeros((8, 5)), law, zeros(4), zeros(2),
+             zeros(2), zeros(2), 0, 0, 1.0, 0.0, False)  # fmt: skip
+        _COMPILED[key] = loop
+    return _COMPILED[key]
+
+
+def compile_loops(variants) -> int:
+    """Compile the tick loops of ``variants`` (``(gate, motion_correction)`` pairs)
+    now, if numba is importable: a process about to fork its fitting workers
+    compiles once for all of them. Returns how many were compiled."""
+    if not compiled_available():
+        return 0
+    todo = [v for v in dict.fromkeys(variants) if v not in _COMPILED]
+    for gate, motion_correction in todo:
+        _compiled(gate, motion_correction)
+    return len(todo)
+
+
+def _compile(gate: str, motion_correction: bool):
     import numba
 
-    return numba.njit(_loop(numba.njit(contact), numba.njit(gate_open)))
+    contact = numba.njit(contact_function())
+    gate_open = numba.njit(gate_function(gate))
+    corrects = numba.njit(corrects_function(motion_correction, gate))
+    mode_of = numba.njit(_mode(contact, gate_open, corrects))
+    return numba.njit(_loop(mode_of, contact, gate_open))
 
 
 @functools.cache
-def _python(contact: Callable[..., float], gate_open: Callable[..., bool]):
-    return _loop(contact, gate_open)
+def _python(gate: str, motion_correction: bool):
+    return _loop(mode_function(gate, motion_correction), contact_function(), gate_function(gate))
 
 
-def held_ticks(
-    contact: Callable[..., float], gate_open: Callable[..., bool], compiled: bool | None = None
+def tick_loop(
+    gate: str, motion_correction: bool, compiled: bool | None = None
 ) -> tuple[Callable[..., Any], bool]:
-    """The held-tick loop over these traced laws, and whether it is compiled.
+    """The tick loop of a compensator with this ``gate`` and MDC switch, and
+    whether it is compiled.
 
     ``compiled`` None: Python for a process's first :data:`COMPILE_AFTER_RUNS`
     calls, compiled after (if numba is importable). A compiled loop takes numpy
-    arrays for ``F`` and the records; the Python loop, lists (faster there).
+    arrays for ``F``, the records, the steps and the rows; the Python loop, lists
+    (faster there).
     """
     global _runs
     if compiled is None:
         _runs += 1
-        compiled = _runs > COMPILE_AFTER_RUNS and compiled_available()
+        compiled = (gate, motion_correction) in _COMPILED or (
+            _runs > COMPILE_AFTER_RUNS and compiled_available()
+        )
     if compiled:
-        return _compiled(contact, gate_open), True
-    return _python(contact, gate_open), False
+        return _compiled(gate, motion_correction), True
+    return _python(gate, motion_correction), False

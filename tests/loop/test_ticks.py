@@ -15,7 +15,9 @@ pytestmark = pytest.mark.skipif(not ticks.compiled_available(), reason="numba is
 
 #: Held loops (the force law cannot switch inside a tick): the paper's four
 #: compensators, a dead band, a clamp, a slow table, a long run that outgrows
-#: the first records, a delay of many ticks.
+#: the first records, a delay of many ticks; and loops whose law switches inside
+#: a tick (no delay, the table-position gate, a clamp on the MDC term), where the
+#: compiled loop hands each switch to Python.
 CASES = {
     "none": table1_params("none"),
     "SDC": table1_params("SDC"),
@@ -28,6 +30,13 @@ CASES = {
         contact_stiffness_n_per_m=4.0e4, initial_velocity_m_per_s=0.02
     ),
     "long-delay": table1_params("MDC").with_(sensor_delay_s=0.04),
+    "undelayed": table1_params("SDMDC").with_(sensor_delay_s=0.0),
+    "undelayed-deadband": table1_params("MDC").with_(sensor_delay_s=0.0, force_deadband_n=3.0),
+    "table-gate": table1_params("SDMDC").with_(contact_gate="table_position"),
+    "clamp-mdc": table1_params("SDMDC").with_(clamp_nonnegative=True),
+    "clamp-gate-slow-table": table1_params("MDC").with_(
+        clamp_nonnegative=True, contact_gate="table_position", table_response_hz=15.0
+    ),
 }
 
 
@@ -70,6 +79,19 @@ def test_a_diverging_loop_stops_alike_in_both(monkeypatch):
 
 def test_a_process_compiles_only_after_its_first_runs(monkeypatch):
     monkeypatch.setattr(ticks, "_runs", 0)
+    monkeypatch.setattr(ticks, "_COMPILED", {})
     monkeypatch.setattr(ticks, "COMPILE_AFTER_RUNS", 2)
-    law = (lambda p, v, k, c: 0.0, lambda f, db: True)
-    assert [ticks.held_ticks(*law)[1] for _ in range(4)] == [False, False, True, True]
+    assert [ticks.tick_loop("measured_force", True)[1] for _ in range(4)] == [
+        False,
+        False,
+        True,
+        True,
+    ]
+
+
+def test_a_loop_compiled_before_a_fork_is_used_from_the_first_run(monkeypatch):
+    monkeypatch.setattr(ticks, "_runs", 0)
+    monkeypatch.setattr(ticks, "_COMPILED", {})
+    assert ticks.compile_loops([("measured_force", False), ("measured_force", False)]) == 1
+    assert ticks.tick_loop("measured_force", False)[1] is True  # the first run: compiled
+    assert ticks.tick_loop("table_position", False)[1] is False  # another law: Python first
