@@ -100,7 +100,9 @@ def _checked(system: Any, who: str) -> System:
     a NaN would otherwise reach the spacecraft's integrator, whose error control
     then shrinks its step without end."""
     if not isinstance(system, System):
-        raise PluginError(f"{who}'s factory returned {type(system).__name__}, not a Drake system")
+        raise PluginError(
+            f"the factory of {who} returned {type(system).__name__}, not a Drake system"
+        )
     if not system.HasOutputPort("compensated_force"):
         names = [system.get_output_port(i).get_name() for i in range(system.num_output_ports())]
         raise PluginError(f"{who} has no output port 'compensated_force' (its outputs: {names})")
@@ -136,7 +138,7 @@ def make_compensator(
             system = factory(params, derivative_period_s)
         else:  # a user's: guarded, and its force checked before the spacecraft
             who = f"compensator {params.compensator!r}"
-            system = call_user(f"{who}'s factory", factory, params, derivative_period_s)
+            system = call_user(f"the factory of {who}", factory, params, derivative_period_s)
             system = _checked(system, who)
     if getattr(params, "passivity", False):
         # Imported here, not at the top: a loop without the guard never pays for it.

@@ -36,7 +36,7 @@ def one_thread() -> None:
     """Limit this process's BLAS to one thread. The fits multiply matrices of a
     few rows; each worker is already one of the CPUs, and BLAS threads on top of
     them spin against each other (Table 1 on two cores: 73 s with two BLAS
-    threads a worker, 16 s with one)."""
+    threads a worker, 12 s with one)."""
     from threadpoolctl import threadpool_limits
 
     threadpool_limits(1)

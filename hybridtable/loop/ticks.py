@@ -1,29 +1,32 @@
-"""The fast engine's laws as plain functions, and its held ticks: one loop, run by Python or
+"""The fast engine's laws as plain functions, and its tick loop: one loop, run by Python or
 compiled by numba when worth it.
 
-The laws (the contact, the gate, the sampled compensator) are traced once from
-their definitions in :mod:`hybridtable.laws` into plain functions
-(:func:`~hybridtable.laws.compiled.python_function`), which the fast engine
-calls and numba compiles.
+The laws (the contact, the gate, when the MDC term acts, the sampled
+compensator) are traced once from their definitions in :mod:`hybridtable.laws`
+into plain functions (:func:`~hybridtable.laws.compiled.python_function`),
+which the fast engine calls and numba compiles.
 
-A continuous loop whose force law cannot switch inside a tick (the gate and the
-clamp read only the held samples) is the campaign workhorse: ``explain``
-spends almost all its time there (Table 4: 15,600 runs, 100 M ticks). Each
-tick is the contact law, the gate on the delayed sample and one exact step of
-the mode the gate chose (:mod:`hybridtable.loop.fast`).
+A continuous fast run is the campaign workhorse: ``explain`` spends almost all
+its time there (Table 4: 15,600 runs, 100 M ticks). Each tick is the contact
+law, the gate on the delayed sample, the mode it picks (:func:`_mode`, bits
+:data:`ON`, :data:`CONTACT`, :data:`MDC`) and that mode's exact step
+(:mod:`hybridtable.loop.fast`). Where the force law switches inside a tick the
+loop stops and the caller locates the switch on the exact trajectory.
 
-:func:`held_ticks` is that loop, written once. It runs as plain Python for the
-first :data:`COMPILE_AFTER_RUNS` runs of a process, and then as machine code
-compiled by numba (the same function, its law calls compiled from the same
-traced laws): compiling costs about a second, which a single ``simulate``
-should not pay, while a fit of thousands of runs gains about two orders of
-magnitude. Both execute the same floating-point operations in the same order
-(numba without ``fastmath`` contracts nothing), so their records are identical
-bit for bit (``tests/loop/test_ticks.py``).
+:func:`tick_loop` gives that loop, written once. It runs as plain Python for
+the first :data:`COMPILE_AFTER_RUNS` runs of a process, and then as machine
+code compiled by numba (the same function, its law calls compiled from the
+same traced laws); :func:`compile_loops` compiles ahead, before a process forks
+its workers. Compiling costs about 2 s, which a single ``simulate`` should not
+pay, while a fit of thousands of runs gains one to two orders of magnitude.
+Both execute the same floating-point operations in the same order (numba
+without ``fastmath`` contracts nothing), so their records are identical bit for
+bit (``tests/loop/test_ticks.py``).
 
 The loop stops at the first tick whose time reaches ``due`` (the stop rule's
-next check, evaluated by the caller in Python) before recording it, and when
-its record arrays are full; the caller then checks, grows or resumes.
+next check, evaluated by the caller in Python) before recording it, when its
+record arrays are full, and at a switch inside a tick; the caller then checks,
+grows, locates the switch, and resumes.
 """
 
 from __future__ import annotations
@@ -58,7 +61,7 @@ __all__ = [
 ]
 
 #: Runs a process makes with the Python loop before it compiles the loop: a run
-#: of the Python loop costs ~20 ms, compiling ~1 s.
+#: of the Python loop costs ~20 ms, compiling ~2 s.
 COMPILE_AFTER_RUNS = 40
 
 _runs = 0
@@ -209,19 +212,12 @@ def compensator_function(lead: bool, mdc: bool, gate: str, clamp: bool, damping:
     return python_function(law, names)
 
 
-def _corrects(motion_correction: bool, gate: str):
-    return python_function(
-        lambda pa: CompensationLaw(motion_correction=motion_correction, gate=gate).corrects_motion(
-            pa > 0.0
-        ),
-        ("pa",),
-    )
-
-
 @functools.cache
 def corrects_function(motion_correction: bool, gate: str):
-    """Whether the MDC term acts at the table position ``pa`` (``corrects_motion``)."""
-    return _corrects(motion_correction, gate)
+    """Whether the MDC term acts at the table position ``pa``
+    (:meth:`~hybridtable.laws.compensation.CompensationLaw.corrects_motion`)."""
+    law = CompensationLaw(motion_correction=motion_correction, gate=gate)
+    return python_function(lambda pa: law.corrects_motion(pa > 0.0), ("pa",))
 
 
 @functools.cache

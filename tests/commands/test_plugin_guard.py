@@ -177,8 +177,8 @@ def compensators(tmp_path):
     "name, code, words",
     [
         ("guard_nan", 1, "is not finite"),
-        ("guard_none", 2, "compensator 'guard_none''s factory returned NoneType, not a Drake"),
-        ("guard_raises", 2, "compensator 'guard_raises''s factory raised ZeroDivisionError"),
+        ("guard_none", 2, "the factory of compensator 'guard_none' returned NoneType, not a Drake"),
+        ("guard_raises", 2, "the factory of compensator 'guard_raises' raised ZeroDivisionError"),
     ],
 )
 def test_a_plugin_compensator_that_fails_is_one_line(compensators, capsys, name, code, words):
