@@ -151,6 +151,24 @@ def _small_disk():
     resource.setrlimit(resource.RLIMIT_FSIZE, (64_000, 64_000))
 
 
+def _on_a_small_disk(folder: Path, argv: list[str]) -> str:
+    """Run the command in ``folder`` on a 64 kB "disk"; it must fail (exit 1) with
+    one line and no traceback: that line."""
+    done = subprocess.run(
+        [sys.executable, "-m", "hybridtable.cli", *argv],
+        cwd=folder,
+        capture_output=True,
+        text=True,
+        preexec_fn=_small_disk,
+        timeout=600,
+        env={**os.environ, "PYTHONPATH": str(ROOT), "MPLBACKEND": "Agg"},
+    )
+    lines = [line for line in done.stderr.splitlines() if "error:" in line]
+    assert done.returncode == 1, done.stderr[-2000:]
+    assert len(lines) == 1 and "Traceback" not in done.stderr
+    return lines[0]
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize(
     "argv, output",
@@ -161,19 +179,8 @@ def _small_disk():
     ],
 )
 def test_a_full_disk_is_one_line_and_leaves_nothing(tmp_path, argv, output):
-    done = subprocess.run(
-        [sys.executable, "-m", "hybridtable.cli", *argv],
-        cwd=tmp_path,
-        capture_output=True,
-        text=True,
-        preexec_fn=_small_disk,
-        timeout=600,
-        env={**os.environ, "PYTHONPATH": str(ROOT), "MPLBACKEND": "Agg"},
-    )
-    lines = [line for line in done.stderr.splitlines() if "error:" in line]
-    assert done.returncode == 1, done.stderr[-2000:]
-    assert len(lines) == 1 and "Traceback" not in done.stderr
-    assert f"could not write {output}" in lines[0] and "nothing of it was written" in lines[0]
+    line = _on_a_small_disk(tmp_path, argv)
+    assert f"could not write {output}" in line and "nothing of it was written" in line
     assert list(tmp_path.iterdir()) == []
 
 
@@ -181,20 +188,9 @@ def test_a_full_disk_is_one_line_and_leaves_nothing(tmp_path, argv, output):
 def test_a_command_whose_later_output_fails_removes_its_earlier_ones(tmp_path):
     """All of a command's new outputs or none: the JSON written before the plot
     that filled the disk goes too, and the line says so."""
-    done = subprocess.run(
-        [sys.executable, "-m", "hybridtable.cli", "simulate", "--json", "out.json"]
-        + ["--plot", "fig.png"],
-        cwd=tmp_path,
-        capture_output=True,
-        text=True,
-        preexec_fn=_small_disk,
-        timeout=600,
-        env={**os.environ, "PYTHONPATH": str(ROOT), "MPLBACKEND": "Agg"},
-    )
-    lines = [line for line in done.stderr.splitlines() if "error:" in line]
-    assert done.returncode == 1 and len(lines) == 1, done.stderr[-2000:]
-    assert "could not write fig.png" in lines[0]
-    assert "other new outputs were removed: out.json" in lines[0]
+    line = _on_a_small_disk(tmp_path, ["simulate", "--json", "out.json", "--plot", "fig.png"])
+    assert "could not write fig.png" in line
+    assert "other new outputs were removed: out.json" in line
     assert list(tmp_path.iterdir()) == []
 
 
