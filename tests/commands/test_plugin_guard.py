@@ -163,8 +163,12 @@ COMPENSATORS = textwrap.dedent(
 
 
 @pytest.fixture
-def compensators(tmp_path):
-    """The compensators beside the effects of :data:`PLUGIN` (``--plugin FILE:RAISES``)."""
+def compensators(tmp_path, monkeypatch):
+    """The compensators beside the effects of :data:`PLUGIN` (``--plugin FILE:RAISES``);
+    the registry of compensators is restored after the test (a copy is patched in)."""
+    from hybridtable.compensators import registry as compensator_registry
+
+    monkeypatch.setattr(compensator_registry, "_REGISTRY", dict(compensator_registry._REGISTRY))
     path = tmp_path / "compensators.py"
     path.write_text(PLUGIN + COMPENSATORS, encoding="utf-8")
     yield path
