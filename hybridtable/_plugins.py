@@ -34,7 +34,14 @@ from typing import Any
 
 from hybridtable.errors import CommandError, ParameterError, PluginError, SimulationError
 
-__all__ = ["PluginError", "Guarded", "call_user", "finite_numbers", "simulation_failure"]
+__all__ = [
+    "PluginError",
+    "Guarded",
+    "call_user",
+    "drake_system",
+    "finite_numbers",
+    "simulation_failure",
+]
 
 #: The folder of the package: a traceback frame outside it is a user's.
 _PACKAGE = Path(__file__).resolve().parent
@@ -116,6 +123,16 @@ class Guarded:
 
     def __repr__(self) -> str:
         return f"Guarded({self.fn!r}, {self.who!r})"
+
+
+def drake_system(who: str, value: Any) -> Any:
+    """``value`` if it is a Drake system (what a user's wrapper or compensator
+    factory must return); else a :class:`PluginError` naming ``who``."""
+    from pydrake.systems.framework import System
+
+    if not isinstance(value, System):
+        raise PluginError(f"{who} returned {type(value).__name__}, not a Drake system")
+    return value
 
 
 def simulation_failure(err: BaseException, what: str = "simulation failed") -> Exception:

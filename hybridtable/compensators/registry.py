@@ -15,7 +15,7 @@ from typing import Any
 from pydrake.systems.framework import DiagramBuilder, System
 
 from hybridtable._lazy import register_entry_points
-from hybridtable._plugins import PluginError, call_user
+from hybridtable._plugins import Guarded, PluginError, drake_system
 from hybridtable._validation import check_choice
 from hybridtable.compensators.online import make_online_sdmdc
 from hybridtable.compensators.paper import COMPENSATORS, paper_compensator
@@ -94,15 +94,11 @@ def compensator_factory(name: str) -> CompensatorFactory:
     return _REGISTRY[name]
 
 
-def _checked(system: Any, who: str) -> System:
+def _checked(system: System, who: str) -> System:
     """A user's compensator ``system`` with its ``compensated_force`` passed through
     a law that refuses a non-finite value (:class:`~hybridtable.laws.compiled.LawSystem`):
     a NaN would otherwise reach the spacecraft's integrator, whose error control
     then shrinks its step without end."""
-    if not isinstance(system, System):
-        raise PluginError(
-            f"the factory of {who} returned {type(system).__name__}, not a Drake system"
-        )
     if not system.HasOutputPort("compensated_force"):
         names = [system.get_output_port(i).get_name() for i in range(system.num_output_ports())]
         raise PluginError(f"{who} has no output port 'compensated_force' (its outputs: {names})")
@@ -138,8 +134,8 @@ def make_compensator(
             system = factory(params, derivative_period_s)
         else:  # a user's: guarded, and its force checked before the spacecraft
             who = f"compensator {params.compensator!r}"
-            system = call_user(f"the factory of {who}", factory, params, derivative_period_s)
-            system = _checked(system, who)
+            made = Guarded(factory, f"the factory of {who}", drake_system)
+            system = _checked(made(params, derivative_period_s), who)
     if getattr(params, "passivity", False):
         # Imported here, not at the top: a loop without the guard never pays for it.
         from hybridtable.compensators.passivity import passivity_guarded

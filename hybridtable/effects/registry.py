@@ -20,7 +20,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import replace
 from pathlib import Path
 
-from hybridtable._plugins import Guarded, PluginError, call_user, finite_numbers
+from hybridtable._plugins import Guarded, PluginError, call_user, drake_system, finite_numbers
 from hybridtable.effects.effect import FRONT_ENDS, Effect
 from hybridtable.effects.legacy import CorEffect, as_effect
 from hybridtable.effects.library import builtin_effects
@@ -404,7 +404,12 @@ class _GuardedApply:
         if not isinstance(out, ModelSpec):
             raise PluginError(f"{who} apply returned {type(out).__name__}, not a ModelSpec")
         wrappers = tuple(
-            (c, w if i < len(spec.wrappers) else Guarded(w, f"{who}: its {c} wrapper", _system))
+            (
+                c,
+                w
+                if i < len(spec.wrappers)
+                else Guarded(w, f"{who}: its {c} wrapper", drake_system),
+            )
             for i, (c, w) in enumerate(out.wrappers)
         )
         loop = tuple(
@@ -412,14 +417,6 @@ class _GuardedApply:
             for i, ch in enumerate(out.loop)
         )
         return replace(out, wrappers=wrappers, loop=loop)
-
-
-def _system(who: str, system):
-    from pydrake.systems.framework import System
-
-    if not isinstance(system, System):
-        raise PluginError(f"{who} returned {type(system).__name__}, not a Drake system")
-    return system
 
 
 def _loop_params(who: str, params):

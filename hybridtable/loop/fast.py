@@ -146,12 +146,10 @@ def _rows(law: CompensationLaw, h: float, k: float, c: float | None, basis: np.n
     return with_mdc, without
 
 
-def _unrolled(e):
-    """``z -> E z`` for a 5x5 ``E`` whose last row keeps ``u`` (scalar Python: no array
-    overhead on a 5-vector)."""
-    (a0, a1, a2, a3, a4), (b0, b1, b2, b3, b4), (c0, c1, c2, c3, c4), (d0, d1, d2, d3, d4) = (
-        [float(x) for x in row] for row in e[:4]
-    )
+def _unrolled(coefficients):
+    """``z -> E z`` for the first four rows of ``E`` (its last row keeps ``u``), given
+    as 20 numbers row by row (scalar Python: no array overhead on a 5-vector)."""
+    a0, a1, a2, a3, a4, b0, b1, b2, b3, b4, c0, c1, c2, c3, c4, d0, d1, d2, d3, d4 = coefficients
 
     def step(p, v, pa, va, u):
         return (
@@ -245,13 +243,12 @@ class _Continuous:
             e[2:4] = e[0:2]  # keeps p_act == p_des bit for bit
         return e
 
-    def mode_data(self, mode: int):
-        """(exact step over h, force row as a tuple) of ``mode``, cached."""
+    def step(self, mode: int):
+        """The exact step over h of ``mode``, cached: the first four rows of its ``E``
+        as 20 numbers (the tick loop's table) and ``z -> E z`` (a switch's tick)."""
         if mode not in self.cache:
-            self.cache[mode] = (
-                _unrolled(self.exp(mode, self.h)),
-                tuple(self.force_row(mode).tolist()),
-            )
+            coefficients = tuple(float(x) for x in self.exp(mode, self.h)[:4].ravel())
+            self.cache[mode] = (coefficients, _unrolled(coefficients))
         return self.cache[mode]
 
     def tables(self, compiled: bool):
@@ -261,7 +258,7 @@ class _Continuous:
         modes = self.modes_on() if self.switches else [ON + (MDC if self.mdc else 0)]
         steps = [(0.0,) * 20] * 8
         for mode in (OFF, *modes):
-            steps[mode] = tuple(float(x) for x in self.exp(mode, self.h)[:4].ravel())
+            steps[mode] = self.step(mode)[0]
         return (np.array(steps), np.array(self._rows)) if compiled else (steps, self._rows)
 
     def mode_of(self, z, gate: bool) -> int:
@@ -272,7 +269,7 @@ class _Continuous:
     def interval(self, z, mode, gate: bool):
         """State after one tick from ``z`` in ``mode``, with every switch located; and
         the mode at the end."""
-        z1 = (*self.mode_data(mode)[0](*z), z[4])
+        z1 = (*self.step(mode)[1](*z), z[4])
         if not self.switches or self.mode_of(z1, gate) == mode:
             return z1, mode
         rem, x = self.h, np.array(z)
@@ -334,7 +331,7 @@ def _run_continuous(params: HybridLoopParams, h: float, n: int, rule: _StopRule)
     loop = _Continuous(params, h)
     ticks, compiled = tick_loop(loop.law.gate, loop.law.motion_correction)
     steps, rows = loop.tables(compiled)
-    law = tick_law(loop)
+    law = loop._law
     state = (*_initial_state(params, loop), 0.0)  # u: no held force before t = 0
     mode = loop.mode_of(state, False)
     # Room for the records: a compiled loop's zeros are not touched until written.
