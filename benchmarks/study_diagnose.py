@@ -11,6 +11,17 @@ CoR unchanged), an effect outside the library (outside), a computer effect
 the detection limit (tiny, counted apart). A different ``--seed`` draws sets
 never seen.
 
+Three more classes, drawn only when ``--only`` names them (the default study
+is the seven above, unchanged), hold a rig condition (``rigzoo``'s
+``CONDITION_CLASSES``) with a null or a single library effect:
+``deadband0`` (``force_deadband_n = 0``: the noise passes the gate in free
+flight), ``fractional_delay`` (``sensor_delay_s`` not a whole number of
+ticks) and ``integrator`` (the rig computer steps the model by explicit
+Euler, trapezoid or RK4, which the JSON does not say). They are scored as a
+null (nothing hidden) or a single; the integrator's rule, where the
+diagnosis reports one, is scored too ("integrator named": the rule or one
+equivalent to it for a held force, RK4 = trapezoid).
+
 Each set is written to a folder, read with ``read_runs`` and diagnosed; the
 verdict is scored per class:
 
@@ -19,7 +30,9 @@ verdict is scored per class:
   named one, and nothing else), "right+extra", "wrong", "missed";
 - pair / pair_cancel: "both", "one", "wrong" (only other effects), "none";
 - outside: "flagged" if the diagnosis says ``explained: false``, else
-  "not flagged".
+  "not flagged";
+- deadband0 / fractional_delay / integrator: as a null ("right", "false
+  positive") when nothing is hidden, else as a single.
 
 Every set also records whether the diagnosis said ``explained: true`` with a
 held-out error above 1.3 (noise units). Prints a line per set, a summary per
@@ -30,6 +43,7 @@ named; single >= 95 % named; pairs >= 80 % both; outside >= 90 % flagged; no
 Usage: python benchmarks/study_diagnose.py [--seed N] [--sets N]
        [--only CLASS,...] [--workers N] [--json FILE] [--markdown FILE]
        [--keep DIR]
+       (e.g. --only deadband0,fractional_delay,integrator for the conditions)
 """
 
 from __future__ import annotations
@@ -63,6 +77,9 @@ OUTCOMES = {
     "pair_cancel": ("both", "one", "wrong", "none"),
     "outside": ("flagged", "not flagged"),
 }
+#: The rig-condition classes: a null or a single library effect.
+for _c in rigzoo.CONDITION_CLASSES:
+    OUTCOMES[_c] = ("right", "right+extra", "false positive", "wrong", "missed")
 #: The audit's JSON key for each computer effect, and the generator's parameter.
 COMPUTER_KEYS = {
     "mass_error": ("spacecraft_mass_kg", "m_used_kg"),
@@ -115,6 +132,58 @@ def heldout_of(j: dict) -> float:
     return float(v) if v is not None else math.nan
 
 
+#: Names a diagnosis may give the rig computer's integrator, to rigzoo's.
+INTEGRATOR_ALIASES = {
+    "semi_implicit_euler": "semi_implicit_euler",
+    "semi_implicit": "semi_implicit_euler",
+    "symplectic_euler": "semi_implicit_euler",
+    "symplectic": "semi_implicit_euler",
+    "explicit_euler": "explicit_euler",
+    "forward_euler": "explicit_euler",
+    "euler": "explicit_euler",
+    "trapezoid": "trapezoid",
+    "trapezoidal": "trapezoid",
+    "rk4": "rk4",
+    "runge_kutta": "rk4",
+    "exact": "trapezoid",
+    "zoh": "trapezoid",
+}
+
+
+def integrator_of(j: dict) -> str | None:
+    """The integrator rule the diagnosis names, in rigzoo's names (None if it
+    names none; tolerant of where the JSON puts it)."""
+    found = None
+    for where in (j, j.get("computer") or {}, j.get("audit") or {}):
+        if isinstance(where, dict) and where.get("integrator") is not None:
+            found = where["integrator"]
+            break
+    if found is None:
+        for f in (j.get("audit") or {}).get("findings") or []:
+            if (
+                f.get("key") in ("integrator", "integration_rule")
+                or f.get("effect") == "integrator"
+            ):
+                found = f.get("used", f.get("value"))
+                break
+    if isinstance(found, dict):
+        found = found.get("rule") or found.get("name") or found.get("used")
+    if not isinstance(found, str):
+        return None
+    key = found.strip().lower().replace("-", "_").replace(" ", "_")
+    return INTEGRATOR_ALIASES.get(key, key)
+
+
+def integrator_score(spec: rigzoo.SetSpec, j: dict) -> dict:
+    """The rig's integrator against the one the diagnosis names (``right``:
+    the same rule or one equivalent to it for a held force; None: none named)."""
+    true = spec.rig.integrator
+    named = integrator_of(j)
+    eq = rigzoo.INTEGRATOR_EQUIVALENT
+    right = None if named is None else eq.get(named, named) == eq[true]
+    return {"true": true, "named": named, "right": right}
+
+
 def accounts(s: str, t: str, la: dict[str, set[str]]) -> bool:
     """Named effect ``s`` stands for the hidden ``t`` (itself or a look-alike)."""
     return s == t or t in la.get(s, ()) or s in la.get(t, ())
@@ -130,7 +199,7 @@ def score(spec: rigzoo.SetSpec, j: dict) -> dict:
     label = spec.label
     extras = [s for s in sel if not any(accounts(s, t, la) for t in truth)]
     hit = [t for t in truth if any(accounts(s, t, la) for s in sel)]
-    if label == "null":
+    if label == "null" or (label in rigzoo.CONDITION_CLASSES and not truth):
         outcome = "false positive" if sel else "right"
     elif label == "outside":
         outcome = "not flagged" if expl else "flagged"
@@ -159,6 +228,11 @@ def score(spec: rigzoo.SetSpec, j: dict) -> dict:
     }
     if label == "computer":
         row["audit"] = audit_accuracy(spec, j)
+    if label in rigzoo.CONDITION_CLASSES:
+        row["condition"] = spec.condition()
+        row["integrator"] = integrator_score(spec, j)
+        if spec.hidden and spec.hidden[0].kind == "computer":
+            row["audit"] = audit_accuracy(spec, j)
     return row
 
 
@@ -255,6 +329,9 @@ def line(row: dict) -> str:
     aud = row.get("audit")
     if aud and aud.get("relative_error") is not None:
         extra += f"  [audit rel. err {aud['relative_error']:+.2e}]"
+    integ = row.get("integrator")
+    if integ and s["label"] == "integrator":
+        extra += f"  [integrator {integ['true']}, named {integ['named'] or '-'}]"
     err = s["info"].get("error")
     err_s = f"{err:.2f}" if isinstance(err, float) else "-"
     return (
@@ -292,6 +369,14 @@ def summarise(rows: list[dict]) -> dict:
                     if r["outcome"] == "not flagged"
                 )
             )
+        if c == "integrator":
+            classes[c]["integrator_named"] = sum(
+                bool((r.get("integrator") or {}).get("right")) for r in rs
+            )
+        if c in rigzoo.CONDITION_CLASSES:
+            classes[c]["integrator_named_wrongly"] = sum(
+                (r.get("integrator") or {}).get("right") is False for r in rs
+            )
         if c == "computer":
             errs = [
                 abs(r["audit"]["relative_error"])
@@ -302,7 +387,10 @@ def summarise(rows: list[dict]) -> dict:
     by_effect: dict[str, dict[str, dict[str, int]]] = {}
     for r in rows:
         lab = r["set"]["label"]
-        if lab in ("single", "tiny", "outside", "computer") and r["set"]["hidden"]:
+        if (
+            lab in ("single", "tiny", "outside", "computer", *rigzoo.CONDITION_CLASSES)
+            and r["set"]["hidden"]
+        ):
             name = r["set"]["hidden"][0]["name"]
             cell = by_effect.setdefault(lab, {}).setdefault(name, {})
             cell[r["outcome"]] = cell.get(r["outcome"], 0) + 1
@@ -446,6 +534,10 @@ def print_summary(summary: dict) -> None:
             extra += f"  not flagged named: {k['not_flagged_named']}"
         if k.get("audit_abs_relative_error_max") is not None:
             extra += f"  audit |rel. err| max {k['audit_abs_relative_error_max']:.2e}"
+        if "integrator_named" in k:
+            extra += f"  integrator named: {k['integrator_named']}/{k['n']}"
+        if k.get("integrator_named_wrongly"):
+            extra += f"  integrator named wrongly: {k['integrator_named_wrongly']}"
         print(f"{c:12s} {k['n']:4d}  {oc}{extra}")
     for lab, cells in summary.get("by_effect", {}).items():
         bad = {n: c for n, c in cells.items() if set(c) - {"right", "flagged"}}
@@ -480,14 +572,22 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0, help="study seed (default 0)")
     ap.add_argument("--sets", type=int, default=None, help="at most N sets, mixed across classes")
     ap.add_argument(
-        "--only", default=None, help="classes, comma separated: " + ",".join(rigzoo.CLASSES)
+        "--only",
+        default=None,
+        help="classes, comma separated (default: "
+        + ",".join(rigzoo.BASE_CLASSES)
+        + "; also "
+        + ",".join(rigzoo.CONDITION_CLASSES)
+        + ")",
     )
     ap.add_argument("--workers", type=int, default=None, help="diagnose's processes")
     ap.add_argument("--json", metavar="FILE", help="write every set's row and the summary")
     ap.add_argument("--markdown", metavar="FILE", help="write the summary as Markdown")
     ap.add_argument("--keep", metavar="DIR", help="write the sets (and their truth) here")
     args = ap.parse_args(argv)
-    only = None
+    # The rig-condition classes only when asked for: the default study is the
+    # original classes' (the same sets and output as before they existed).
+    only = set(rigzoo.BASE_CLASSES)
     if args.only:
         only = {c.strip() for c in args.only.split(",") if c.strip()}
         bad = only - set(rigzoo.CLASSES)

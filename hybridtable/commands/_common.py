@@ -28,6 +28,8 @@ __all__ = [
     "note_unset",
     "input_paths",
     "read_run_arguments",
+    "log_layout_of",
+    "log_map_entry",
     "add_run_arguments",
     "check_outputs",
     "declared_inputs",
@@ -211,13 +213,41 @@ def write_json(path: str | Path, data: Any) -> None:
 
 
 def read_run_arguments(args: argparse.Namespace, tail_s: float | None = None):
-    """The runs of ``RUN...`` (with ``--column-map``), every long log split into
-    its contact events (:func:`hybridtable.measurement.events.split_runs`, each
-    cut ``tail_s`` after its contact if given): ``(runs, splits)``."""
+    """The runs of ``RUN...`` (read through :func:`log_layout_of`), every long
+    log split into its contact events
+    (:func:`hybridtable.measurement.events.split_runs`, each cut ``tail_s``
+    after its contact if given): ``(runs, splits)``."""
     from hybridtable.measurement.events import split_runs
-    from hybridtable.measurement.run_reader import parse_column_map, read_runs
+    from hybridtable.measurement.run_reader import read_runs
 
-    return split_runs(read_runs(args.runs, parse_column_map(args.column_map)), tail_s)
+    return split_runs(read_runs(args.runs, layout=log_layout_of(args)), tail_s)
+
+
+def log_map_entry(args: argparse.Namespace, runs) -> dict | None:
+    """The ``log_map`` entry of a command's JSON: the mapping the logs were
+    read with and each log's columns not read; ``None`` for logs in the
+    format's own CSV."""
+    layout = log_layout_of(args)
+    skipped = {str(r.csv_path): list(r.skipped_columns) for r in runs if r.skipped_columns}
+    if layout.plain and not skipped:
+        return None
+    return {**layout.to_dict(), "skipped_columns": skipped}
+
+
+def log_layout_of(args: argparse.Namespace):
+    """How the logs of ``RUN...`` map to the format: the ``--log-map`` file and
+    the flags over it (:func:`hybridtable.measurement.log_layout.log_layout`)."""
+    from hybridtable.measurement.log_layout import log_layout
+
+    return log_layout(
+        log_map=args.log_map,
+        column_map=args.column_map,
+        units=args.unit,
+        delimiter=args.delimiter,
+        decimal=args.decimal,
+        comment=args.comment,
+        ignore=args.ignore_column,
+    )
 
 
 def input_paths(runs) -> list[Path]:
@@ -226,9 +256,9 @@ def input_paths(runs) -> list[Path]:
 
 
 def declared_inputs(args: argparse.Namespace) -> list[Path]:
-    """The files a command's flags name as inputs: ``--model``, ``--tables`` and
-    the ``.py`` files of ``--plugin`` (resolved; those that exist)."""
-    paths = [getattr(args, "model", None), getattr(args, "tables", None)]
+    """The files a command's flags name as inputs: ``--model``, ``--tables``,
+    ``--log-map`` and the ``.py`` files of ``--plugin`` (resolved; those that exist)."""
+    paths = [getattr(args, name, None) for name in ("model", "tables", "log_map")]
     for text in getattr(args, "plugin", None) or ():
         head = str(text).rsplit(":", 1)[0]  # ./backlash.py:EFFECT
         if head.endswith(".py"):
@@ -388,15 +418,59 @@ def add_force_argument(parser: argparse.ArgumentParser) -> None:
 
 def add_run_arguments(parser: argparse.ArgumentParser, report: str) -> None:
     """The inputs and outputs of a command that reads recorded runs: ``RUN...``,
-    ``--json``, ``--report`` (``report`` says what it writes) and ``--column-map``."""
+    ``--json``, ``--report`` (``report`` says what it writes) and how a rig's
+    own log maps to the format (``--log-map`` and its flags, :func:`log_layout_of`)."""
     parser.add_argument("runs", nargs="+", metavar="RUN", help="a run's .csv or .json, or a folder")
     parser.add_argument("--json", metavar="FILE", help="write the results as JSON (- for stdout)")
     parser.add_argument("--report", metavar="DIR", help=report)
-    parser.add_argument(
+    log = parser.add_argument_group(
+        "a rig's own log (docs/run-format.md, 'Reading a rig's own log'; each flag "
+        "overrides the --log-map file's entry)"
+    )
+    log.add_argument(
+        "--log-map",
+        metavar="FILE",
+        help="a TOML file saying how the logs map to the format: columns, units, scale, "
+        "delimiter, decimal mark, comment prefix, columns to ignore",
+    )
+    log.add_argument(
         "--column-map",
         metavar="FORMAT=LOG",
         action="append",
         default=[],
         help="read the format's column FORMAT from the log's column LOG (repeatable, or "
         "comma separated), e.g. --column-map f_mea_n=force,time_s=t",
+    )
+    log.add_argument(
+        "--unit",
+        metavar="FORMAT=UNIT",
+        action="append",
+        default=[],
+        help="the unit the log holds a column in (repeatable, or comma separated), e.g. "
+        "--unit time_s=ms,f_mea_n=kN; time s/ms/us, positions m/cm/mm/um, forces N/kN/mN, "
+        "velocity m/s, cm/s, mm/s (default: the format's SI unit)",
+    )
+    log.add_argument(
+        "--delimiter",
+        metavar="C",
+        help="the log's cell delimiter: , ; | tab or space (default: ,)",
+    )
+    log.add_argument(
+        "--decimal",
+        metavar="C",
+        choices=(".", ","),
+        help="the log's decimal mark, . or , (default: .; , needs another delimiter)",
+    )
+    log.add_argument(
+        "--comment",
+        metavar="PREFIX",
+        help="skip the log's lines that start with PREFIX, e.g. '#' (default: none)",
+    )
+    log.add_argument(
+        "--ignore-column",
+        metavar="NAME",
+        action="append",
+        default=[],
+        help="a log column not to read (repeatable; a column no format column is read "
+        "from is skipped anyway)",
     )

@@ -55,6 +55,7 @@ def run(args: argparse.Namespace) -> int:
     from hybridtable.commands._common import (
         check_outputs,
         input_paths,
+        log_map_entry,
         read_run_arguments,
         write_json,
     )
@@ -123,6 +124,8 @@ def run(args: argparse.Namespace) -> int:
         if not quiet:
             print(f"wrote the model to {args.save_model}: {model.describe()}")
     if args.json:
+        if (log_map := log_map_entry(args, runs)) is not None:
+            document["log_map"] = log_map
         write_json(args.json, document)
     if args.report:
         with staged_folder(args.report) as stage:

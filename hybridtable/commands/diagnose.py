@@ -90,6 +90,7 @@ def run(args: argparse.Namespace) -> int:
     from hybridtable.commands._common import (
         check_outputs,
         input_paths,
+        log_map_entry,
         read_run_arguments,
         write_json,
     )
@@ -152,6 +153,8 @@ def run(args: argparse.Namespace) -> int:
         document = diagnosis_json(d)
         if splits:
             document["contact_events"] = [s.to_dict() for s in splits]
+        if (log_map := log_map_entry(args, runs)) is not None:
+            document["log_map"] = log_map
         write_json(args.json, document)
     if args.report:
         with staged_folder(args.report) as stage:

@@ -1,7 +1,7 @@
 """The fast path of the run reader: a CSV of plain numbers read by pyarrow.
 
-:func:`read_header` finds the header row (the first non-blank line, read with
-:mod:`csv` like the line-precise reader of
+:func:`read_header` finds the header row (the first line that is neither blank
+nor a comment, read with :mod:`csv` like the line-precise reader of
 :mod:`hybridtable.measurement.run_reader`) and where the data start;
 :func:`read_float_columns` reads the data as float64 columns with
 ``pyarrow.csv`` (multi-threaded, no Python string per cell). Neither raises on
@@ -10,8 +10,8 @@ valid table, and the caller then reads the file with its line-precise Python
 path, which names the defect. So the fast path only accepts files that the
 Python path reads to the same bits:
 
-- the data hold only the bytes ``0-9 . e E + - ,``, space, tab, CR and LF
-  (no quotes, no ``nan``/``inf`` words, no ``_``, no other line breaks of
+- the data hold only the bytes ``0-9 . e E + - ,``, space, tab, CR, LF and
+  the delimiter (no comment line, no quotes, no ``nan``/``inf`` words, no ``_``, no other line breaks of
   :meth:`str.splitlines`, nothing outside ASCII): on that alphabet pyarrow and
   :func:`float` accept the same cells (after trimming spaces and tabs) and
   both round correctly;
@@ -80,7 +80,9 @@ def _next_break(data: bytes, start: int) -> tuple[int, int] | None:
     return i, i + 1
 
 
-def read_header(path: str | Path) -> CsvHeader | None:
+def read_header(
+    path: str | Path, delimiter: str = ",", comment: str | None = None
+) -> CsvHeader | None:
     """The header row of the CSV file ``path``, or ``None`` where the fast path
     does not apply.
 
@@ -88,6 +90,10 @@ def read_header(path: str | Path) -> CsvHeader | None:
     ----------
     path : path
         The CSV file (UTF-8, an optional BOM).
+    delimiter : str
+        Its cell delimiter (a space delimiter is left to the Python path).
+    comment : str, optional
+        Lines starting with it (after leading blanks) are skipped.
 
     Returns
     -------
@@ -97,6 +103,8 @@ def read_header(path: str | Path) -> CsvHeader | None:
         lines up to it are not UTF-8 or hold a quote, a NUL or a line break of
         :meth:`str.splitlines` other than CR and LF.
     """
+    if delimiter == " ":
+        return None
     try:
         with open(path, "rb") as f:
             prefix = f.read(HEADER_BYTES)
@@ -116,36 +124,40 @@ def read_header(path: str | Path) -> CsvHeader | None:
             return None
         line += 1
         pos = brk[1]
+        if comment is not None and text.lstrip().startswith(comment):
+            continue
         try:
-            row = next(csv.reader([text]), [])
+            row = next(csv.reader([text], delimiter=delimiter), [])
         except csv.Error:
             return None
         if row and any(c.strip() for c in row):
             return CsvHeader([c.strip() for c in row], line, pos)
 
 
-def _plain_bytes(path: str | Path, offset_bytes: int) -> bool:
+def _plain_bytes(path: str | Path, offset_bytes: int, delimiter: str = ",") -> bool:
     """True if the file from ``offset_bytes`` on holds only :data:`DATA_BYTES`
-    and has no field longer than :func:`csv.field_size_limit`.
+    and the ``delimiter``, and has no field longer than :func:`csv.field_size_limit`.
 
     The field check is conservative: the section is cut into tiles of half the
-    limit (at most 64 KiB), and every tile must hold a separator (comma, CR or
-    LF); a field longer than the limit would cover a whole tile.
+    limit (at most 64 KiB), and every tile must hold a separator (the
+    delimiter, CR or LF); a field longer than the limit would cover a whole tile.
     """
+    allowed = DATA_BYTES + delimiter.encode()
+    sep = delimiter.encode()
     tile = max(1, min(csv.field_size_limit() // 2, 1 << 16))
     chunk_bytes = tile * max(1, _CHUNK_BYTES // tile)
     try:
         with open(path, "rb") as f:
             f.seek(offset_bytes)
             while chunk := f.read(chunk_bytes):
-                if chunk.translate(None, DATA_BYTES):
+                if chunk.translate(None, allowed):
                     return False
                 for k in range(0, len(chunk), tile):
                     end = k + tile
                     if end > len(chunk):
                         break  # a partial last tile: a longer field covers a whole one
                     if (
-                        chunk.find(b",", k, end) < 0
+                        chunk.find(sep, k, end) < 0
                         and chunk.find(b"\n", k, end) < 0
                         and chunk.find(b"\r", k, end) < 0
                     ):
@@ -156,7 +168,12 @@ def _plain_bytes(path: str | Path, offset_bytes: int) -> bool:
 
 
 def read_float_columns(
-    path: str | Path, offset_bytes: int, n_columns: int
+    path: str | Path,
+    offset_bytes: int,
+    n_columns: int,
+    delimiter: str = ",",
+    decimal: str = ".",
+    include: list[int] | None = None,
 ) -> list[np.ndarray] | None:
     """The data section of a CSV file as float64 columns, or ``None`` on any
     defect.
@@ -169,11 +186,15 @@ def read_float_columns(
         Byte offset of its first data line (:attr:`CsvHeader.data_offset_bytes`).
     n_columns : int
         Number of cells every data row must have.
+    delimiter, decimal : str
+        The cell delimiter and the decimal mark.
+    include : list of int, optional
+        The columns to read (default all); the others are not parsed.
 
     Returns
     -------
     list of numpy.ndarray or None
-        One writable, contiguous float64 array per column (in file order), all
+        One writable, contiguous float64 array per column read (in file order), all
         values finite; empty lines are skipped. ``None`` if the section holds a
         byte outside :data:`DATA_BYTES`, a field longer than the csv module's
         limit, a cell pyarrow cannot parse as a number (an empty one too), a row
@@ -182,9 +203,10 @@ def read_float_columns(
     import pyarrow as pa
     import pyarrow.csv as pa_csv
 
-    if not _plain_bytes(path, offset_bytes):
+    if delimiter == " " or not _plain_bytes(path, offset_bytes, delimiter):
         return None
     names = [f"c{i}" for i in range(n_columns)]
+    read = names if include is None else [names[i] for i in include]
     try:
         with pa.OSFile(str(path)) as f:
             f.seek(offset_bytes)
@@ -192,14 +214,16 @@ def read_float_columns(
                 f,
                 read_options=pa_csv.ReadOptions(column_names=names),
                 parse_options=pa_csv.ParseOptions(
-                    delimiter=",",
+                    delimiter=delimiter,
                     quote_char=False,
                     escape_char=False,
                     newlines_in_values=False,
                     ignore_empty_lines=True,
                 ),
                 convert_options=pa_csv.ConvertOptions(
-                    column_types={n: pa.float64() for n in names},
+                    column_types={n: pa.float64() for n in read},
+                    include_columns=read,
+                    decimal_point=decimal,
                     null_values=[],
                     strings_can_be_null=False,
                     quoted_strings_can_be_null=False,
@@ -207,10 +231,10 @@ def read_float_columns(
             )
     except (pa.ArrowException, OSError):
         return None
-    if table.num_rows == 0 or table.num_columns != n_columns:
+    if table.num_rows == 0 or table.num_columns != len(read):
         return None
     columns: list[np.ndarray] = []
-    for name in names:
+    for name in read:
         # One column at a time, dropped from the table as soon as it is copied
         # out, so the table and the arrays are not both held whole.
         values = table.column(name).to_numpy(zero_copy_only=False)

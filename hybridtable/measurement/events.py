@@ -149,7 +149,14 @@ def _event(run: Run, start: int, end: int, index: int, total: int) -> Run:
     )
     cols = {name: values[start:end].copy() for name, values in run.columns().items()}
     cols["time_s"] = cols["time_s"] - run.time_s[start]
-    return Run(info=info, csv_path=run.csv_path, json_path=run.json_path, part=where, **cols)
+    return Run(
+        info=info,
+        csv_path=run.csv_path,
+        json_path=run.json_path,
+        part=where,
+        skipped_columns=run.skipped_columns,
+        **cols,
+    )
 
 
 def split_events(run: Run, tail_s: float | None = None) -> tuple[list[Run], EventSplit | None]:

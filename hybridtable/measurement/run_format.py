@@ -115,6 +115,9 @@ class Run:
     #: Which part of the files this run is, if not all of them (a contact
     #: event of a long log, :mod:`hybridtable.measurement.events`).
     part: str | None = None
+    #: The log's columns that were not read (a rig's own log,
+    #: :mod:`hybridtable.measurement.log_layout`).
+    skipped_columns: tuple[str, ...] = ()
 
     @property
     def run_id(self) -> str:

@@ -1,18 +1,22 @@
 """The header row of a run's CSV: which format column each log column is.
 
-:func:`format_names` renames the log's columns by a column map and checks that
-the header holds exactly the columns of
-:data:`~hybridtable.measurement.run_format.RUN_COLUMNS`; a missing column's
-message names the log's columns and proposes the ``--column-map`` that reads
-it, by name and by the usual other names of each column (:data:`_ALIASES`).
+:func:`format_names` renames the log's columns by a
+:class:`~hybridtable.measurement.log_layout.LogLayout` and checks that the
+header holds every column of
+:data:`~hybridtable.measurement.run_format.RUN_COLUMNS` once (other columns are
+skipped); a missing column's message names the log's columns and proposes the
+``--column-map`` that reads it, by name and by the usual other names of each
+column (:data:`_ALIASES`), or names the delimiter or comment prefix the
+header shows.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 
 from hybridtable.errors import MeasurementError
+from hybridtable.measurement.log_layout import LogLayout
 from hybridtable.measurement.run_format import RUN_COLUMNS
 
 __all__ = ["format_names", "shown"]
@@ -73,11 +77,38 @@ def _missing_message(missing: list[str], header: list[str], leftover: list[str])
     return f"{text}; map {them} with --column-map {items}"
 
 
+#: Prefixes that start a comment line in the logs of common loggers.
+_COMMENT_MARKS = ("#", "%", "//", ";", "!")
+
+
+def _layout_hint(header: list[str], layout: LogLayout) -> str:
+    """Why a header lacks the format's columns, if the header shows it (a
+    comment line taken for the header, a delimiter other than the layout's),
+    as the message's text; else ``""``."""
+    first = header[0] if header else ""
+    for mark in _COMMENT_MARKS:
+        if first.startswith(mark) and layout.comment != mark:
+            return (
+                f"the format's columns are missing and the first line starts with {mark!r} "
+                f"like a comment line: give --comment '{mark}' "
+                f'(comment = "{mark}" in a --log-map file)'
+            )
+    joined = layout.delimiter.join(header)
+    for d, word in ((";", ";"), ("\t", "\\t"), ("|", "|"), (",", ",")):
+        if d != layout.delimiter and joined.count(d) >= len(RUN_COLUMNS) - 1:
+            return (
+                f"the format's columns are missing and the header ({shown(joined)!r}) looks "
+                f"separated by '{word}': give --delimiter '{word}' "
+                f'(delimiter = "{word}" in a --log-map file)'
+            )
+    return ""
+
+
 def format_names(
-    path: Path, header: list[str], header_line: int, column_map: Mapping[str, str] | None
-) -> list[str]:
-    """The format name of every header cell, once the header holds exactly
-    the format's columns.
+    path: Path, header: list[str], header_line: int, layout: LogLayout
+) -> list[str | None]:
+    """The format name of every header cell (``None`` for a column not read),
+    once the header holds every format column once.
 
     Parameters
     ----------
@@ -87,46 +118,45 @@ def format_names(
         The header's cells, stripped.
     header_line : int
         The header's file line (named in the messages).
-    column_map : mapping, optional
-        ``{format_column: log_column}``: log names renamed to format names.
+    layout : LogLayout
+        How the log's columns map to the format's.
 
     Returns
     -------
-    list of str
-        The format name of each cell, in file order.
+    list of str or None
+        The format name of each cell, in file order; ``None`` for a column the
+        format does not need or the layout ignores.
 
     Raises
     ------
     MeasurementError
-        For an empty or repeated column name, a ``column_map`` entry not in the
-        header, a missing format column (naming the log's columns and proposing
-        the ``--column-map`` that would read it) or a column the format lacks.
+        For an empty or repeated column name, a mapped column not in the
+        header, a missing format column (naming the log's columns and
+        proposing the ``--column-map`` that would read it, or the delimiter or
+        comment prefix the header shows).
     """
-    rename = {log: fmt for fmt, log in (column_map or {}).items()}
-    names = [rename.get(c, c) for c in header]
-    seen: set[str] = set()
-    for c, name in zip(header, names, strict=True):
+    rename = layout.rename()
+    names: list[str | None] = []
+    for c in header:
         if not c:
             raise MeasurementError(f"{path} line {header_line}: empty column name in the header")
-        if name in seen:
+        name = None if c in layout.ignore else rename.get(c)
+        if name is not None and name in names:
             raise MeasurementError(f"{path} line {header_line}: column {shown(c)!r} appears twice")
-        seen.add(name)
-    unmatched = [f"{f}={log}" for f, log in (column_map or {}).items() if log not in header]
-    if unmatched:
+        names.append(name)
+    mapped = [
+        f"{fmt}={src.column}"
+        for fmt, src in layout.columns.items()
+        if src.column != fmt and src.column not in header
+    ]
+    if mapped:
         raise MeasurementError(
-            f"{path} line {header_line}: --column-map entries not in the header: "
-            f"{', '.join(unmatched)} (has: {_column_list(header)})"
+            f"{path} line {header_line}: {layout.source} names log column(s) not in the header: "
+            f"{', '.join(mapped)} (has: {_column_list(header)})"
         )
-    missing = [c for c in RUN_COLUMNS if c not in seen]
+    missing = [c for c in RUN_COLUMNS if c not in names]
     if missing:
-        leftover = [c for c, name in zip(header, names, strict=True) if name not in RUN_COLUMNS]
-        raise MeasurementError(
-            f"{path} line {header_line}: {_missing_message(missing, header, leftover)}"
-        )
-    extra = [c for c, name in zip(header, names, strict=True) if name not in RUN_COLUMNS]
-    if extra:
-        raise MeasurementError(
-            f"{path} line {header_line}: unexpected column(s) {_column_list(extra)} "
-            f"(the format has {', '.join(RUN_COLUMNS)}; rename with --column-map)"
-        )
+        leftover = [c for c, name in zip(header, names, strict=True) if name is None]
+        text = _layout_hint(header, layout) or _missing_message(missing, header, leftover)
+        raise MeasurementError(f"{path} line {header_line}: {text}")
     return names

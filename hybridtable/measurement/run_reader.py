@@ -14,17 +14,20 @@ every pair and returns :class:`~hybridtable.measurement.run_format.Run` objects
 
 The CLI prints that line and exits with code 2.
 
-Logs whose columns are named differently are read with a column map
-``{format_name: log_name}`` (:func:`parse_column_map` reads the command-line
-form ``FORMAT=LOG``).
+A rig's own log (other column names, extra columns, another delimiter or
+decimal mark, comment lines, other units) is read through a
+:class:`~hybridtable.measurement.log_layout.LogLayout`: the values come out in
+SI, and a channel that the JSON shows to be in another unit is refused naming
+the column and the unit that fits (:mod:`~hybridtable.measurement.log_units`).
 """
 
 from __future__ import annotations
 
 import csv
+import dataclasses
 import json
 import math
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -35,6 +38,8 @@ from hybridtable.errors import MeasurementError
 from hybridtable.limits import LIMITS
 from hybridtable.measurement.channels import check_channels
 from hybridtable.measurement.csv_fast import read_float_columns, read_header
+from hybridtable.measurement.log_layout import DEFAULT_LAYOUT, LogLayout, parse_pairs
+from hybridtable.measurement.log_units import check_units, time_unit_hint
 from hybridtable.measurement.run_format import (
     FORMAT,
     MIN_ROWS,
@@ -59,7 +64,8 @@ __all__ = [
 # -- column map ----------------------------------------------------------------
 def parse_column_map(items: Iterable[str] | None) -> dict[str, str]:
     """Parse ``FORMAT=LOG`` items (each may hold several, comma separated) into
-    ``{format_column: log_column}``.
+    ``{format_column: log_column}`` (the ``--column-map`` flag; the whole
+    mapping of a log is :func:`~hybridtable.measurement.log_layout.log_layout`).
 
     Raises
     ------
@@ -67,30 +73,11 @@ def parse_column_map(items: Iterable[str] | None) -> dict[str, str]:
         For an item without ``=``, an unknown format column, or a column
         mapped twice.
     """
-    mapping: dict[str, str] = {}
-    for item in items or ():
-        for part in str(item).split(","):
-            part = part.strip()
-            if not part:
-                continue
-            if "=" not in part:
-                raise MeasurementError(
-                    f"--column-map item {part!r} must be FORMAT_COLUMN=LOG_COLUMN "
-                    f"(format columns: {', '.join(RUN_COLUMNS)})"
-                )
-            fmt, log = (s.strip() for s in part.split("=", 1))
-            if fmt not in RUN_COLUMNS:
-                raise MeasurementError(
-                    f"--column-map: {fmt!r} is not a column of the format "
-                    f"(one of {', '.join(RUN_COLUMNS)})"
-                )
-            if not log:
-                raise MeasurementError(f"--column-map: empty log column name for {fmt}")
-            if fmt in mapping:
-                raise MeasurementError(f"--column-map: {fmt} is mapped twice")
-            if log in mapping.values():
-                raise MeasurementError(f"--column-map: log column {log!r} is mapped twice")
-            mapping[fmt] = log
+    mapping = parse_pairs(items, "--column-map", "LOG_COLUMN")
+    logs = list(mapping.values())
+    twice = [log for log in logs if logs.count(log) > 1]
+    if twice:
+        raise MeasurementError(f"--column-map: log column {twice[0]!r} is mapped twice")
     return mapping
 
 
@@ -161,27 +148,44 @@ def run_info_from_dict(raw: object, path: str) -> RunInfo:
 _FAST_CSV = True
 
 
-def _parse_cell(text: str) -> float:
+def _parse_cell(text: str, decimal: str = ".") -> float:
     s = text.strip()
     if not s or "_" in s:
         raise ValueError
+    if decimal == ",":
+        if "." in s:
+            raise ValueError
+        s = s.replace(",", ".")
     return float(s)
 
 
-def _csv_rows(path: Path) -> tuple[list[str], int, list[list[str]], list[int]]:
+def _rows(lines: list[str], layout: LogLayout) -> Iterator[tuple[int, list[str]]]:
+    """``(line number, cells)`` of every row; a comment line is a blank row
+    (so the rows keep their numbers)."""
+    comment = layout.comment
+    if comment is not None:
+        lines = ["" if line.lstrip().startswith(comment) else line for line in lines]
+    if layout.delimiter == " ":
+        yield from enumerate((line.split() for line in lines), start=1)
+    else:
+        yield from enumerate(csv.reader(lines, delimiter=layout.delimiter), start=1)
+
+
+def _csv_rows(
+    path: Path, layout: LogLayout = DEFAULT_LAYOUT
+) -> tuple[list[str], int, list[list[str]], list[int]]:
     """The Python path: the header's cells and file line, every data row's
-    cells and file line (blank lines skipped)."""
+    cells and file line (blank and comment lines skipped)."""
     text = _read_text(path)
     if not text.strip():
         raise MeasurementError(f"{path}: empty file")
     lines = text.splitlines()
-    rows = csv.reader(lines)
     header: list[str] | None = None
     header_line = 0
     data: list[list[str]] = []
     line_of_row: list[int] = []
     try:
-        for i, row in enumerate(rows, start=1):
+        for i, row in _rows(lines, layout):
             if not row or all(not c.strip() for c in row):
                 continue  # blank line
             if header is None:
@@ -201,13 +205,14 @@ class _RowLines(Sequence[int]):
     on first use by reading the file again line by line: only a message about
     a row needs it, so a valid file never builds the list."""
 
-    def __init__(self, path: Path):
+    def __init__(self, path: Path, layout: LogLayout):
         self._path = path
+        self._layout = layout
         self._lines: list[int] | None = None
 
     def _get(self) -> list[int]:
         if self._lines is None:
-            self._lines = _csv_rows(self._path)[3]
+            self._lines = _csv_rows(self._path, self._layout)[3]
         return self._lines
 
     def __getitem__(self, i):
@@ -218,66 +223,108 @@ class _RowLines(Sequence[int]):
 
 
 def _read_series_fast(
-    path: Path, column_map: Mapping[str, str] | None
-) -> dict[str, np.ndarray] | None:
-    """Columns by format name read by pyarrow, or ``None`` if the file is not
-    a plain valid table (the Python path then names its defect)."""
-    header = read_header(path)
+    path: Path, layout: LogLayout
+) -> tuple[dict[str, np.ndarray], tuple[str, ...]] | None:
+    """Columns by format name read by pyarrow, in the log's units, and the
+    log's columns not read; ``None`` if the file is not a plain valid table
+    (the Python path then names its defect)."""
+    header = read_header(path, layout.delimiter, layout.comment)
     if header is None:
         return None
     try:
-        names = format_names(path, header.cells, header.line, column_map)
+        names = format_names(path, header.cells, header.line, layout)
     except MeasurementError:
         return None  # the Python path says it, or a defect before it
-    columns = read_float_columns(path, header.data_offset_bytes, len(names))
+    read = [i for i, name in enumerate(names) if name is not None]
+    columns = read_float_columns(
+        path, header.data_offset_bytes, len(names), layout.delimiter, layout.decimal, read
+    )
     if columns is None or len(columns[0]) < MIN_ROWS:
         return None
-    return {name: columns[names.index(name)] for name in RUN_COLUMNS}
+    skipped = tuple(c for c, name in zip(header.cells, names, strict=True) if name is None)
+    return {names[i]: col for i, col in zip(read, columns, strict=True)}, skipped
+
+
+def _decimal_hint(cell: str, layout: LogLayout) -> str:
+    if layout.decimal == "." and "," in cell and "." not in cell:
+        return ' (a decimal comma? give --decimal , or decimal = "," in a --log-map file)'
+    return ""
 
 
 def _read_series(
-    path: Path, column_map: Mapping[str, str] | None
-) -> tuple[dict[str, np.ndarray], Sequence[int]]:
-    """Columns by format name and the file line of every data row.
+    path: Path, layout: LogLayout
+) -> tuple[dict[str, np.ndarray], Sequence[int], tuple[str, ...]]:
+    """Columns by format name, in SI (the layout's units), the file line
+    of every data row and the log's columns not read.
 
     A plain valid file is read by pyarrow (no Python string per cell; its row
     lines are found only if a message needs them); any other file, and every
     defect, by the Python path, line by line, whose message names the line.
+    Only the columns the format reads are parsed.
     """
-    if _FAST_CSV:
-        cols = _read_series_fast(path, column_map)
-        if cols is not None:
-            return cols, _RowLines(path)
-    header, header_line, data, line_of_row = _csv_rows(path)
-    names = format_names(path, header, header_line, column_map)
+    fast = _read_series_fast(path, layout) if _FAST_CSV else None
+    lines: Sequence[int]
+    if fast is not None:
+        (cols, skipped), lines = fast, _RowLines(path, layout)
+    else:
+        cols, lines, skipped = _read_series_python(path, layout)
+    for name in RUN_COLUMNS:
+        factor = layout.factor(name)
+        if factor != 1.0:
+            cols[name] = cols[name] * factor
+    return {name: cols[name] for name in RUN_COLUMNS}, lines, skipped
+
+
+def _read_series_python(
+    path: Path, layout: LogLayout
+) -> tuple[dict[str, np.ndarray], list[int], tuple[str, ...]]:
+    header, header_line, data, line_of_row = _csv_rows(path, layout)
+    names = format_names(path, header, header_line, layout)
     if not data:
         raise MeasurementError(f"{path}: no data rows after the header")
     if len(data) < MIN_ROWS:
         raise MeasurementError(f"{path}: only {len(data)} data row(s), need at least {MIN_ROWS}")
     ncol = len(header)
-    values = np.empty((len(data), ncol))
+    read = [(c, name) for c, name in enumerate(names) if name is not None]
+    values = np.empty((len(data), len(read)))
     for r, (row, line) in enumerate(zip(data, line_of_row, strict=True)):
         if len(row) != ncol:
-            raise MeasurementError(f"{path} line {line}: {len(row)} cells, the header has {ncol}")
-        for c, cell in enumerate(row):
+            hint = ""
+            if len(row) > ncol and layout.delimiter == "," and layout.decimal == ".":
+                hint = " (decimal commas in a comma-separated log cannot be read apart from it)"
+            raise MeasurementError(
+                f"{path} line {line}: {len(row)} cells, the header has {ncol}{hint}"
+            )
+        for j, (c, _) in enumerate(read):
+            cell = row[c]
             if not cell.strip():
-                raise MeasurementError(f"{path} line {line}, column {names[c]}: empty cell")
+                raise MeasurementError(f"{path} line {line}, column {shown(header[c])}: empty cell")
             try:
-                x = _parse_cell(cell)
+                x = _parse_cell(cell, layout.decimal)
             except ValueError:
                 raise MeasurementError(
-                    f"{path} line {line}, column {names[c]}: not a number ({shown(cell.strip())!r})"
+                    f"{path} line {line}, column {shown(header[c])}: not a number "
+                    f"({shown(cell.strip())!r}){_decimal_hint(cell, layout)}"
                 ) from None
             if not math.isfinite(x):
                 raise MeasurementError(
-                    f"{path} line {line}, column {names[c]}: not finite ({shown(cell.strip())})"
+                    f"{path} line {line}, column {shown(header[c])}: not finite "
+                    f"({shown(cell.strip())})"
                 )
-            values[r, c] = x
-    cols = {name: values[:, names.index(name)].copy() for name in RUN_COLUMNS}
-    return cols, line_of_row
+            values[r, j] = x
+    cols = {name: values[:, j].copy() for j, (_, name) in enumerate(read)}
+    skipped = tuple(c for c, name in zip(header, names, strict=True) if name is None)
+    return cols, line_of_row, skipped
 
 
-def _check_time(path: Path, json_path: Path, t: np.ndarray, lines: Sequence[int], info: RunInfo):
+def _check_time(
+    path: Path,
+    json_path: Path,
+    t: np.ndarray,
+    lines: Sequence[int],
+    info: RunInfo,
+    layout: LogLayout = DEFAULT_LAYOUT,
+):
     h = info.sample_period_s
     dt = np.diff(t)
     bad = np.flatnonzero(dt <= 0.0)
@@ -290,7 +337,7 @@ def _check_time(path: Path, json_path: Path, t: np.ndarray, lines: Sequence[int]
     if abs(h_seen - h) > SAMPLE_RATE_TOLERANCE * h:
         raise MeasurementError(
             f"{path}: time_s is sampled at {1.0 / h_seen:.6g} Hz but {json_path.name} says "
-            f"sample_rate_hz = {info.sample_rate_hz:g}"
+            f"sample_rate_hz = {info.sample_rate_hz:g}{time_unit_hint(h_seen / h, layout)}"
         )
     uneven = np.flatnonzero(np.abs(dt - h) > SAMPLE_RATE_TOLERANCE * h)
     if uneven.size:
@@ -319,6 +366,7 @@ def read_run(
     csv_path: str | Path,
     json_path: str | Path | None = None,
     column_map: Mapping[str, str] | None = None,
+    layout: LogLayout | None = None,
 ) -> Run:
     """Read and validate one run.
 
@@ -329,13 +377,17 @@ def read_run(
     json_path : path, optional
         Its parameters (default: the CSV's stem with ``.json``).
     column_map : mapping, optional
-        ``{format_column: log_column}`` for logs named differently.
+        ``{format_column: log_column}`` for logs named differently (a
+        shorthand of ``layout``, which it overrides).
+    layout : LogLayout, optional
+        How the log maps to the format (default: the format's own CSV).
 
     Raises
     ------
     MeasurementError
         For any defect, in one line naming the file and the line or key.
     """
+    layout = _layout(layout, column_map)
     csv_path = Path(csv_path)
     json_path = Path(json_path) if json_path is not None else csv_path.with_suffix(".json")
     for p in (csv_path, json_path):
@@ -348,9 +400,22 @@ def read_run(
         if problem:
             raise MeasurementError(f"{p}: {problem}")
     info = _read_info(json_path)
-    cols, lines = _read_series(csv_path, column_map)
-    _check_time(csv_path, json_path, cols["time_s"], lines, info)
-    return Run(info=info, csv_path=csv_path, json_path=json_path, **cols)
+    cols, lines, skipped = _read_series(csv_path, layout)
+    _check_time(csv_path, json_path, cols["time_s"], lines, info, layout)
+    return Run(info=info, csv_path=csv_path, json_path=json_path, skipped_columns=skipped, **cols)
+
+
+def _layout(layout: LogLayout | None, column_map: Mapping[str, str] | None) -> LogLayout:
+    """``layout`` with the log names of ``column_map`` over its own."""
+    base = layout or DEFAULT_LAYOUT
+    if not column_map:
+        return base
+    columns = dict(base.columns)
+    for fmt, log in column_map.items():
+        if fmt not in columns:
+            parse_column_map([f"{fmt}={log}"])  # names the unknown column
+        columns[fmt] = dataclasses.replace(columns[fmt], column=log)
+    return dataclasses.replace(base, columns=columns, source="--column-map")
 
 
 def _looks_like_run(path: Path) -> bool:
@@ -427,13 +492,16 @@ def find_run_files(paths: Sequence[str | Path]) -> list[tuple[Path, Path]]:
 
 
 def read_runs(
-    paths: Sequence[str | Path], column_map: Mapping[str, str] | None = None
+    paths: Sequence[str | Path],
+    column_map: Mapping[str, str] | None = None,
+    layout: LogLayout | None = None,
 ) -> list[Run]:
     """Read and validate every run named by ``paths`` (files or folders).
 
     All runs are read before any is returned, so a defect anywhere stops
-    everything. Run ids must be unique, and each run's channels must agree
-    with each other (:func:`hybridtable.measurement.channels.check_channels`:
+    everything. Run ids must be unique, and each run's channels must be in
+    the units read (:func:`hybridtable.measurement.log_units.check_units`) and
+    agree with each other (:func:`hybridtable.measurement.channels.check_channels`:
     no dead or sign-flipped channel, a contact, a start apart).
 
     Raises
@@ -441,8 +509,10 @@ def read_runs(
     MeasurementError
         For any defect (see :func:`read_run` and :func:`find_run_files`).
     """
-    runs = [read_run(c, j, column_map) for c, j in find_run_files(paths)]
+    layout = _layout(layout, column_map)
+    runs = [read_run(c, j, layout=layout) for c, j in find_run_files(paths)]
     for r in runs:
+        check_units(r, layout)
         check_channels(r)
     ids: dict[str, Path | None] = {}
     for r in runs:

@@ -16,12 +16,15 @@ Physics (what a run of a rig is)
   (contact point) position ``q``; nominal force ``k q`` for ``q > 0``, else 0.
   No force acts back on the table (a stiff position servo).
 - **Force sensor**: ``f_mea[k] = f(t_k - D) + noise`` with ``D`` the JSON's
-  whole number of ticks (``f = 0`` before ``t = 0``). Sensor dynamics (filters)
+  delay, a whole number of ticks (or, with the fractional-delay condition
+  below, a fraction more; ``f = 0`` before ``t = 0``). Sensor dynamics (filters)
   act on a fine history of the force (``SUBSTEPS`` points per tick, filters
   discretised exactly for a piecewise-linear input); fractional delays read it
   by 4-point cubic interpolation.
 - **Position sensor**: ``p_act[k] = p(t_k) + noise``.
-- **Rig computer**: steps 2-4 of the format, on the noisy readings. At tick 0
+- **Rig computer**: steps 2-4 of the format, on the noisy readings (step 3 by
+  the rig's integrator, the format's semi-implicit Euler unless the
+  integrator condition below says otherwise). At tick 0
   there is no earlier reading, so the SDC derivative is taken as 0 there; the
   MDC's ``p_des[-1]`` is the model's start ``-initial_gap_m``.
 - **Noise**: white, AR(1) or AR(2), stationary from the first sample, with a
@@ -31,7 +34,7 @@ When no effect is hidden and the noise is off, a run is the nominal model's
 exactly (rounding aside). Three integration paths exist: a lean float loop for
 tick-exact physics (nominal table, static contact law, whole-tick delay, no
 sensor dynamics); a sub-stepped numpy path (linear tables stepped exactly,
-filters, fractional delays, the base-excited table mode); and RK4 in floats
+filters, fractional delays, nominal or hidden, the base-excited table mode); and RK4 in floats
 for the nonlinear tables (rate-limited servo; the optional loaded table mode,
 on which the contact force acts).
 On the physics they share they agree to rounding (tested), and halving the
@@ -84,6 +87,59 @@ Outside-library effects (12 kinds; * = borderline, see ``EFFECTS[n].borderline``
 - ``resonant_force_sensor`` *: an underdamped second-order force sensor; far
   above the contact it is a delay / first-order filter look-alike.
 
+Rig conditions (not effects: properties of the rig the JSON states, or does not)
+--------------------------------------------------------------------------------
+Three conditions real rigs produce, each a field of :class:`Rig` (drawn by
+:func:`draw_rig` on request), so each combines with any hidden effect and with
+the others. A rig of the original zoo has none of them.
+
+- **Zero deadband** (``Rig.deadband_n = 0``, the paper's own rig model): the
+  gate ``f_mea <= 0`` then passes sensor noise in free flight, so ``f_comp``
+  is the clamped noise (about half of the free-flight ticks non-zero, and the
+  SDC / MDC terms with it) before and after the contact, and the model drifts.
+  Noise-free it is the run with a tiny deadband.
+- **Fractional nominal sensor delay** (``Rig.delay_frac``, a fraction of a
+  tick added to ``delay_ticks``): the JSON's ``sensor_delay_s`` is
+  ``(delay_ticks + delay_frac) h`` (e.g. 3.4 ms at 1 kHz, a real sensor's
+  filter delay) and the physics reads the force that much late, by the same
+  cubic interpolation of the fine force history as a fractional
+  ``extra_delay`` (the sub-stepped path). :func:`nominal_replay` models it the
+  same way, so a null set's nominal error stays the noise's.
+- **The rig computer's integrator** (``Rig.integrator``, one of
+  :data:`INTEGRATORS`; the JSON does not say which, a hidden property of the
+  rig recorded in the set's truth): how step 3 of the format moves the
+  spacecraft model with the force ``f_comp[k]`` held over the tick,
+  ``a = -f_comp[k] / m``. Every rule gives ``v_new = v_old + a h``; they differ
+  in the position (see :func:`model_step`):
+
+  - ``semi_implicit_euler`` (the format's): ``x += v_new h`` = ``x + v_old h + a h^2``;
+  - ``explicit_euler``: ``x += v_old h``, then ``v += a h``;
+  - ``trapezoid``: ``x += (v_old + v_new) / 2 h`` = ``x + v_old h + a h^2 / 2``;
+  - ``rk4``: classical RK4 on ``x' = v, v' = a`` with ``a`` constant over the
+    tick. Its stages are ``v, v + a h/2, v + a h/2, v + a h`` for x and ``a``
+    four times for v, so ``x += v_old h + a h^2 / 2`` and ``v += a h``: the
+    exact solution for a held force, **the same update as ``trapezoid``** (to
+    rounding; :data:`INTEGRATOR_EQUIVALENT` maps it to ``trapezoid``).
+
+  Against the exact (trapezoid) positions, the semi-implicit ones lead by
+  ``(h / 2) (v_k - v_0)`` and the explicit ones lag by as much: over a
+  contact, explicit Euler acts as half a tick more delay than the exact rule
+  (energy added, a higher CoR), semi-implicit Euler as half a tick less.
+  Exactly: explicit Euler with a sensor delay of D ticks is the format's rule
+  with D + 1 ticks, its velocity one tick early (``v_exp[k] = v_semi[k+1]``,
+  the same commands ``p_des`` and, noise-free, ``f_mea[k] = f_mea'[k+1]``)
+  when the compensation has no MDC term (the MDC's ``p_des[k-1] - p_act[k]``
+  breaks the shift); tested. A record still tells them apart: its
+  ``p_des`` steps by the previous tick's ``v_des``.
+
+The study classes ``deadband0``, ``fractional_delay`` and ``integrator``
+(:data:`CONDITION_CLASSES`) each draw sets of a rig with that condition and
+otherwise like the other classes: a null or a single library effect (physics,
+sized as a ``single``; or computer, sized as a ``computer``).
+``SetSpec.truth()`` is the hidden effect (empty for a null) and
+``SetSpec.condition()`` / the ``condition`` key of ``SetSpec.to_json()`` says
+which condition applies (the integrator's rule and its equivalents).
+
 Sets and the study
 ------------------
 A :class:`SetSpec` is one rig, its noise, its runs (velocities, compensators,
@@ -112,6 +168,11 @@ __all__ = [
     "COMPUTER_EFFECTS",
     "OUTSIDE_EFFECTS",
     "CLASSES",
+    "BASE_CLASSES",
+    "CONDITION_CLASSES",
+    "INTEGRATORS",
+    "INTEGRATOR_EQUIVALENT",
+    "DEFAULT_INTEGRATOR",
     "EffectDef",
     "Rig",
     "NoiseSpec",
@@ -129,6 +190,8 @@ __all__ = [
     "make_hidden",
     "physical_params",
     "simulate_run",
+    "model_step",
+    "rig_with_delay",
     "simulate_set",
     "nominal_replay",
     "nominal_error",
@@ -149,7 +212,24 @@ SUBSTEPS = 20
 MAX_TICKS = 3000
 #: No-contact time kept after the separation, s.
 QUIET_S = 0.2
-CLASSES = ("null", "single", "pair", "pair_cancel", "outside", "tiny", "computer")
+#: The study's classes of the original zoo (their draws are fixed by the seed).
+BASE_CLASSES = ("null", "single", "pair", "pair_cancel", "outside", "tiny", "computer")
+#: Classes of a rig condition (zero deadband, fractional nominal delay, the
+#: computer's integrator), each set a null or a single library effect.
+CONDITION_CLASSES = ("deadband0", "fractional_delay", "integrator")
+CLASSES = BASE_CLASSES + CONDITION_CLASSES
+#: Rules by which the rig computer steps the spacecraft model (step 3 of the
+#: format), the format's own first; see the module's docstring.
+INTEGRATORS = ("semi_implicit_euler", "explicit_euler", "trapezoid", "rk4")
+DEFAULT_INTEGRATOR = INTEGRATORS[0]
+#: Each rule's class of rules that give the same update for a force held over
+#: the tick (``rk4`` is exact for it, as is ``trapezoid``).
+INTEGRATOR_EQUIVALENT = {
+    "semi_implicit_euler": "semi_implicit_euler",
+    "explicit_euler": "explicit_euler",
+    "trapezoid": "trapezoid",
+    "rk4": "trapezoid",
+}
 
 
 # --------------------------------------------------------------------------- #
@@ -364,6 +444,10 @@ class Rig:
     """What the JSON of every run of a set says (besides compensator, velocity, id).
 
     The rig's true physics is this unless a :class:`Hidden` effect says otherwise.
+    ``delay_frac`` (0 <= it < 1, default 0) is a fraction of a tick added to
+    the nominal delay ``delay_ticks`` (the JSON states the sum);
+    ``integrator`` (one of :data:`INTEGRATORS`) is how the rig computer steps
+    the spacecraft model, which the JSON does not state.
     """
 
     sample_rate_hz: int
@@ -375,14 +459,70 @@ class Rig:
     deadband_n: float
     lead_time_s: float
     initial_gap_m: float
+    delay_frac: float = 0.0
+    integrator: str = DEFAULT_INTEGRATOR
+
+    def __post_init__(self):
+        if self.integrator not in INTEGRATORS:
+            raise ValueError(f"integrator {self.integrator!r} is not one of {INTEGRATORS}")
+        if not 0.0 <= self.delay_frac < 1.0:
+            raise ValueError(f"delay_frac {self.delay_frac} is not in [0, 1)")
 
     @property
     def h(self) -> float:
         return 1.0 / self.sample_rate_hz
 
     @property
+    def delay_ticks_exact(self) -> float:
+        """The nominal (and true) sensor delay in ticks, fraction included."""
+        return self.delay_ticks + self.delay_frac
+
+    @property
+    def delay_ticks_ceil(self) -> int:
+        """Whole ticks that cover the delay."""
+        return self.delay_ticks + (1 if self.delay_frac > 0.0 else 0)
+
+    @property
     def sensor_delay_s(self) -> float:
+        if self.delay_frac:
+            return round(self.delay_ticks_exact / self.sample_rate_hz, 12)
         return self.delay_ticks / self.sample_rate_hz
+
+    def conditions(self) -> dict:
+        """The rig's conditions beyond the original zoo's (empty if none):
+        ``zero_deadband``, ``fractional_delay`` (with the delay in ticks) and a
+        non-default ``integrator`` (with the rules equivalent to it)."""
+        out: dict = {}
+        if self.deadband_n == 0.0:
+            out["zero_deadband"] = True
+        if self.delay_frac:
+            out["fractional_delay"] = True
+            out["sensor_delay_ticks"] = self.delay_ticks_exact
+        if self.integrator != DEFAULT_INTEGRATOR:
+            out["integrator"] = self.integrator
+            out["integrator_equivalent"] = sorted(
+                n
+                for n in INTEGRATORS
+                if INTEGRATOR_EQUIVALENT[n] == INTEGRATOR_EQUIVALENT[self.integrator]
+            )
+        return out
+
+    def __repr__(self) -> str:
+        # The dataclass repr, the conditions' fields only where not the
+        # defaults (a rig of the original zoo reads as it always did: the
+        # redraw reasons in a set's info quote it).
+        body = ", ".join(f"{k}={v!r}" for k, v in self.public_dict().items())
+        return f"{type(self).__qualname__}({body})"
+
+    def public_dict(self) -> dict:
+        """The fields, the conditions' only where they are not the defaults
+        (a rig of the original zoo gives the dict it always gave)."""
+        d = dict(self.__dict__)
+        if not self.delay_frac:
+            d.pop("delay_frac")
+        if self.integrator == DEFAULT_INTEGRATOR:
+            d.pop("integrator")
+        return d
 
     @property
     def contact_hz(self) -> float:
@@ -408,6 +548,17 @@ class Rig:
             "initial_velocity_m_per_s": velocity,
             "force_deadband_n": self.deadband_n,
         }
+
+
+def rig_with_delay(rig: Rig, delay_s: float) -> Rig:
+    """``rig`` with the nominal (and true) sensor delay ``delay_s``: whole ticks
+    plus a fraction (a delay within 1e-9 tick of a whole number is whole)."""
+    d = delay_s * rig.sample_rate_hz
+    nd = round(d)
+    if abs(d - nd) < 1e-9:
+        return replace(rig, delay_ticks=int(nd), delay_frac=0.0)
+    nd = math.floor(d)
+    return replace(rig, delay_ticks=int(nd), delay_frac=round(d - nd, 12))
 
 
 @dataclass(frozen=True)
@@ -541,6 +692,15 @@ class SetSpec:
         return Scales.of(self.rig, self.velocities, self.noise)
 
     @property
+    def run_stem(self) -> str:
+        """Stem of the runs' ``run_id``: the set id for the original classes
+        (as before), a neutral name for the condition classes, whose run JSON
+        must not tell the hidden effect or the computer's integrator."""
+        if self.label in CONDITION_CLASSES:
+            return f"rig{self.seed:010d}"
+        return self.set_id
+
+    @property
     def sized(self) -> bool:
         return all(h.magnitude is not None for h in self.hidden)
 
@@ -555,13 +715,31 @@ class SetSpec:
     def expects_unexplained(self) -> bool:
         return self.label == "outside"
 
+    def condition(self) -> dict:
+        """Which rig condition applies (:meth:`Rig.conditions`, empty for a rig
+        of the original zoo); ``integrator`` is always given once any
+        condition is (the format's rule unless the rig's differs), so a study
+        can score whether a tool named the rule."""
+        out = self.rig.conditions()
+        if out or self.label in CONDITION_CLASSES:
+            out.setdefault("integrator", self.rig.integrator)
+            out.setdefault(
+                "integrator_equivalent",
+                sorted(
+                    n
+                    for n in INTEGRATORS
+                    if INTEGRATOR_EQUIVALENT[n] == INTEGRATOR_EQUIVALENT[self.rig.integrator]
+                ),
+            )
+        return out
+
     def to_json(self) -> dict:
         sc = self.scales
-        return {
+        out = {
             "set_id": self.set_id,
             "label": self.label,
             "truth": sorted(self.truth()),
-            "rig": self.rig.__dict__ | {"contact_hz": self.rig.contact_hz},
+            "rig": self.rig.public_dict() | {"contact_hz": self.rig.contact_hz},
             "noise": {
                 "kind": self.noise.kind,
                 "ar": list(self.noise.ar),
@@ -575,6 +753,10 @@ class SetSpec:
             "hidden": [h.to_json(sc) for h in self.hidden],
             "info": dict(self.info),
         }
+        cond = self.condition()
+        if cond:
+            out["condition"] = cond
+        return out
 
 
 @dataclass
@@ -889,6 +1071,7 @@ class _Physics:
             or bool(self.filters)
             or self.extra_delay > 0.0
             or self.pos_lag > 0.0
+            or rig.delay_frac > 0.0
         )
 
     # ---- contact law -------------------------------------------------------
@@ -1048,6 +1231,41 @@ def _compensate(f_mea, f_prev, p_act, u_prev, db, sdc, mdc, lead, kc, h) -> floa
     return fc if fc > 0.0 else 0.0
 
 
+def model_step(rule: str, x: float, v: float, fc: float, m: float, h: float) -> tuple[float, float]:
+    """Step 3 of the format by the rule ``rule`` (one of :data:`INTEGRATORS`):
+    the spacecraft model ``x' = v, v' = -fc / m`` over one tick ``h`` with the
+    compensated force ``fc`` held. Returns the new ``(x, v)``.
+
+    - ``semi_implicit_euler``: ``v += a h``, then ``x += v h`` (the format's);
+    - ``explicit_euler``: ``x += v h``, then ``v += a h``;
+    - ``trapezoid``: ``v += a h``, ``x += (v_old + v_new) / 2 h``;
+    - ``rk4``: classical RK4 with the force held; for the constant
+      acceleration it is exact, ``x += v_old h + a h^2 / 2``, ``v += a h``:
+      the same update as ``trapezoid`` (to rounding).
+    """
+    if rule == "semi_implicit_euler":
+        v += -fc / m * h
+        x += v * h
+        return x, v
+    a = -fc / m
+    if rule == "explicit_euler":
+        return x + v * h, v + a * h
+    if rule == "trapezoid":
+        v_new = v + a * h
+        return x + 0.5 * (v + v_new) * h, v_new
+    if rule == "rk4":
+        hh = 0.5 * h
+        k1x, k1v = v, a
+        k2x, k2v = v + hh * k1v, a
+        k3x, k3v = v + hh * k2v, a
+        k4x, k4v = v + h * k3v, a
+        return (
+            x + h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x),
+            v + h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v),
+        )
+    raise ValueError(rule)
+
+
 def _loop_fast(ph: _Physics, v0: float, comp: str, n: int, nf, npos) -> dict:
     rig = ph.rig
     h = rig.h
@@ -1060,6 +1278,8 @@ def _loop_fast(ph: _Physics, v0: float, comp: str, n: int, nf, npos) -> dict:
     sdc, mdc = _computer_flags(comp)
     m, lead, kc, db = ph.m_used, ph.L_used, ph.K_used, rig.deadband_n
     quant = ph.quant
+    rule = rig.integrator
+    semi = rule == "semi_implicit_euler"
     maps = ph.gain_g != 0.0 or ph.f_sat < math.inf or ph.bias != 0.0 or ph.zdrift != 0.0
     nfl = nf.tolist()
     npl = npos.tolist()
@@ -1101,8 +1321,11 @@ def _loop_fast(ph: _Physics, v0: float, comp: str, n: int, nf, npos) -> dict:
         if f_prev is None:
             f_prev = f_mea
         fc = _compensate(f_mea, f_prev, p_act, u_prev, db, sdc, mdc, lead, kc, h)
-        v += -fc / m * h
-        x += v * h
+        if semi:
+            v += -fc / m * h
+            x += v * h
+        else:
+            x, v = model_step(rule, x, v, fc, m, h)
         out_p_des[k] = x
         out_p_act[k] = p_act
         out_f_mea[k] = f_mea
@@ -1140,6 +1363,9 @@ def _loop_fine(ph: _Physics, v0: float, comp: str, n: int, nf, npos) -> dict:
     t_run = n * h
     nd = rig.delay_ticks
     dsteps = nd * N + ph.extra_delay / dt
+    if rig.delay_frac:
+        # The nominal delay's fraction of a tick, read like a fractional extra delay.
+        dsteps += rig.delay_frac * N
     if abs(dsteps - round(dsteps)) < 1e-9:
         dsteps = float(round(dsteps))
     lsteps = ph.pos_lag / dt
@@ -1197,6 +1423,8 @@ def _loop_fine(ph: _Physics, v0: float, comp: str, n: int, nf, npos) -> dict:
     sdc, mdc = _computer_flags(comp)
     m, lead, kc, db = ph.m_used, ph.L_used, ph.K_used, rig.deadband_n
     quant = ph.quant
+    rule = rig.integrator
+    semi = rule == "semi_implicit_euler"
     res = {key: np.zeros(n) for key in ("p_des", "p_act", "f_mea", "f_comp", "v_des", "pen", "f")}
     x = -rig.initial_gap_m
     v = v0
@@ -1218,8 +1446,11 @@ def _loop_fine(ph: _Physics, v0: float, comp: str, n: int, nf, npos) -> dict:
         if f_prev is None:
             f_prev = f_mea
         fc = _compensate(f_mea, f_prev, p_act, u_prev, db, sdc, mdc, lead, kc, h)
-        v += -fc / m * h
-        x += v * h
+        if semi:
+            v += -fc / m * h
+            x += v * h
+        else:
+            x, v = model_step(rule, x, v, fc, m, h)
         res["p_des"][k] = x
         res["p_act"][k] = p_act
         res["f_mea"][k] = f_mea
@@ -1362,7 +1593,7 @@ def simulate_set(
                 seed=[spec.seed, i],
                 run_index=i,
                 n_runs=n_runs,
-                run_id=f"{spec.set_id}-run{i + 1}",
+                run_id=f"{spec.run_stem}-run{i + 1}",
             )
         )
     return runs
@@ -1371,15 +1602,25 @@ def simulate_set(
 # --------------------------------------------------------------------------- #
 # The nominal model's error
 # --------------------------------------------------------------------------- #
-def nominal_replay(meta: dict, p_des: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def nominal_replay(
+    meta: dict, p_des: np.ndarray, *, fine: bool = False
+) -> tuple[np.ndarray, np.ndarray]:
     """The recorded commands through the nominal table, contact and sensor (no
-    noise): the position and the force reading the nominal model predicts."""
+    noise): the position and the force reading the nominal model predicts.
+
+    A sensor delay of a whole number of ticks reads the tick-exact force that
+    many ticks late; a fractional one (or ``fine``) reads the force history
+    sub-stepped as the generator's fine path does (:data:`SUBSTEPS` points a
+    tick, cubic interpolation), so a noise-free nominal run replays exactly."""
     fs = float(meta["sample_rate_hz"])
     h = 1.0 / fs
     w = 2 * math.pi * float(meta["table_natural_frequency_hz"])
     z = float(meta["table_damping_ratio"])
     k = float(meta["contact_stiffness_n_per_m"])
-    nd = int(round(float(meta["sensor_delay_s"]) * fs))
+    d_ticks = float(meta["sensor_delay_s"]) * fs
+    nd = int(round(d_ticks))
+    if fine or abs(d_ticks - nd) >= 1e-9:
+        return _nominal_replay_fine(meta, p_des, d_ticks)
     phi, gam = _lti_step(np.array([[0.0, 1.0], [-w * w, -2 * z * w]]), np.array([0.0, w * w]), h)
     a11, a12, a21, a22 = (float(v) for v in phi.ravel())
     b1, b2 = float(gam[0]), float(gam[1])
@@ -1396,6 +1637,52 @@ def nominal_replay(meta: dict, p_des: np.ndarray) -> tuple[np.ndarray, np.ndarra
     if nd < n:
         fr[nd:] = f[: n - nd]
     return pos_a, fr
+
+
+def _nominal_replay_fine(
+    meta: dict, p_des: np.ndarray, d_ticks: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`nominal_replay` on the generator's sub-stepped grid (the same
+    table steps, force history and interpolation as :func:`_loop_fine`)."""
+    fs = float(meta["sample_rate_hz"])
+    h = 1.0 / fs
+    N = SUBSTEPS
+    dt = h / N
+    w = 2 * math.pi * float(meta["table_natural_frequency_hz"])
+    z = float(meta["table_damping_ratio"])
+    k = float(meta["contact_stiffness_n_per_m"])
+    dsteps = d_ticks * N
+    if abs(dsteps - round(dsteps)) < 1e-9:
+        dsteps = float(round(dsteps))
+    n = len(p_des)
+    pad = int(math.ceil(dsteps)) + 4 * N
+    S = np.zeros(pad + n * N + 1)
+    a = np.array([[0.0, 1.0], [-w * w, -2 * z * w]])
+    b = np.array([0.0, w * w])
+    # Rows as in _loop_fine: encoder, contact point, its rate, then the state.
+    big = np.empty((3 * N + 2, 2))
+    gbig = np.empty(3 * N + 2)
+    for j in range(1, N + 1):
+        phj, gj = _lti_step(a, b, j * dt)
+        for blk, row in ((0, 0), (1, 0), (2, 1)):
+            big[blk * N + j - 1] = phj[row]
+            gbig[blk * N + j - 1] = gj[row]
+    big[3 * N :] = phj
+    gbig[3 * N :] = gj
+    xs = np.array([-float(meta["initial_gap_m"]), float(meta["initial_velocity_m_per_s"])])
+    pos = np.empty(n)
+    fr = np.empty(n)
+    p_now = float(xs[0])
+    for i, u in enumerate(p_des.tolist()):
+        base = pad + i * N
+        pos[i] = p_now
+        fr[i] = _interp(S, base - dsteps, base)
+        y = big @ xs + gbig * u
+        q_c = y[N : 2 * N]
+        S[base + 1 : base + N + 1] = np.where(q_c > 0.0, k * np.where(q_c > 0.0, q_c, 0.0), 0.0)
+        xs = y[3 * N :]
+        p_now = float(y[N - 1])
+    return pos, fr
 
 
 def nominal_error(runs: list[RunRecord], sigma_f: float, sigma_p: float) -> float:
@@ -1666,7 +1953,14 @@ def resolve(spec: SetSpec, max_redraws: int = 20) -> SetSpec:
         except SizingError as e:
             reasons.append(f"{cur.rig}: {e}")
             rng = np.random.default_rng([spec.seed, attempt + 1])
-            base = draw_base(rng, spec.set_id, spec.label, need=spec.info.get("need"), n_runs=None)
+            base = draw_base(
+                rng,
+                spec.set_id,
+                spec.label,
+                need=spec.info.get("need"),
+                n_runs=None,
+                condition=spec.info.get("condition"),
+            )
             cur = replace(base, hidden=spec.hidden, info=dict(base.info))
             continue
         info = dict(out.info)
@@ -1743,12 +2037,33 @@ def _loguniform(rng, lo, hi):
     return float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
 
 
-def draw_rig(rng: np.random.Generator, v_typ: float = 0.1, min_contact_ratio: float = 0.0) -> Rig:
+def draw_rig(
+    rng: np.random.Generator,
+    v_typ: float = 0.1,
+    min_contact_ratio: float = 0.0,
+    *,
+    zero_deadband: bool = False,
+    fractional_delay: bool = False,
+    integrator: str = DEFAULT_INTEGRATOR,
+) -> Rig:
     """A rig in the issue's ranges whose contact is at most a quarter of the
     table's frequency and short enough for a run of :data:`MAX_TICKS` ticks.
     ``v_typ`` sets the gap (3-8 ms of approach at that speed);
     ``min_contact_ratio``: the contact's frequency at least this fraction of
-    the table's (a table mode is only measurable when the contact excites it)."""
+    the table's (a table mode is only measurable when the contact excites it).
+
+    Rig conditions (the defaults draw exactly the rigs drawn before they
+    existed, from the same generator state):
+
+    - ``zero_deadband``: ``deadband_n = 0`` (the deadband is still drawn, then
+      replaced, so the rest of the rig is the one drawn without it);
+    - ``fractional_delay``: the nominal delay is whole ticks plus a fraction
+      0.10-0.90 of a tick (two decimals), still within 1-20 ms; the SDC lead
+      time is that delay (perturbed as usual a quarter of the time);
+    - ``integrator``: the rig computer's rule (:data:`INTEGRATORS`), not drawn.
+    """
+    if integrator not in INTEGRATORS:
+        raise ValueError(f"integrator {integrator!r} is not one of {INTEGRATORS}")
     for _ in range(10000):
         fs = int(rng.choice([500, 1000, 2000]))
         m = round(_loguniform(rng, 100.0, 5000.0), 3)
@@ -1764,12 +2079,21 @@ def draw_rig(rng: np.random.Generator, v_typ: float = 0.1, min_contact_ratio: fl
         lo = max(1, math.ceil(1e-3 * fs - 1e-9))
         hi = math.floor(20e-3 * fs + 1e-9)
         nd = int(rng.integers(lo, hi + 1))
-        lead = nd / fs
+        frac = 0.0
+        if fractional_delay:
+            frac = round(float(rng.uniform(0.1, 0.9)), 2)
+            if nd + frac > hi:
+                nd -= 1
+        lead = (nd + frac) / fs if frac else nd / fs
         if rng.random() < 0.25:
             lead = round(lead * float(rng.uniform(0.8, 1.2)), 6)
+        elif frac:
+            lead = round(lead, 12)
         db = round(float(rng.uniform(0.0, 5.0)), 3)
+        if zero_deadband:
+            db = 0.0
         gap = round(v_typ * float(rng.uniform(3e-3, 8e-3)), 6)
-        return Rig(fs, m, k, nd, ft, zt, db, lead, gap)
+        return Rig(fs, m, k, nd, ft, zt, db, lead, gap, frac, integrator)
     raise RuntimeError("no rig drawn")
 
 
@@ -1827,15 +2151,15 @@ def _check_nominal(rig: Rig, velocities, comps) -> tuple[list[int], list[float]]
                 return None
             last = int(ct[-1])
             quiet = int(math.ceil(QUIET_S / h))
-            if last + quiet + rig.delay_ticks < n_try and r.v_des[-1] < 0:
+            if last + quiet + rig.delay_ticks_ceil < n_try and r.v_des[-1] < 0:
                 break
         else:
             return None
         cor = r.cor
         if not 0.3 <= cor <= 1.6:
             return None
-        n = last + int(math.ceil((QUIET_S + 0.15 * tc) / h)) + 2 * rig.delay_ticks + 10
-        if last + quiet + rig.delay_ticks > MAX_TICKS:
+        n = last + int(math.ceil((QUIET_S + 0.15 * tc) / h)) + 2 * rig.delay_ticks_ceil + 10
+        if last + quiet + rig.delay_ticks_ceil > MAX_TICKS:
             return None
         lens.append(min(n, MAX_TICKS))
         cors.append(cor)
@@ -1849,11 +2173,20 @@ def draw_base(
     *,
     need: str | None = None,
     n_runs: int | None = None,
+    condition: dict | None = None,
 ) -> SetSpec:
     """A validated set with no hidden effect (``need``: "sdc" / "mdc": at
     least two runs with that compensation; "order": at least three runs whose
     velocity is not monotone in the run order; "resonance": a contact at
-    least 0.15 of the table's frequency)."""
+    least 0.15 of the table's frequency). ``condition``: the rig's conditions,
+    keyword arguments of :func:`draw_rig` (``zero_deadband``,
+    ``fractional_delay``, ``integrator``), kept in ``info["condition"]`` so
+    :func:`resolve` redraws a rig with them; None (or empty) draws exactly
+    what was drawn before conditions existed."""
+    cond = dict(condition or {})
+    bad = set(cond) - {"zero_deadband", "fractional_delay", "integrator"}
+    if bad:
+        raise ValueError(f"unknown rig condition(s) {sorted(bad)}")
     for _ in range(500):
         nr = int(n_runs or rng.integers(2, 6))
         if need == "order":
@@ -1870,6 +2203,7 @@ def draw_base(
             rng,
             v_typ=math.sqrt(min(vel) * max(vel)),
             min_contact_ratio=0.15 if need == "resonance" else 0.0,
+            **cond,
         )
         vmax = max(vel)
         noise = draw_noise(
@@ -1893,6 +2227,9 @@ def draw_base(
         if chk is None:
             continue
         lens, cors = chk
+        info = {"cor_nominal_runs": cors, "need": need}
+        if cond:
+            info["condition"] = cond
         return SetSpec(
             set_id=set_id,
             label=label,
@@ -1902,7 +2239,7 @@ def draw_base(
             compensators=tuple(comps),
             n_ticks=tuple(lens),
             seed=int(rng.integers(2**31)),
-            info={"cor_nominal_runs": cors, "need": need},
+            info=info,
         )
     raise RuntimeError("no valid set drawn")
 
@@ -1946,6 +2283,7 @@ def draw_study(
     outside_target: float = 4.0,
     n_outside_extra: int = 4,
     n_tiny: int = 10,
+    n_condition_each: int = 8,
 ) -> list[SetSpec]:
     """The study's sets (unsized; :func:`resolve` / :func:`write_set` size them).
 
@@ -1957,7 +2295,15 @@ def draw_study(
       lead time and compensator stiffness);
     - every outside-library kind once at ``outside_target`` plus
       ``n_outside_extra`` more at 2.5;
-    - ``n_tiny`` detection-limit sets (a library effect at error 1.2-1.4).
+    - ``n_tiny`` detection-limit sets (a library effect at error 1.2-1.4);
+    - ``n_condition_each`` sets of each rig condition (:data:`CONDITION_CLASSES`:
+      ``deadband0``, ``fractional_delay``, ``integrator``), drawn after all
+      the others (so the sets above are the ones a seed drew before the
+      conditions existed): every fourth a null, the others a single library
+      effect in a shuffled cycle of the physics ones (sized to one of
+      ``sizes``) and the computer ones (3-20 % mass, 10-40 % lead time and
+      compensator stiffness). The ``integrator`` class cycles through the
+      rules other than the format's (:data:`INTEGRATORS`).
 
     Each set draws its own rig; a different ``seed`` gives different rigs.
     """
@@ -2022,4 +2368,40 @@ def draw_study(
         target = round(float(rng.uniform(1.2, 1.4)), 3)
         base = draw_base(rng, f"tiny-{j:02d}-{name}", "tiny", need=_need(name))
         specs.append(replace(base, hidden=(make_hidden(name, rng, target_error=target),)))
+    # ---- rig conditions (drawn last: the sets above are unchanged) ----
+    candidates = LIBRARY_PHYSICS + COMPUTER_EFFECTS
+    rules = [r for r in INTEGRATORS if r != DEFAULT_INTEGRATOR]
+    for label in CONDITION_CLASSES:
+        order = [candidates[i] for i in master.permutation(len(candidates))]
+        n_eff = 0
+        for j in range(n_condition_each):
+            if j % 4 == 0:
+                name = None
+            else:
+                name = order[n_eff % len(order)]
+                n_eff += 1
+            if label == "deadband0":
+                cond: dict = {"zero_deadband": True}
+            elif label == "fractional_delay":
+                cond = {"fractional_delay": True}
+            else:
+                cond = {"integrator": rules[j % len(rules)]}
+            rng = child()
+            if name is None:
+                need = None
+            elif name in ranges:
+                need = ranges[name][2]
+            else:
+                need = _need(name)
+            # The set id names the class only (and the runs' run_id not even that).
+            base = draw_base(rng, f"{label}-{j:02d}", label, need=need, condition=cond)
+            if name is None:
+                hidden: tuple[Hidden, ...] = ()
+            elif name in ranges:
+                lo, hi, _ = ranges[name]
+                hidden = (make_hidden(name, rng, magnitude=round(float(rng.uniform(lo, hi)), 4)),)
+            else:
+                target = float(sizes[int(rng.integers(len(sizes)))])
+                hidden = (make_hidden(name, rng, target_error=target),)
+            specs.append(replace(base, hidden=hidden))
     return specs

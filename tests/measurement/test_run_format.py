@@ -56,10 +56,6 @@ def _drop_column(column: str):
     return fn
 
 
-def _add_column(lines):
-    return [lines[0] + ",temperature_c"] + [line + ",21.5" for line in lines[1:]]
-
-
 def _time_at(line_no: int, value):
     def fn(lines):
         cells = lines[line_no - 1].split(",")
@@ -90,7 +86,13 @@ def _shift_all_times(lines):
 # (id, csv edit, json edit, expected substring, file named in the message)
 CASES = [
     ("missing_column", _drop_column("f_comp_n"), None, "missing column(s) f_comp_n", "csv"),
-    ("extra_column", _add_column, None, "unexpected column(s) temperature_c", "csv"),
+    (
+        "column_named_twice",
+        lambda lines: [lines[0] + ",f_comp_n"] + [line + ",0" for line in lines[1:]],
+        None,
+        "column 'f_comp_n' appears twice",
+        "csv",
+    ),
     (
         "non_numeric",
         _set_cell(11, "f_mea_n", "1.2.3"),
@@ -310,7 +312,7 @@ def test_column_map_reads_renamed_log(tmp_path, capsys):
         np.testing.assert_array_equal(getattr(run, name), getattr(reference, name))
     # A map entry whose log column is absent is named in the error.
     with pytest.raises(
-        MeasurementError, match=r"--column-map entries not in the header: p_act_m=pos"
+        MeasurementError, match=r"--column-map names log column\(s\) not in the header: p_act_m=pos"
     ):
         read_run(c, column_map=parse_column_map(["f_mea_n=Force", "time_s=t", "p_act_m=pos"]))
     for bad, expect in (

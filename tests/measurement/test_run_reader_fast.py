@@ -70,9 +70,9 @@ def python_path_calls(monkeypatch):
     calls = []
     original = run_reader._csv_rows
 
-    def spy(path):
+    def spy(path, *args):
         calls.append(path)
-        return original(path)
+        return original(path, *args)
 
     monkeypatch.setattr(run_reader, "_csv_rows", spy)
     return calls
