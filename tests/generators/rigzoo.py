@@ -1932,7 +1932,10 @@ def resolve(spec: SetSpec, max_redraws: int = 20) -> SetSpec:
       nominal error must be at least 2.5 (a lag reads as negative damping to
       first order, so damping + delay also cancel in the readings: the
       target is raised until the pair shows);
-    - null / computer: nothing to size.
+    - null / computer: nothing to size;
+    - deadband0 / fractional_delay / integrator: as a single (a physics
+      effect) or nothing (a null, a computer effect); a redraw keeps the
+      set's rig condition (``info["condition"]``).
 
     If a target cannot be reached within :func:`magnitude_bounds`, or the
     sized set is not a usable rig (:func:`_sane`), the set's rig, noise and
