@@ -41,7 +41,7 @@ from hybridtable.effects.effect import Effect
 from hybridtable.effects.registry import build_spec, get_effect
 from hybridtable.effects.spec import ModelSpec, RigScale
 from hybridtable.errors import ParameterError
-from hybridtable.measurement.phases import cor_from_record
+from hybridtable.measurement.phases import record_cor
 from hybridtable.measurement.rig import RigPhysics, computer_with_model_mass
 from hybridtable.measurement.run_format import Run, RunInfo
 
@@ -155,9 +155,7 @@ class RigModel:
         model_runs = []
         for r, c in zip(runs, per_run, strict=True):
             try:
-                cor, _, _ = cor_from_record(
-                    r.v_des_m_per_s, r.f_comp_n, r.info.initial_velocity_m_per_s
-                )
+                cor, _, _ = record_cor(r)
             except ValueError:
                 cor = None
             digest = hashlib.sha256(r.csv_path.read_bytes()).hexdigest() if r.csv_path else None

@@ -43,9 +43,11 @@ Definitions (``y`` measured, ``y_hat`` model, residual ``e = y - y_hat``):
   means a systematic effect the model lacks.
 - within the noise (:meth:`RunComparison.within_noise`): replay RMS error over
   noise RMS at most :data:`WITHIN_NOISE_RATIO`.
-- CoR (:func:`cor_from_record`): ``|v_des|`` at the end of the record over
-  ``|v_des|`` at the last tick before the first non-zero ``f_comp`` (the model
-  felt no force yet), the same definition for measurement and model.
+- CoR (:func:`cor_from_record`): ``|v_des|`` at the end of the contact over
+  ``|v_des|`` at the last tick before it, the contact being the ticks of
+  non-zero ``f_comp`` (the model felt a force), the same definition for
+  measurement and model; where the deadband lets the sensor's noise through,
+  the record's contact is found above the noise (:func:`record_cor`).
 - force-deflection loop: measured ``f_mea[k + M]`` against ``p_act[k]`` and the
   replay's ``f_act`` against its ``p_act``; the loop's energy
   ``sum f dp`` over the contact is the energy the contact absorbed
@@ -72,6 +74,7 @@ from hybridtable.measurement.phases import (
     loop_energy,
     phase_breakdown,
     phase_labels,
+    record_cor,
     settle_ticks,
 )
 from hybridtable.measurement.replay import ReplayResult, replay
@@ -239,7 +242,7 @@ def _measured_facts(run: Run) -> tuple[np.ndarray, tuple[float, float, float], i
     except ValueError as err:
         raise MeasurementError(f"{where}: {err}") from None
     try:
-        cor = cor_from_record(run.v_des_m_per_s, run.f_comp_n, run.info.initial_velocity_m_per_s)
+        cor = record_cor(run)
     except ValueError as err:
         raise MeasurementError(f"{where}: {err}; cannot measure the CoR") from None
     return labels, cor, delay_samples(params.sensor_delay_s, run.sample_period_s)

@@ -15,6 +15,8 @@ __all__ = [
     "delayed_labels",
     "phase_breakdown",
     "cor_from_record",
+    "contact_reading",
+    "record_cor",
     "contact_duration",
     "loop_energy",
     "true_runs",
@@ -122,28 +124,70 @@ def dilate(mask: np.ndarray, before: int, after: int) -> np.ndarray:
 
 # -- contact metrics -----------------------------------------------------------
 def cor_from_record(
-    v_des_m_per_s: np.ndarray, f_comp_n: np.ndarray, initial_velocity_m_per_s: float
+    v_des_m_per_s: np.ndarray,
+    f_comp_n: np.ndarray,
+    initial_velocity_m_per_s: float,
+    reading: np.ndarray | None = None,
 ) -> tuple[float, float, float]:
     """CoR, ``v_in`` and ``v_out`` from a record's spacecraft velocity.
 
-    ``v_in`` is ``v_des`` at the last tick before the first non-zero ``f_comp``
-    (the initial velocity if that is tick 0), ``v_out`` the last ``v_des``.
+    The contact, as the model felt it, spans the ticks from the first to the
+    last non-zero ``f_comp``, or, where ``reading`` is given (a mask of the
+    ticks whose force reading shows the contact), from its first to its last
+    tick, widened on each side over the ticks where ``f_comp`` stays non-zero.
+    ``v_in`` is ``v_des`` at the tick before the contact (the initial
+    velocity if that is tick 0), ``v_out`` at its last tick.
+
+    Without ``reading`` (a deadband that gates the sensor's noise, and every
+    noise-free model run), ``v_out`` is the last ``v_des``. Where noise passes
+    the gate (a deadband of 0), ``f_comp`` is noise before and after the
+    contact, and the model's velocity drifts under it: the readings find the
+    contact (:func:`record_cor`), and the drift outside it is not counted.
 
     Raises
     ------
     ValueError
-        If ``f_comp`` is never non-zero, or still non-zero at the last tick.
+        If there is no contact, or it lasts to the last tick.
     """
     v = np.asarray(v_des_m_per_s, dtype=float)
     f = np.asarray(f_comp_n, dtype=float)
-    on = np.flatnonzero(f != 0.0)
+    on = np.flatnonzero(f != 0.0 if reading is None else np.asarray(reading, dtype=bool))
     if on.size == 0:
+        if reading is not None:
+            raise ValueError("the force reading never shows a contact above its noise")
         raise ValueError("f_comp is zero throughout: the model never felt a contact")
-    if f[-1] != 0.0:
+    zero = np.flatnonzero(f == 0.0)
+    before, after = zero[zero < on[0]], zero[zero > on[-1]]
+    if after.size == 0:
         raise ValueError("f_comp is still non-zero at the last tick: the contact has not ended")
-    v_in = float(v[on[0] - 1]) if on[0] > 0 else float(initial_velocity_m_per_s)
-    v_out = float(v[-1])
+    first = int(before[-1]) + 1 if before.size else 0
+    last = int(after[0]) - 1
+    v_in = float(v[first - 1]) if first > 0 else float(initial_velocity_m_per_s)
+    v_out = float(v[last])
     return abs(v_out) / abs(v_in), v_in, v_out
+
+
+def contact_reading(run) -> np.ndarray | None:
+    """The ticks of recorded ``run`` (:class:`~hybridtable.measurement.run_format.Run`)
+    whose force reading shows the contact, where the deadband lets the
+    reading's noise through (it is below
+    :data:`~hybridtable.measurement.channels.NOISE_MULTIPLE` robust noise
+    levels): the readings above that many noise levels. ``None`` where the
+    deadband gates the noise (``f_comp`` is then zero outside the contact)."""
+    from hybridtable.measurement.channels import NOISE_MULTIPLE, noise_level
+
+    above = NOISE_MULTIPLE * noise_level(np.asarray(run.f_mea_n, dtype=float))
+    if run.info.force_deadband_n >= above:
+        return None
+    return np.asarray(run.f_mea_n) > above
+
+
+def record_cor(run) -> tuple[float, float, float]:
+    """:func:`cor_from_record` of a recorded ``run``, its contact found by
+    :func:`contact_reading`."""
+    return cor_from_record(
+        run.v_des_m_per_s, run.f_comp_n, run.info.initial_velocity_m_per_s, contact_reading(run)
+    )
 
 
 def contact_duration(time_s: np.ndarray, p_act_m: np.ndarray) -> float:

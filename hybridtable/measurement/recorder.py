@@ -30,7 +30,7 @@ import numpy as np
 
 from hybridtable._files import write_text_atomic
 from hybridtable.errors import CommandError, ParameterError, SimulationError
-from hybridtable.measurement.phases import cor_from_record
+from hybridtable.measurement.phases import record_cor
 from hybridtable.measurement.rig import RigPhysics, simulate_rig
 from hybridtable.measurement.run_format import FORMAT, RUN_COLUMNS, RUN_KEYS, Run, RunInfo
 from hybridtable.systems.noise import MeasurementNoiseParams, noise_series
@@ -125,13 +125,13 @@ def record_run(
     f_act = np.asarray(result.f_act_n, dtype=float)
     if not np.any(f_act > 0.0):
         raise SimulationError(f"run {info.run_id}: no contact within {duration:.4g} s")
-    if f_act[-1] > 0.0 or run.f_comp_n[-1] != 0.0:
+    if f_act[-1] > 0.0:
         raise SimulationError(
             f"run {info.run_id}: still in contact at the end of the record "
             f"({duration:.4g} s); give a longer duration"
         )
     try:
-        cor = cor_from_record(run.v_des_m_per_s, run.f_comp_n, info.initial_velocity_m_per_s)[0]
+        cor = record_cor(run)[0]
     except ValueError as err:
         raise SimulationError(f"run {info.run_id}: {err}") from None
     return run, {"cor": cor, "peak_force_n": float(f_act.max()), "ticks": n}
