@@ -31,6 +31,7 @@ __all__ = [
     "log_layout_of",
     "log_map_entry",
     "add_run_arguments",
+    "add_log_arguments",
     "check_outputs",
     "declared_inputs",
     "add_force_argument",
@@ -416,13 +417,9 @@ def add_force_argument(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def add_run_arguments(parser: argparse.ArgumentParser, report: str) -> None:
-    """The inputs and outputs of a command that reads recorded runs: ``RUN...``,
-    ``--json``, ``--report`` (``report`` says what it writes) and how a rig's
-    own log maps to the format (``--log-map`` and its flags, :func:`log_layout_of`)."""
-    parser.add_argument("runs", nargs="+", metavar="RUN", help="a run's .csv or .json, or a folder")
-    parser.add_argument("--json", metavar="FILE", help="write the results as JSON (- for stdout)")
-    parser.add_argument("--report", metavar="DIR", help=report)
+def add_log_arguments(parser: argparse.ArgumentParser) -> None:
+    """How a rig's own log maps to the format: ``--log-map`` and the flags
+    over it (:func:`log_layout_of` reads them)."""
     log = parser.add_argument_group(
         "a rig's own log (docs/run-format.md, 'Reading a rig's own log'; each flag "
         "overrides the --log-map file's entry)"
@@ -474,3 +471,13 @@ def add_run_arguments(parser: argparse.ArgumentParser, report: str) -> None:
         help="a log column not to read (repeatable; a column no format column is read "
         "from is skipped anyway)",
     )
+
+
+def add_run_arguments(parser: argparse.ArgumentParser, report: str) -> None:
+    """The inputs and outputs of a command that reads recorded runs: ``RUN...``,
+    ``--json``, ``--report`` (``report`` says what it writes) and how a rig's
+    own log maps to the format (``--log-map`` and its flags, :func:`log_layout_of`)."""
+    parser.add_argument("runs", nargs="+", metavar="RUN", help="a run's .csv or .json, or a folder")
+    parser.add_argument("--json", metavar="FILE", help="write the results as JSON (- for stdout)")
+    parser.add_argument("--report", metavar="DIR", help=report)
+    add_log_arguments(parser)

@@ -24,6 +24,7 @@ PAPER_SAMPLE_PERIOD_S = 1e-3
 
 
 def register(sub) -> None:
+    from hybridtable.commands._common import add_log_arguments
     from hybridtable.commands._model_options import add_plugin_argument
 
     p = sub.add_parser(
@@ -51,6 +52,7 @@ def register(sub) -> None:
         "paper's Table 1 point: k = 1e5 N/m, m = 2533 kg, v = 0.1 m/s, sensor delay "
         "5 ms, table 25 Hz, sampled at 1 kHz)",
     )
+    add_log_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -209,7 +211,12 @@ def format_effects(items: list[dict]) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hybridtable.commands._common import check_outputs, input_paths, write_json
+    from hybridtable.commands._common import (
+        check_outputs,
+        input_paths,
+        log_layout_of,
+        write_json,
+    )
     from hybridtable.effects.registry import effect_names, effect_source, get_effect, load_plugin
     from hybridtable.effects.spec import RigScale
 
@@ -220,7 +227,7 @@ def run(args: argparse.Namespace) -> int:
     if args.rig:
         from hybridtable.measurement.run_reader import read_runs
 
-        runs = read_runs([args.rig])
+        runs = read_runs([args.rig], layout=log_layout_of(args))
         inputs = input_paths(runs)
         scale = RigScale.from_runs(runs)
         ids = ", ".join(r.run_id for r in runs)

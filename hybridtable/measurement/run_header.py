@@ -149,14 +149,17 @@ def format_names(
         for fmt, src in layout.columns.items()
         if src.column != fmt and src.column not in header
     ]
+    missing = [c for c in RUN_COLUMNS if c not in names]
+    if (mapped or missing) and (hint := _layout_hint(header, layout)):
+        raise MeasurementError(f"{path} line {header_line}: {hint}")
     if mapped:
         raise MeasurementError(
             f"{path} line {header_line}: {layout.source} names log column(s) not in the header: "
             f"{', '.join(mapped)} (has: {_column_list(header)})"
         )
-    missing = [c for c in RUN_COLUMNS if c not in names]
     if missing:
         leftover = [c for c, name in zip(header, names, strict=True) if name is None]
-        text = _layout_hint(header, layout) or _missing_message(missing, header, leftover)
-        raise MeasurementError(f"{path} line {header_line}: {text}")
+        raise MeasurementError(
+            f"{path} line {header_line}: {_missing_message(missing, header, leftover)}"
+        )
     return names
