@@ -859,10 +859,10 @@ def test_diagnose_refuses_a_wrong_unit_the_same_way(tmp_path):
     assert _has(err, "kN"), err
 
 
-@pytest.mark.parametrize("command", ["compare", "diagnose", "effects", "simulate"])
+@pytest.mark.parametrize("command", ["compare", "diagnose", "effects"])
 def test_every_command_that_reads_runs_takes_a_log_map(command):
     """The spec: --log-map "to compare, diagnose and every command that reads
-    runs" (effects --rig and simulate --model read runs)."""
+    runs" (effects --rig reads runs; simulate --model reads a model file, not runs)."""
     outcome = _cli(command, "--help")
     assert outcome.code == 0
     for flag in ("--log-map", "--unit", "--delimiter", "--decimal", "--comment", "--ignore-column"):
