@@ -25,7 +25,6 @@ from hybridtable.measurement.replay import replay
 from hybridtable.measurement.rig import rig_params, simulate_rig
 from hybridtable.measurement.run_format import Run
 from hybridtable.systems.blocks import RecordedOffset, chain_output
-from hybridtable.systems.sensor import delay_samples
 
 __all__ = [
     "RunData",
@@ -79,7 +78,7 @@ def prepare_runs(runs: Sequence[Run]) -> list[RunData]:
             labels = phase_labels(run.p_act_m)
         except ValueError as err:
             raise MeasurementError(f"{run.where('csv')}: {err}") from None
-        m = delay_samples(params.sensor_delay_s, run.sample_period_s)
+        m = round(params.sensor_delay_s / run.sample_period_s)  # to the nearest tick
         table = params.plant.table
         h = run.sample_period_s
         settle = max(2, settle_ticks(table.settling_time_s, h, run.n))

@@ -70,7 +70,7 @@ from hybridtable.loop.ticks import (
     tick_law,
     tick_loop,
 )
-from hybridtable.systems.sensor import continuous_delay_period, delay_samples
+from hybridtable.systems.sensor import continuous_delay_period, sample_taps
 
 __all__ = ["fast_unsupported", "prepare_fast", "simulate_fast"]
 
@@ -305,12 +305,13 @@ class _Continuous:
         return rem
 
 
-def _computer_period(params: HybridLoopParams) -> tuple[float, int]:
+def _computer_period(params: HybridLoopParams) -> tuple[float, int | tuple[int, float]]:
     """The rig computer's period ``h`` (s) and the delay in ticks (the delay line's ``N``
-    of a continuous loop, ``M`` of a sampled one), as the diagram's builder sets them."""
+    of a continuous loop; the taps ``(M, alpha)`` of a sampled one), as the diagram's
+    builder sets them."""
     if params.sample_rate_hz is not None:
         h = params.sample_period_s
-        return h, delay_samples(params.sensor_delay_s, h)
+        return h, sample_taps(params.sensor_delay_s, h)
     if params.sensor_delay_s > 0.0:
         return continuous_delay_period(params.sensor_delay_s, params.step_s)
     return params.step_s, 0
@@ -364,9 +365,11 @@ def _grown(x, m: int, compiled: bool):
     return np.concatenate([x, np.zeros(m)]) if compiled else x + [0.0] * m
 
 
-def _run_sampled(params: HybridLoopParams, h: float, n_delay: int, rule: _StopRule):
+def _run_sampled(params: HybridLoopParams, h: float, taps: tuple[int, float], rule: _StopRule):
     """Row log ``(v, f_act, f_comp)`` of a sampled loop (row k: what tick k read and
-    computed, and the spacecraft state after its update)."""
+    computed, and the spacecraft state after its update); the reading is the
+    sampled sensor's (:meth:`~hybridtable.systems.sensor.ForceSensorDelay.readings`)."""
+    n_delay, alpha = taps
     law, kc, cc = _law(params)
     k_con, c_con = params.contact_stiffness_n_per_m, params.contact_damping_n_s_per_m
     contact = bound(contact_function(), k_con, c_con)
@@ -386,7 +389,7 @@ def _run_sampled(params: HybridLoopParams, h: float, n_delay: int, rule: _StopRu
         phi, gamma = second_order_tick(table.response_frequency_hz, table.damping_ratio, h)
         (e00, e01), (e10, e11) = phi.tolist()
         e02, e12 = gamma.tolist()
-    F = [0.0] * n_delay  # F[j] = f_act(t_j) at index j + n_delay
+    F = [0.0] * (n_delay + 1)  # F[j] = f_act(t_j) at index j + n_delay + 1
     prev = 0.0
     vs, fas, fcs = [], [], []
     k, due = 0, rule.due
@@ -397,7 +400,7 @@ def _run_sampled(params: HybridLoopParams, h: float, n_delay: int, rule: _StopRu
         if f_act > 0.0:
             rule.touched = True
         F.append(f_act)
-        f_mea = F[k]
+        f_mea = F[k + 1] if not alpha else (1 - alpha) * F[k + 1] + alpha * F[k]
         f_comp = compensator(f_mea, prev, p, v, pa, va)
         if k * h >= due:
             if rule.check_tick(k, f_act, f_mea, f_comp):

@@ -220,8 +220,9 @@ class RigComputer:
     sensor : SensorParams
         The force-sensor delay T_fms (``sensor_delay_s``), >= 0.
     sample_rate_hz : float or None
-        ``None``: a continuous rig computer. Otherwise the rate of its loop; the
-        sensor delay must then be a whole number of ticks.
+        ``None``: a continuous rig computer. Otherwise the rate of its loop; a
+        sensor delay between ticks reads the two neighbouring samples
+        interpolated (:func:`~hybridtable.systems.sensor.sample_taps`).
     time_step_s : float or None
         Continuous mode: the largest integration step and delay-line period
         (``None``: :attr:`HybridLoopParams.step_s`).
@@ -239,11 +240,6 @@ class RigComputer:
             if getattr(self, name) is not None:
                 _set(self, name, check_positive(name, getattr(self, name)))
         _plausible(self, ("rig",), ("sensor_delay_s", "sample_rate_hz", "time_step_s"))
-        if self.sample_rate_hz is not None:
-            # Raises a clear error when the delay is not a whole number of ticks.
-            from hybridtable.systems.sensor import delay_samples
-
-            delay_samples(self.sensor.sensor_delay_s, self.sample_period_s)
 
     @property
     def sample_period_s(self) -> float | None:

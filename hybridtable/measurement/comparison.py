@@ -88,7 +88,6 @@ from hybridtable.measurement.stats import (
     force_noise_rms,
     position_noise_rms,
 )
-from hybridtable.systems.sensor import delay_samples
 
 __all__ = [
     "COMPARE_ACCURACY",
@@ -245,7 +244,8 @@ def _measured_facts(run: Run) -> tuple[np.ndarray, tuple[float, float, float], i
         cor = record_cor(run)
     except ValueError as err:
         raise MeasurementError(f"{where}: {err}; cannot measure the CoR") from None
-    return labels, cor, delay_samples(params.sensor_delay_s, run.sample_period_s)
+    # the readings' phases lag the contact's by the delay, to the nearest tick
+    return labels, cor, round(params.sensor_delay_s / run.sample_period_s)
 
 
 def check_comparable(run: Run) -> None:

@@ -12,15 +12,13 @@ from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import (
     Adder,
     ConstantVectorSource,
-    DiscreteTimeDelay,
     LinearSystem,
-    MatrixGain,
-    Multiplexer,
     PassThrough,
 )
 
+from hybridtable._components import add_component, connect_input
 from hybridtable._validation import check_finite, check_nonnegative, check_positive
-from hybridtable.systems.sensor import delayed_by_ticks
+from hybridtable.systems.sensor import ForceSensorDelay, SensorParams, sample_taps
 
 __all__ = [
     "MeasurementChainParams",
@@ -64,11 +62,12 @@ class MeasurementChainParams:
 
     def taps(self) -> tuple[int, float]:
         """Whole ticks ``M`` and fraction ``alpha`` of the delay,
-        ``D = (M + alpha) h`` (a delay within 1e-9 of a whole tick is whole)."""
-        x = self.delay_s / self.sample_period_s
-        m = math.floor(x + 1e-9)
-        alpha = x - m
-        return m, (0.0 if alpha < 1e-9 else alpha)
+        ``D = (M + alpha) h`` (:func:`~hybridtable.systems.sensor.sample_taps`)."""
+        return sample_taps(self.delay_s, self.sample_period_s)
+
+    def sensor(self) -> ForceSensorDelay:
+        """The chain's delay: the sampled sensor of delay ``D``."""
+        return ForceSensorDelay(SensorParams(self.delay_s), "sampled", self.sample_period_s)
 
 
 def first_order_hold_filter(
@@ -94,7 +93,8 @@ class MeasurementChain(Diagram):
     Output ``measured_force`` (size 1, N)
         The reading the rig computer gets at its ticks.
 
-    ``force -> [low pass] -> DiscreteTimeDelay taps M, M+1 -> (1 - alpha, alpha) -> + b``.
+    ``force -> [low pass] -> ForceSensorDelay "sampled" (taps M, M+1 mixed by
+    (1 - alpha, alpha)) -> + b``.
     The low pass is a discrete ``LinearSystem`` with feedthrough (the
     first-order-hold discretization of the continuous filter: exact while the
     force is linear between ticks). The taps follow the sampled sensor's
@@ -119,25 +119,9 @@ class MeasurementChain(Diagram):
             )
             builder.Connect(signal, lowpass.get_input_port())
             signal = lowpass.get_output_port()
-        m, alpha = params.taps()
-
-        def tap(j: int):
-            if j == 0:
-                return signal
-            delay = builder.AddNamedSystem(f"delay_{j}", DiscreteTimeDelay(h, j - 1, 1))
-            builder.Connect(signal, delay.get_input_port())
-            return delay.get_output_port()
-
-        out = tap(m)
-        if alpha > 0.0:
-            mux = builder.AddNamedSystem("taps", Multiplexer(2))
-            builder.Connect(out, mux.get_input_port(0))
-            builder.Connect(tap(m + 1), mux.get_input_port(1))
-            mix = builder.AddNamedSystem(
-                "interpolation", MatrixGain(np.array([[1 - alpha, alpha]]))
-            )
-            builder.Connect(mux.get_output_port(), mix.get_input_port())
-            out = mix.get_output_port()
+        delay = add_component(builder, "delay", params.sensor())
+        connect_input(builder, signal, delay, "force")
+        out = delay.outputs["measured_force"]
         if params.bias_n != 0.0:
             bias = builder.AddNamedSystem("bias", ConstantVectorSource([params.bias_n]))
             adder = builder.AddNamedSystem("add_bias", Adder(2, 1))
@@ -161,10 +145,7 @@ class MeasurementChain(Diagram):
                 out[k] = 1.0 * z + b1 * u
                 z = a * z + gain * u
             y = out
-        m, alpha = p.taps()
-        out = delayed_by_ticks(y, m)
-        if alpha > 0.0:
-            out = (1 - alpha) * out + alpha * delayed_by_ticks(y, m + 1)
+        out = p.sensor().readings(y)
         if p.bias_n != 0.0:
             out = out + p.bias_n
         return out

@@ -8,7 +8,10 @@ Three realizations of the same pure delay, with the same ports:
 - ``"sampled"``: the rig computer's view at a sample rate. Discrete consumers
   updating at tick ``k`` read ``DiscreteTimeDelay(h, N)`` as ``u(t_k - (N+1) h)``,
   so a delay of ``M`` samples is ``DiscreteTimeDelay(h, M - 1)`` and
-  ``f_mea[k] = f_act(t_k - M h)`` exactly.
+  ``f_mea[k] = f_act(t_k - M h)`` exactly. A delay between ticks,
+  ``D = (M + alpha) h`` (:func:`sample_taps`; a real sensor's filter delay is
+  rarely a whole number of ticks), reads the two neighbouring samples linearly
+  interpolated: ``f_mea[k] = (1 - alpha) f_act(t_k - M h) + alpha f_act(t_k - (M + 1) h)``.
 - ``"pade"``: a continuous Pade approximant (``control.pade``) for analysis.
 """
 
@@ -19,7 +22,13 @@ from dataclasses import dataclass
 
 import numpy as np
 from pydrake.systems.framework import DiagramBuilder
-from pydrake.systems.primitives import DiscreteTimeDelay, LinearSystem, PassThrough
+from pydrake.systems.primitives import (
+    DiscreteTimeDelay,
+    LinearSystem,
+    MatrixGain,
+    Multiplexer,
+    PassThrough,
+)
 
 from hybridtable._components import Block, Component
 from hybridtable._validation import check_nonnegative, check_positive
@@ -30,6 +39,7 @@ __all__ = [
     "ForceSensorDelay",
     "continuous_delay_period",
     "delay_samples",
+    "sample_taps",
     "delayed_by_ticks",
     "pade_state_space",
 ]
@@ -62,16 +72,29 @@ def continuous_delay_period(delay_s: float, max_period_s: float) -> tuple[float,
     return delay_s / (n + 0.5), n
 
 
+def sample_taps(delay_s: float, sample_period_s: float) -> tuple[int, float]:
+    """Whole ticks ``M`` and fraction ``alpha`` in ``[0, 1)`` of a delay
+    ``delay_s = (M + alpha) h`` read at ticks of period ``h`` (a delay within
+    1e-6 of a tick of a whole number of ticks is whole)."""
+    x = delay_s / sample_period_s
+    whole = round(x)
+    if abs(x - whole) <= 1e-6:
+        return int(whole), 0.0
+    m = math.floor(x)
+    return m, x - m
+
+
 def delay_samples(delay_s: float, sample_period_s: float) -> int:
-    """Number of samples ``M`` with ``M h = delay_s``; raises if not an integer."""
-    m = delay_s / sample_period_s
-    mi = int(round(m))
-    if abs(m - mi) > 1e-6:
+    """Number of samples ``M`` with ``M h = delay_s``; raises if not an integer
+    (for the analyses that model whole ticks only; the sampled loop reads a
+    delay between ticks, :func:`sample_taps`)."""
+    m, alpha = sample_taps(delay_s, sample_period_s)
+    if alpha:
         raise ParameterError(
             f"sensor_delay_s ({delay_s:.6g} s) must be a whole number of sample periods "
-            f"({sample_period_s:.6g} s, {1.0 / sample_period_s:.6g} Hz) for a sampled loop"
+            f"({sample_period_s:.6g} s, {1.0 / sample_period_s:.6g} Hz) here"
         )
-    return mi
+    return m
 
 
 def pade_state_space(
@@ -125,13 +148,15 @@ class ForceSensorDelay(Component):
         T = params.sensor_delay_s
         self.update_period_s: float | None = None
         self._samples: int | None = 0 if T == 0.0 else None
+        self._alpha = 0.0
         if T == 0.0:
             pass
         elif mode == "continuous":
             self.update_period_s, self._ticks = continuous_delay_period(T, period_s)
         elif mode == "sampled":
             self.update_period_s = period_s
-            self._samples = self._ticks = delay_samples(T, period_s)
+            self._samples, self._alpha = sample_taps(T, period_s)
+            self._ticks = self._samples
         elif mode == "pade":
             self._pade = pade_state_space(T, pade_order)
         else:
@@ -140,6 +165,8 @@ class ForceSensorDelay(Component):
 
     def _add(self, builder: DiagramBuilder, name: str) -> Block:
         size, h = self.size, self.update_period_s
+        if self._alpha:
+            return self._add_taps(builder, name)
         if self._samples == 0:
             inner = PassThrough(size)
         elif self.mode == "continuous":
@@ -154,13 +181,41 @@ class ForceSensorDelay(Component):
             self, {"force": [inner.get_input_port()]}, {"measured_force": inner.get_output_port()}
         )
 
+    def _add_taps(self, builder: DiagramBuilder, name: str) -> Block:
+        """A sampled delay between ticks: taps ``M`` and ``M + 1``, mixed by
+        ``(1 - alpha, alpha)``."""
+        size, h, m, alpha = self.size, self.update_period_s, self._samples, self._alpha
+
+        def tap(j: int):
+            inner = PassThrough(size) if j == 0 else DiscreteTimeDelay(h, j - 1, size)
+            return builder.AddNamedSystem(f"{name}_tap{j}", inner)
+
+        near, far = tap(m), tap(m + 1)
+        taps = builder.AddNamedSystem(f"{name}_taps", Multiplexer([size, size]))
+        builder.Connect(near.get_output_port(), taps.get_input_port(0))
+        builder.Connect(far.get_output_port(), taps.get_input_port(1))
+        mix = builder.AddNamedSystem(
+            name, MatrixGain(np.kron(np.array([[1.0 - alpha, alpha]]), np.eye(size)))
+        )
+        builder.Connect(taps.get_output_port(), mix.get_input_port())
+        return Block(
+            self,
+            {"force": [near.get_input_port(), far.get_input_port()]},
+            {"measured_force": mix.get_output_port()},
+        )
+
     def readings(self, force_n: np.ndarray) -> np.ndarray | None:
         """The readings at the ticks for the actual force at the ticks
-        (``f_mea[k] = f_act[k - M]``, zero before the start); None unless the
-        delay is sampled or zero."""
+        (``f_mea[k] = f_act[k - M]``, or the two taps' mix for a delay between
+        ticks, zero before the start), operation for operation the Drake
+        primitives'; None unless the delay is sampled or zero."""
         if self._samples is None:
             return None
-        return delayed_by_ticks(np.asarray(force_n, dtype=float), self._samples)
+        x = np.asarray(force_n, dtype=float)
+        out = delayed_by_ticks(x, self._samples)
+        if self._alpha:
+            out = (1 - self._alpha) * out + self._alpha * delayed_by_ticks(x, self._samples + 1)
+        return out
 
 
 def delayed_by_ticks(x: np.ndarray, ticks: int) -> np.ndarray:

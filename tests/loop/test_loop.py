@@ -78,7 +78,6 @@ def test_contact_that_does_not_end_is_an_error():
         ({"sensor_delay_s": -0.001}, "sensor_delay_s"),
         ({"compensator": "magic"}, "compensator"),
         ({"initial_velocity_m_per_s": float("nan")}, "initial_velocity_m_per_s"),
-        ({"sample_rate_hz": 1000.0, "sensor_delay_s": 0.0025}, "sensor_delay_s"),
         ({"table_initial_state": "flying"}, "table_initial_state"),
     ],
 )
