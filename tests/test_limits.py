@@ -19,7 +19,14 @@ DOCS = Path(__file__).resolve().parents[1] / "docs"
 def test_every_number_a_user_gives_has_a_range():
     numbers = [k for k, kind in RUN_KEYS.items() if kind == "number"]
     assert set(numbers) <= set(LIMITS)
-    words = {"compensator", "contact_gate", "table_initial_state", "clamp_nonnegative", "passivity"}
+    words = {
+        "compensator",
+        "contact_gate",
+        "table_initial_state",
+        "clamp_nonnegative",
+        "passivity",
+        "computer_integrator",
+    }
     given_state = {"table_initial_position_m", "table_initial_velocity_m_per_s"}
     assert set(FIELDS) - words - given_state <= set(LIMITS)
     assert set(RUN_COLUMNS) - {"time_s"} <= set(LIMITS)

@@ -160,7 +160,9 @@ def add_hybrid_loop(
         spacecraft = Spacecraft(params.plant.spacecraft)
     else:
         h_computer = h_sample
-        spacecraft = Spacecraft(params.plant.spacecraft, sample_period_s=h_sample)
+        spacecraft = Spacecraft(
+            params.plant.spacecraft, sample_period_s=h_sample, integrator=params.rig.integrator
+        )
     spacecraft = add_component(builder, "spacecraft", spacecraft, flat)
     table = add_component(builder, "table", table or SecondOrderTable(params.plant.table), flat)
     contact = add_component(

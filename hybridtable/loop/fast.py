@@ -378,7 +378,7 @@ def _run_sampled(params: HybridLoopParams, h: float, taps: tuple[int, float], ru
         compensator_function(*switches, cc is not None),
         *(law.lead_time_s, h, law.force_deadband_n, kc, 0.0 if cc is None else cc),
     )
-    A, B = computer_step(params.spacecraft_mass_kg, h)  # the rig computer's model, one tick
+    A, B = computer_step(params.spacecraft_mass_kg, h, params.rig.integrator)  # one tick
     (a00, a01), (a10, a11) = A.tolist()
     b0, b1 = B[:, 0].tolist()
     table = params.plant.table

@@ -37,6 +37,7 @@ from hybridtable.compensators.paper import CONTACT_GATES, CompensatorParams
 from hybridtable.compensators.registry import compensator_names
 from hybridtable.errors import ParameterError
 from hybridtable.laws.contact import critical_damping_n_s_per_m, mass_for_contact_frequency_kg
+from hybridtable.laws.spacecraft import DEFAULT_INTEGRATOR, INTEGRATORS
 from hybridtable.limits import check_plausible, limit_of, limit_words
 from hybridtable.systems.contact import ContactParams
 from hybridtable.systems.sensor import SensorParams
@@ -90,6 +91,7 @@ FIELDS: dict[str, tuple[str, ...]] = {
     "sample_rate_hz": ("rig", "sample_rate_hz"),
     "time_step_s": ("rig", "time_step_s"),
     "passivity": ("rig", "compensator", "passivity"),
+    "computer_integrator": ("rig", "integrator"),
 }
 _FLAT_NAME: dict[tuple[str, ...], str] = {path: name for name, path in FIELDS.items()}
 
@@ -228,18 +230,34 @@ class RigComputer:
         (``None``: :attr:`HybridLoopParams.step_s`).
     compensator : CompensatorConfig
         The compensator it runs and what it believes.
+    integrator : str
+        The rule a sampled computer steps its spacecraft model by
+        (:data:`~hybridtable.laws.spacecraft.INTEGRATORS`; default the run
+        format's semi-implicit Euler). A continuous computer integrates the
+        model exactly: only the default applies.
     """
 
     sensor: SensorParams = SensorParams()
     sample_rate_hz: float | None = None
     time_step_s: float | None = None
     compensator: CompensatorConfig = CompensatorConfig()
+    integrator: str = DEFAULT_INTEGRATOR
 
     def __post_init__(self) -> None:
         for name in ("sample_rate_hz", "time_step_s"):
             if getattr(self, name) is not None:
                 _set(self, name, check_positive(name, getattr(self, name)))
         _plausible(self, ("rig",), ("sensor_delay_s", "sample_rate_hz", "time_step_s"))
+        if self.integrator not in INTEGRATORS:
+            raise ParameterError(
+                f"computer_integrator must be one of {', '.join(INTEGRATORS)} "
+                f"(got {self.integrator!r})"
+            )
+        if self.sample_rate_hz is None and self.integrator != DEFAULT_INTEGRATOR:
+            raise ParameterError(
+                f"computer_integrator {self.integrator!r} needs a sampled rig computer "
+                "(a sample rate); a continuous one integrates its model exactly"
+            )
 
     @property
     def sample_period_s(self) -> float | None:

@@ -94,12 +94,13 @@ def _loop_inputs() -> dict[str, Input]:
         "sample_rate_hz": ("Hz", "rig computer rate (absent: continuous)"),
         "time_step_s": ("s", "continuous mode's largest step"),
         "passivity": ("", "the passivity guard on the compensator"),
+        "computer_integrator": ("", "the sampled computer's rule: semi_implicit_euler, ..."),
     }
     out = {}
     for name in FIELDS:
         unit, doc = docs[name]
         kind = "bool" if name in ("clamp_nonnegative", "passivity") else "number"
-        if name in ("compensator", "contact_gate", "table_initial_state"):
+        if name in ("compensator", "contact_gate", "table_initial_state", "computer_integrator"):
             kind = "text"
         out[name] = Input(name, kind, unit, doc)
     return out

@@ -74,27 +74,28 @@ def continuous_delay_period(delay_s: float, max_period_s: float) -> tuple[float,
 
 def sample_taps(delay_s: float, sample_period_s: float) -> tuple[int, float]:
     """Whole ticks ``M`` and fraction ``alpha`` in ``[0, 1)`` of a delay
-    ``delay_s = (M + alpha) h`` read at ticks of period ``h`` (a delay within
-    1e-6 of a tick of a whole number of ticks is whole)."""
+    ``delay_s = (M + alpha) h`` read at ticks of period ``h`` (a fraction below
+    1e-9 of a tick is rounding: the delay is whole; a fit's finite differences
+    of a delay must still see the fraction)."""
     x = delay_s / sample_period_s
-    whole = round(x)
-    if abs(x - whole) <= 1e-6:
-        return int(whole), 0.0
-    m = math.floor(x)
-    return m, x - m
+    m = math.floor(x + 1e-9)
+    alpha = x - m
+    return m, (0.0 if alpha < 1e-9 else alpha)
 
 
 def delay_samples(delay_s: float, sample_period_s: float) -> int:
-    """Number of samples ``M`` with ``M h = delay_s``; raises if not an integer
-    (for the analyses that model whole ticks only; the sampled loop reads a
-    delay between ticks, :func:`sample_taps`)."""
-    m, alpha = sample_taps(delay_s, sample_period_s)
-    if alpha:
+    """Number of samples ``M`` with ``M h = delay_s`` within 1e-6 of a tick;
+    raises if the delay is not a whole number of ticks (for the analyses that
+    model whole ticks only; the sampled loop reads a delay between ticks,
+    :func:`sample_taps`)."""
+    m = delay_s / sample_period_s
+    mi = int(round(m))
+    if abs(m - mi) > 1e-6:
         raise ParameterError(
             f"sensor_delay_s ({delay_s:.6g} s) must be a whole number of sample periods "
             f"({sample_period_s:.6g} s, {1.0 / sample_period_s:.6g} Hz) here"
         )
-    return m
+    return mi
 
 
 def pade_state_space(

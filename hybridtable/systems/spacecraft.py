@@ -15,7 +15,7 @@ from pydrake.systems.primitives import LinearSystem
 
 from hybridtable._components import Block, Component
 from hybridtable._validation import check_finite, check_positive
-from hybridtable.laws.spacecraft import computer_step
+from hybridtable.laws.spacecraft import DEFAULT_INTEGRATOR, computer_step
 
 __all__ = ["SpacecraftParams", "Spacecraft", "spacecraft_matrices"]
 
@@ -37,13 +37,13 @@ class SpacecraftParams:
 
 
 def spacecraft_matrices(
-    mass_kg: float, sample_period_s: float | None = None
+    mass_kg: float, sample_period_s: float | None = None, integrator: str = DEFAULT_INTEGRATOR
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """State-space matrices (A, B, C, D) of the spacecraft, state ``[p_des, v_des]``.
 
     Continuous: ``d/dt [p, v] = [v, -f/m]``. Sampled with period ``h``: the
-    semi-implicit Euler step of the rig's computer, ``v+ = v - f h / m`` then
-    ``p+ = p + v+ h``.
+    rig computer's step (:func:`~hybridtable.laws.spacecraft.computer_step`),
+    by default semi-implicit Euler, ``v+ = v - f h / m`` then ``p+ = p + v+ h``.
     """
     m = check_positive("mass_kg", mass_kg)
     C = np.eye(2)
@@ -52,7 +52,7 @@ def spacecraft_matrices(
         A = np.array([[0.0, 1.0], [0.0, 0.0]])
         B = np.array([[0.0], [-1.0 / m]])
     else:
-        A, B = computer_step(m, check_positive("sample_period_s", sample_period_s))
+        A, B = computer_step(m, check_positive("sample_period_s", sample_period_s), integrator)
     return A, B, C, D
 
 
@@ -74,10 +74,13 @@ class Spacecraft(Component):
     params : SpacecraftParams
     sample_period_s : float, optional
         ``None`` (default) for the continuous model of the paper; a period for
-        the rig computer's semi-implicit Euler integration, whose state output
-        is then held between ticks (the zero-order-held command).
+        the rig computer's integration, whose state output is then held
+        between ticks (the zero-order-held command).
     initial_position_m, initial_velocity_m_per_s : float
         Default state.
+    integrator : str
+        The sampled rig computer's rule (:data:`~hybridtable.laws.spacecraft.INTEGRATORS`;
+        default the format's semi-implicit Euler).
     """
 
     def __init__(
@@ -86,10 +89,12 @@ class Spacecraft(Component):
         sample_period_s: float | None = None,
         initial_position_m: float = 0.0,
         initial_velocity_m_per_s: float = 0.0,
+        integrator: str = DEFAULT_INTEGRATOR,
     ) -> None:
         Component.__init__(self)
         self.params = params
         self.sample_period_s = sample_period_s
+        self.integrator = integrator
         self._x0 = np.array(
             [
                 check_finite("initial_position_m", initial_position_m),
@@ -99,7 +104,7 @@ class Spacecraft(Component):
         self._build("double_integrator")
 
     def _add(self, builder: DiagramBuilder, name: str) -> Block:
-        A, B, C, D = spacecraft_matrices(self.params.mass_kg, self.sample_period_s)
+        A, B, C, D = spacecraft_matrices(self.params.mass_kg, self.sample_period_s, self.integrator)
         h = self.sample_period_s
         linear = builder.AddNamedSystem(name, LinearSystem(A, B, C, D, 0.0 if h is None else h))
         return Block(

@@ -31,6 +31,7 @@ import pytest
 from hybridtable.cli import main
 from tests.generators.riglog import (
     FORMAT_COLUMNS,
+    UNITS,
     Layout,
     RigLog,
     flags_of,
@@ -97,6 +98,14 @@ LAYOUTS = {
     # A table without ``column`` keeps the format's name.
     "velocity_mm_per_s_same_name": Layout(units={"v_des_m_per_s": "mm/s"}),
     "all_together": ALL_TOGETHER,
+    # The flags comma-joined (one --column-map, one --unit), two --ignore-column.
+    "all_together_joined_flags": replace(ALL_TOGETHER, joined_flags=True, ignore=("f_raw", "tick")),
+    # The defaults written out: delimiter ",", decimal ".", units s and N.
+    "explicit_defaults": Layout(
+        columns={"time_s": "Zeit", "f_mea_n": "F_sensor"},
+        units={"time_s": "s", "f_mea_n": "N", "p_act_m": "m", "v_des_m_per_s": "m/s"},
+        explicit_defaults=True,
+    ),
     # An extra column named like a format column, ignored; the format column
     # is read from another log column.
     "ignored_namesake": Layout(
@@ -572,7 +581,7 @@ class Wrong:
     """A log, a wrong mapping of it, and what the one-line error must name:
     ``columns`` (any one of them: the log's name or the format's), ``unit``
     (the unit that fits), ``words`` (regular expressions), ``file`` ("csv": the
-    log's name; "toml": the mapping's, with --log-map)."""
+    log's name; "toml": the mapping's, with --log-map; "any": either)."""
 
     layout: Layout
     mutate: object
@@ -737,6 +746,13 @@ WRONG = {
         file="toml",
         modes=("log_map",),
     ),
+    # "a column both read and ignored is an error" (the TOML example's comment).
+    "ignore_a_column_read": Wrong(
+        Layout(columns=NAMES), _set(["F_sensor"], "ignore"), _names("f_mea_n"), file="any"
+    ),
+    "ignore_a_column_read_by_its_format_name": Wrong(
+        Layout(extras=EXTRAS), _set(["time_s"], "ignore"), ("time_s",), file="any"
+    ),
     "log_column_mapped_twice": Wrong(
         Layout(columns=NAMES), _set("x_cmd", "columns", "p_act_m"), ("x_cmd",), file="toml"
     ),
@@ -796,8 +812,10 @@ def test_a_wrong_mapping_is_one_line_naming_the_column_and_the_unit(tmp_path, na
     assert not (tmp_path / "out.json").exists(), "an output was written for a refused input"
     if case.file == "csv":
         assert f"{run}.csv" in err, f"{what}: the log file is not named: {err}"
-    elif mode == "log_map":
+    elif case.file == "toml" and mode == "log_map":
         assert "rig.toml" in err, f"{what}: the mapping file is not named: {err}"
+    elif mode == "log_map":
+        assert "rig.toml" in err or f"{run}.csv" in err, f"{what}: no file named: {err}"
     if case.columns:
         assert any(_has(err, c) for c in case.columns), (
             f"{what}: none of {case.columns} named: {err}"
@@ -806,6 +824,78 @@ def test_a_wrong_mapping_is_one_line_naming_the_column_and_the_unit(tmp_path, na
         assert _has(err, case.unit), f"{what}: the unit that fits ({case.unit}) is not named: {err}"
     for word in case.words:
         assert re.search(word, err), f"{what}: {word!r} not in: {err}"
+
+
+@pytest.mark.parametrize("run", ["run1", "run2"])
+@pytest.mark.parametrize("column", FORMAT_COLUMNS)
+def test_every_channel_in_every_other_unit_is_named_with_the_unit_that_fits(tmp_path, column, run):
+    """Each channel logged in each of its units and read in each other one:
+    exit 2, one line naming the column, the unit it was read in and the unit
+    that fits (run2 is SDMDC: f_comp_n is not f_mea_n there)."""
+    failures = []
+    for true in UNITS[column]:
+        log = write_log(
+            EXAMPLES / f"{run}.csv",
+            Layout(columns=NAMES, units={column: true}),
+            tmp_path / true.replace("/", "_"),
+            toml_path=tmp_path / "rig.toml",
+        )
+        for declared in UNITS[column]:
+            if declared == true:
+                continue
+            mapping = json.loads(json.dumps(log.mapping))
+            mapping["columns"][column] = {"column": NAMES[column], "unit": declared}
+            toml = write_toml(mapping, tmp_path / "rig.toml")
+            outcome = _cli("compare", log.csv, "--no-progress", "--log-map", toml)
+            err = outcome.err.strip()
+            named = (
+                outcome.code == 2
+                and err
+                and "\n" not in err
+                and (_has(err, column) or _has(err, NAMES[column]))
+                and _has(err, declared)
+                and _has(err, true)
+            )
+            if not named:
+                failures.append(f"log in {true}, read in {declared}: exit {outcome.code}: {err}")
+    assert not failures, "\n".join(failures)
+
+
+@pytest.mark.slow
+def test_a_user_fixes_the_map_from_the_messages_one_by_one(tmp_path, baselines):
+    """The all-together log read with the column names only: each run of
+    compare names at least one fault (comment, delimiter, decimal comma, a
+    unit) with its fix, which the user then gives; with every fix given, the
+    run's results. A unit's fix is named as in the spec's example
+    (``--unit f_mea_n=kN``): ``COLUMN=UNIT``."""
+    baseline = baselines["run1"]
+    log = write_log(
+        EXAMPLES / "run1.csv", ALL_TOGETHER, tmp_path / "log", toml_path=tmp_path / "m.toml"
+    )
+    flags = ["--column-map", ",".join(f"{k}={v}" for k, v in NAMES.items())]
+    faults = {
+        "comment": (r"comment\W{1,6}#", ["--comment", "#"]),
+        "delimiter": (r"delimiter\W{1,6};", ["--delimiter", ";"]),
+        "decimal": (r"decimal\W{1,6},", ["--decimal", ","]),
+    }
+    for column, unit in ALL_TOGETHER.units.items():
+        pattern = rf"(?<![\w/]){column}={re.escape(unit)}(?![\w/])"
+        faults[column] = (pattern, ["--unit", f"{column}={unit}"])
+    seen: list[list[str]] = []
+    for _ in range(len(faults) + 1):
+        outcome = _cli("compare", log.csv, "--json", tmp_path / "out.json", "--no-progress", *flags)
+        if outcome.code == 0:
+            break
+        err = _assert_one_line(outcome, f"compare with {' '.join(flags)}")
+        fixed = [name for name, (pattern, _) in faults.items() if re.search(pattern, err)]
+        assert fixed, f"after fixing {seen}: no fix of the faults left ({sorted(faults)}) in: {err}"
+        seen.append(fixed)
+        for name in fixed:
+            flags += faults.pop(name)[1]
+    assert outcome.code == 0, f"after fixing {seen}: exit {outcome.code}: {outcome.err.strip()}"
+    assert not faults, f"never named: {sorted(faults)} (named: {seen})"
+    data = json.loads((tmp_path / "out.json").read_text())
+    _assert_same_results(data, baseline["data"], log.csv.parent, baseline["dir"])
 
 
 def test_the_specs_example_message_for_forces_in_kn(tmp_path):

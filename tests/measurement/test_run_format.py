@@ -188,13 +188,6 @@ CASES = [
         "key format must be 'hybridtable-run/1'",
         "json",
     ),
-    (
-        "delay_not_whole_ticks",
-        None,
-        lambda d: d.update(sensor_delay_s=0.0045),
-        "whole number of sample periods",
-        "json",
-    ),
 ]
 
 

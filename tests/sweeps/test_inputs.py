@@ -170,9 +170,13 @@ def test_noise_params():
 
 
 def test_a_loop_that_cannot_be_is_refused_naming_the_field():
-    """A sampled rig whose delay is not a whole number of ticks (1 kHz, 1.5 ms)."""
-    with pytest.raises(ParameterError, match="sensor_delay_s"):
-        loop_params({"sample_rate_hz": 1000.0, "sensor_delay_s": 0.0015})
+    """A rule of a sampled computer on a continuous one; a delay between ticks is
+    a loop (read between two samples)."""
+    with pytest.raises(ParameterError, match="computer_integrator"):
+        loop_params({"computer_integrator": "trapezoid"})
+    assert (
+        loop_params({"sample_rate_hz": 1000.0, "sensor_delay_s": 0.0015}).sensor_delay_s == 0.0015
+    )
 
 
 @pytest.mark.parametrize(

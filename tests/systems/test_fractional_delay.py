@@ -22,7 +22,8 @@ def test_taps_split_a_delay_into_whole_ticks_and_a_fraction():
     assert sample_taps(0.004, H) == (4, 0.0)
     m, alpha = sample_taps(0.0034, H)
     assert m == 3 and alpha == pytest.approx(0.4, abs=1e-12)
-    assert sample_taps(0.004 + 1e-12, H) == (4, 0.0)  # rounding is whole
+    assert sample_taps(0.004 + 1e-15, H) == (4, 0.0)  # rounding is whole
+    assert sample_taps(0.004 + 1e-10, H)[1] == pytest.approx(1e-7)  # a fit's step is not
     assert sample_taps(0.0, H) == (0, 0.0)
     m, alpha = sample_taps(0.0003, H)
     assert m == 0 and alpha == pytest.approx(0.3)
