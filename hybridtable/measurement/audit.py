@@ -11,9 +11,16 @@ CSV's precision, and every one that differs from the run's JSON is a
 
 Per run (:func:`audit_run`):
 
-- **time step**: ``p_des[k] - p_des[k-1] = v_des[k] h`` gives ``h`` by least
-  squares (``sample_rate_hz = 1 / h``); ``p_des[0] = -gap + v_des[0] h``
-  gives the initial gap;
+- **time step and integration rule**: ``p_des[k] - p_des[k-1] = v_des[k] h``
+  gives ``h`` by least squares (``sample_rate_hz = 1 / h``); a computer that
+  steps the model by another rule (:data:`~hybridtable.laws.spacecraft.INTEGRATORS`:
+  ``p_des`` steps by ``h (theta v_des[k] + (1 - theta) v_des[k-1])``) shows
+  in the fit of ``h v_des[k] - c (v_des[k] - v_des[k-1])``, ``theta = 1 - c / h``,
+  where the force changes the velocity: a ``theta`` other than 1 is a
+  finding that names the rule (explicit Euler 0, trapezoid or RK4 with the
+  force held 1/2), and ``h`` is then read from that fit, so the rule does
+  not pass for a time step, mass or lead time of its own; ``p_des[0] = -gap
+  + v_des[0] h`` (``theta``-weighted) gives the initial gap;
 - **mass**: ``v_des[k] - v_des[k-1] = -f_comp[k] h / m`` on the ticks with a
   force gives ``m``; a ``v_des`` that changes with no force is reported;
 - **compensation**: on the ticks with ``f_comp != 0``, a least-squares fit of
@@ -38,6 +45,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from hybridtable.laws.spacecraft import DEFAULT_INTEGRATOR, INTEGRATORS
 from hybridtable.measurement.audit_findings import (
     RELATIVE_TOLERANCE,
     SIGNIFICANCE,
@@ -95,6 +103,30 @@ def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
         (h,), (h_se,), _ = _ls(vv[:, None], dx)
     else:
         h, h_se = h_json, math.inf
+    rule, theta, theta_se = _integration_rule(dx, v)
+    if rule != DEFAULT_INTEGRATOR:
+        h, h_se = theta[1], theta_se[1]
+        weight, weight_se = theta[0], theta_se[0]
+        named = (
+            f"{rule.replace('_', ' ')}"
+            + (" (or RK4 with the force held over the tick)" if rule == "trapezoid" else "")
+            if rule in INTEGRATORS
+            else "a rule the model does not have"
+        )
+        found.append(
+            Finding(
+                "integrator",
+                1.0,
+                weight,
+                weight_se,
+                rid,
+                f"the computer steps the spacecraft model by {named}: p_des steps by "
+                f"h ({weight:.3g} v_des[k] + {1.0 - weight:.3g} v_des[k-1]); the format's "
+                "semi-implicit Euler steps by h v_des[k]",
+            )
+        )
+    else:
+        weight, weight_se = 1.0, 0.0
     if _differs(h, h_se, h_json, h_json):
         found.append(
             Finding(
@@ -107,7 +139,12 @@ def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
                 f"({1.0 / h:.6g} Hz); the JSON says {info.sample_rate_hz:g} Hz",
             )
         )
-    gap = -(p_des[0] - v[0] * h)
+    v_start = v[0] + fc[0] * h / info.spacecraft_mass_kg  # before tick 0's step
+    gap = (
+        -(p_des[0] - v[0] * h)
+        if weight == 1.0
+        else -(p_des[0] - h * (weight * v[0] + (1.0 - weight) * v_start))
+    )
     if _differs(gap, 10 * abs(h_se * v[0]), info.initial_gap_m, max(info.initial_gap_m, 1e-6)):
         found.append(
             Finding(
@@ -308,6 +345,9 @@ def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
         run_id=run.run_id,
         time_step_s=float(h),
         time_step_se=float(h_se),
+        integrator=rule,
+        position_weight=float(weight),
+        position_weight_se=float(weight_se),
         initial_gap_m=float(gap),
         initial_velocity_m_per_s=float(v0),
         mass_kg=float(m),
@@ -327,6 +367,33 @@ def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
         negative_force_ticks=negative,
     )
     return est, found
+
+
+def _integration_rule(dx: np.ndarray, v: np.ndarray) -> tuple[str, np.ndarray, np.ndarray]:
+    """The rule by which the computer stepped ``p_des`` (steps ``dx``) from its
+    velocities ``v``: the fit ``dx = h v[k] - c (v[k] - v[k-1])``, as
+    ``(rule, [theta, h], [theta_se, h_se])`` with ``theta = 1 - c / h``. The
+    rule is the format's while ``theta`` is within five standard errors or
+    :data:`RELATIVE_TOLERANCE` of 1 (or the velocity never changes: nothing
+    tells), the nearest of :data:`~hybridtable.laws.spacecraft.INTEGRATORS`
+    within the same of it, else ``"other"``."""
+    dv = np.diff(v)
+    if len(dx) < 3 or not np.any(dv != 0.0):
+        return DEFAULT_INTEGRATOR, np.array([1.0, math.nan]), np.zeros(2)
+    (h, c), (h_se, c_se), _ = _ls(np.column_stack([v[1:], -dv]), dx)
+    if not (math.isfinite(h) and h > 0.0 and math.isfinite(c_se)):
+        return DEFAULT_INTEGRATOR, np.array([1.0, math.nan]), np.zeros(2)
+    theta = 1.0 - c / h
+    theta_se = math.hypot(c_se / h, c * h_se / (h * h))
+    values, errors = np.array([theta, h]), np.array([theta_se, h_se])
+
+    def near(target: float) -> bool:
+        return abs(theta - target) <= max(SIGNIFICANCE * theta_se, 1e-2)
+
+    if abs(theta - 1.0) <= max(SIGNIFICANCE * theta_se, RELATIVE_TOLERANCE):
+        return DEFAULT_INTEGRATOR, values, errors
+    rule = min(INTEGRATORS, key=lambda r: abs(theta - INTEGRATORS[r]))
+    return (rule if near(INTEGRATORS[rule]) else "other"), values, errors
 
 
 def audit_runs(runs: Sequence[Run]) -> Audit:

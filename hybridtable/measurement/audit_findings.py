@@ -12,6 +12,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from hybridtable.laws.spacecraft import DEFAULT_INTEGRATOR, INTEGRATORS
+
 __all__ = [
     "RELATIVE_TOLERANCE",
     "SIGNIFICANCE",
@@ -44,6 +46,7 @@ FINDING_EFFECTS: dict[str, str] = {
     "compensation_law": "compensation_law_error",
     "clamp": "compensation_law_error",
     "spacecraft_model": "spacecraft_model_error",
+    "integrator": "integrator_error",
 }
 
 #: Units of the values a finding reports.
@@ -60,6 +63,7 @@ UNITS: dict[str, str] = {
     "compensation_law": "N",
     "clamp": "N",
     "spacecraft_model": "m/s",
+    "integrator": "1",
 }
 
 
@@ -135,6 +139,11 @@ class ComputerEstimate:
     run_id: str
     time_step_s: float
     time_step_se: float
+    #: The rule the computer stepped its model by (``"other"``: none of the
+    #: model's), and the weight ``theta`` of the new velocity in its position step.
+    integrator: str
+    position_weight: float
+    position_weight_se: float
     initial_gap_m: float
     initial_velocity_m_per_s: float
     mass_kg: float
@@ -173,6 +182,14 @@ class Audit:
         return not self.findings
 
     @property
+    def integrator(self) -> str:
+        """The rule the computers stepped their model by: the format's unless
+        a run shows another (the first such run's; ``"other"``: none of the
+        model's)."""
+        rules = [e.integrator for e in self.estimates if e.integrator != DEFAULT_INTEGRATOR]
+        return rules[0] if rules else DEFAULT_INTEGRATOR
+
+    @property
     def effects(self) -> list[str]:
         """The findings' verdict names, each once, in order."""
         out: list[str] = []
@@ -184,7 +201,7 @@ class Audit:
     def computer_changes(self, run_id: str) -> dict[str, float | str]:
         """The changes of :class:`~hybridtable.loop.params.HybridLoopParams`
         that make the model's computer do what run ``run_id``'s did (mass, lead
-        time, MDC stiffness, deadband and compensator kind). A gain, an offset
+        time, MDC stiffness, deadband, compensator kind and integration rule). A gain, an offset
         or a law the format lacks has no such change."""
         out: dict[str, float | str] = {}
         for f in self.findings:
@@ -198,6 +215,10 @@ class Audit:
                 out["compensator_stiffness_n_per_m"] = f.used_value
             elif f.key == "force_deadband_n":
                 out["force_deadband_n"] = f.used_value
+            elif f.key == "integrator":
+                rule = next(e.integrator for e in self.estimates if e.run_id == run_id)
+                if rule in INTEGRATORS:
+                    out["computer_integrator"] = rule
         if "lead_time_s" in out or "compensator_stiffness_n_per_m" in out:
             est = next(e for e in self.estimates if e.run_id == run_id)
             lead = _present(est.lead_time_s, est.lead_time_se, est.time_step_s)
@@ -208,13 +229,22 @@ class Audit:
                 (False, True): "MDC",
                 (False, False): "none",
             }[(lead, stiff)]
-            out.setdefault("lead_time_s", max(est.lead_time_s, 0.0))
-            out.setdefault("compensator_stiffness_n_per_m", max(est.stiffness_n_per_m, 0.0))
+            # what the computer has none of is not a number of it (an MDC
+            # stiffness of 0 is no stiffness the loop takes)
+            if lead:
+                out.setdefault("lead_time_s", max(est.lead_time_s, 0.0))
+            else:
+                out.pop("lead_time_s", None)
+            if stiff:
+                out.setdefault("compensator_stiffness_n_per_m", max(est.stiffness_n_per_m, 0.0))
+            else:
+                out.pop("compensator_stiffness_n_per_m", None)
         return out
 
     def to_json(self) -> dict:
         return {
             "ok": self.ok,
+            "integrator": self.integrator,
             "findings": [f.to_json() for f in self.findings],
             "runs": [e.to_json() for e in self.estimates],
             "relative_tolerance": RELATIVE_TOLERANCE,

@@ -69,6 +69,7 @@ COMPUTER_PARAMS: tuple[str, ...] = (
     "lead_time_s",
     "compensator_stiffness_n_per_m",
     "force_deadband_n",
+    "computer_integrator",
 )
 
 SystemFactory = Callable[[HybridLoopParams], System]
