@@ -19,7 +19,7 @@ from hybridtable.diagnosis.settings import (
 )
 from hybridtable.effects.spec import ModelSpec, RigScale
 from hybridtable.errors import MeasurementError, SimulationError
-from hybridtable.measurement.noise_model import NoiseModel, estimate_noise, whiten
+from hybridtable.measurement.noise_model import NoiseModel, run_noise, whiten
 from hybridtable.measurement.phases import delayed_labels, phase_labels, settle_ticks
 from hybridtable.measurement.replay import replay
 from hybridtable.measurement.rig import rig_params, simulate_rig
@@ -82,21 +82,12 @@ def prepare_runs(runs: Sequence[Run]) -> list[RunData]:
         table = params.plant.table
         h = run.sample_period_s
         settle = max(2, settle_ticks(table.settling_time_s, h, run.n))
-        noise = estimate_noise(run, m, settle)
-        notes = []
+        noise, notes = run_noise(run, m, settle)
         if "f_mea_n" not in noise:
             raise MeasurementError(
                 f"{run.where('csv')}: fewer than 20 ticks without contact; "
                 "cannot estimate the force noise"
             )
-        if "p_act_m" not in noise:
-            noise["p_act_m"] = estimate_noise(run, m, 2).get("p_act_m")
-            notes.append("p_act noise from stretches where the table may not have settled")
-        if noise["p_act_m"] is None:
-            noise["p_act_m"] = NoiseModel(
-                float(np.std(np.diff(run.p_act_m, 3))) / math.sqrt(20.0), 0.0, 0
-            )
-            notes.append("p_act noise from third differences of the whole record")
         floors = {
             "f_mea_n": NUMERICAL_FLOOR * max(float(np.abs(run.f_mea_n).max()), 1.0),
             "p_act_m": NUMERICAL_FLOOR * max(float(np.ptp(run.p_act_m)), 1e-6),

@@ -64,6 +64,7 @@ import numpy as np
 
 from hybridtable.errors import MeasurementError
 from hybridtable.loop.simulation import SimulationResult
+from hybridtable.measurement.noise_model import is_coloured, run_noise, third_difference_gain
 from hybridtable.measurement.phases import (
     PHASES,
     contact_duration,
@@ -313,7 +314,10 @@ def compare_run(
         for c in ("v_des_m_per_s", "f_comp_n", "p_des_m", "p_act_m", "f_mea_n")
     }
 
-    # Noise floor from the no-contact ticks.
+    # Noise floor from the no-contact ticks, read by the noise model diagnose
+    # uses (measurement.noise_model): the force's spread about each quiet
+    # stretch's mean, the position's third differences (blind to the table's
+    # curving motion), corrected for the noise's colour where it has one.
     on = contact_mask(run.p_act_m)
     guard = 2
     quiet_phys = ~dilate(on, guard, guard)
@@ -331,6 +335,12 @@ def compare_run(
         notes.append("p_act noise from short quiet segments (table transients not skipped)")
     if n_f < 8:
         notes.append(f"f_mea noise RMS from only {n_f} no-contact ticks")
+    model = run_noise(run, m, settle)[0].get("p_act_m")
+    if model is not None and is_coloured(model):
+        noise_p /= math.sqrt(third_difference_gain(model))
+        notes.append(
+            f"p_act noise coloured (lag-1 correlation {model.phi:.2f}): its RMS read accordingly"
+        )
 
     e_f = run.f_mea_n - rep.f_mea_n
     e_p = run.p_act_m - rep.p_act_m

@@ -196,6 +196,8 @@ class LogLayout:
         """How to state that each column of ``units`` is in its unit, in the user's words."""
         flag = "--unit " + ",".join(f"{c}={u}" for c, u in units.items())
         toml = ", ".join(f'unit = "{u}" for {c}' for c, u in units.items())
+        if len(units) > 1:
+            toml = "these units"
         if self.source.lower().endswith(".toml"):
             return f"give {toml} in {self.source} (or {flag})"
         return f"give {flag} (or {toml} in a --log-map file)"

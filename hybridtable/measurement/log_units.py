@@ -116,6 +116,11 @@ def check_units(run: Run, layout: LogLayout) -> None:
         f"{layout.read_as(name)} is {ratio:.4g} times {anchor}, like {unit}"
         for name, unit, ratio, anchor in found
     )
+    advice = layout.unit_advice({n: u for n, u, _, _ in found})
+    if len(found) == 1:
+        raise MeasurementError(f"{run.where('csv')}: {what}: {advice}")
+    # the fix first: a long line is cut at its end
     raise MeasurementError(
-        f"{run.where('csv')}: {what}: {layout.unit_advice({n: u for n, u, _, _ in found})}"
+        f"{run.where('csv')}: {len(found)} columns fit other units than they were read "
+        f"in: {advice}; {what}"
     )

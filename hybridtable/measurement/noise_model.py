@@ -18,6 +18,9 @@ __all__ = [
     "MAX_AR_ORDER",
     "NoiseModel",
     "estimate_noise",
+    "run_noise",
+    "is_coloured",
+    "third_difference_gain",
     "ar1_from_segments",
     "ar_from_segments",
     "whiten",
@@ -117,22 +120,37 @@ def _ar1_apply(x: np.ndarray, phi: float) -> np.ndarray:
     return fwd + bwd - x
 
 
-def _detrended(segments: Sequence[np.ndarray], degree: int) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Each segment long enough (``degree + 5`` samples) without its least-squares
-    polynomial of ``degree``, with the trend's orthonormal basis."""
+def _detrended(
+    segments: Sequence[np.ndarray],
+    degree: int,
+    regressors: Sequence[np.ndarray | None] | None = None,
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Each segment long enough (``degree + 5`` samples, and 4 more than its
+    trend's columns) without its least-squares trend, with the trend's
+    orthonormal basis: a polynomial of ``degree``, and the segment's
+    ``regressors`` (columns, or None) where given."""
     q = degree + 1
     out = []
-    for seg in segments:
+    for i, seg in enumerate(segments):
         seg = np.asarray(seg, dtype=float)
-        if len(seg) < q + 4:
+        extra = regressors[i] if regressors is not None else None
+        width = q if extra is None else q + extra.shape[1]
+        if len(seg) < max(q, width) + 4:
             continue
         t = np.linspace(-1.0, 1.0, len(seg))
-        basis, _ = np.linalg.qr(np.vander(t, q, increasing=True))
+        trend = np.vander(t, q, increasing=True)
+        if extra is not None:
+            trend = np.column_stack([trend, extra])
+        basis, _ = np.linalg.qr(trend)
         out.append((seg - basis @ (basis.T @ seg), basis))
     return out
 
 
-def ar1_from_segments(segments: Sequence[np.ndarray], degree: int) -> NoiseModel | None:
+def ar1_from_segments(
+    segments: Sequence[np.ndarray],
+    degree: int,
+    regressors: Sequence[np.ndarray | None] | None = None,
+) -> NoiseModel | None:
     """AR(1) noise of segments that hold noise plus a polynomial of ``degree``.
 
     Each segment's polynomial trend is removed; the pooled lag-1
@@ -140,24 +158,25 @@ def ar1_from_segments(segments: Sequence[np.ndarray], degree: int) -> NoiseModel
     (``E[phi_hat] ~ phi - (q + (q + 2) phi) / n``, ``q = degree + 1``), and
     the variance for the noise the trend removes:
     ``E[sum x^2] = sigma^2 sum_s (n_s - trace(Q_s' R(phi) Q_s))`` with ``Q_s``
-    an orthonormal basis of the trend and ``R`` the AR(1) correlation.
+    an orthonormal basis of the trend and ``R`` the AR(1) correlation. A
+    segment's ``regressors`` (columns, or None) join its trend (with ``q``
+    then its trend's columns).
     Returns None with fewer than 20 degrees of freedom.
     """
-    q = degree + 1
     s0 = s1 = 0.0
     kept = []
-    for x, basis in _detrended(segments, degree):
+    for x, basis in _detrended(segments, degree, regressors):
         s0 += float(x @ x)
         s1 += float(x[1:] @ x[:-1])
         kept.append(basis)
     total = sum(len(b) for b in kept)
-    if total - q * len(kept) < 20:
+    kq = sum(b.shape[1] for b in kept)  # trend columns, summed over the segments
+    if total - kq < 20:
         return None
     if not s0 > 0.0:  # a noise-free record
         return NoiseModel(0.0, 0.0, total)
-    k = len(kept)
     phi_hat = s1 / s0
-    phi = (phi_hat + k * q / total) / (1.0 - k * (q + 2) / total)
+    phi = (phi_hat + kq / total) / (1.0 - (kq + 2 * len(kept)) / total)
     phi = float(np.clip(phi, -0.95, 0.98))
     dof = sum(len(b) - float(np.trace(b.T @ _ar1_apply(b, phi))) for b in kept)
     dof = max(dof, 0.25 * total)
@@ -165,7 +184,10 @@ def ar1_from_segments(segments: Sequence[np.ndarray], degree: int) -> NoiseModel
 
 
 def ar_from_segments(
-    segments: Sequence[np.ndarray], degree: int, max_order: int = MAX_AR_ORDER
+    segments: Sequence[np.ndarray],
+    degree: int,
+    max_order: int = MAX_AR_ORDER,
+    regressors: Sequence[np.ndarray | None] | None = None,
 ) -> NoiseModel | None:
     """AR(p) noise of segments holding noise plus a polynomial of ``degree``,
     the order ``p <= max_order`` chosen by BIC over the pooled conditional
@@ -176,11 +198,12 @@ def ar_from_segments(
     and the marginal variance ``sum x^2 / (N - q S)`` (``S`` segments).
     Returns None with fewer than 20 degrees of freedom.
     """
-    base = ar1_from_segments(segments, degree)
+    base = ar1_from_segments(segments, degree, regressors)
     if base is None or base.sigma == 0.0 or max_order < 2:
         return base
-    q = degree + 1
-    xs = [x for x, _ in _detrended(segments, degree)]
+    detrended = _detrended(segments, degree, regressors)
+    xs = [x for x, _ in detrended]
+    kq = sum(b.shape[1] for _, b in detrended)
     best: tuple[float, int, np.ndarray] | None = None
     for p in range(1, max_order + 1):
         rows, target = [], []
@@ -208,7 +231,7 @@ def ar_from_segments(
         return base
     total = sum(len(x) for x in xs)
     s0 = sum(float(x @ x) for x in xs)
-    sigma = math.sqrt(s0 / max(total - q * len(xs), 0.25 * total))
+    sigma = math.sqrt(s0 / max(total - kq, 0.25 * total))
     rho1 = float(_ar_acf(coef)[1])
     return NoiseModel(sigma, rho1, total, tuple(float(c) for c in coef))
 
@@ -223,7 +246,10 @@ def estimate_noise(run: Run, delay_ticks: int, settle_ticks: int) -> dict[str, N
     ``p_act``: away from contact, after ``settle_ticks`` (the start and the
     end of each contact), the table tracks the command's ramp with a
     constant lag, sampled once per tick: the residuals of a straight line
-    fitted to each segment are the noise (:func:`ar1_from_segments`).
+    fitted to each segment are the noise (:func:`ar1_from_segments`). Where
+    the command is no straight line there (the model kicked by the noise
+    that a deadband lets through), the command and the model's velocity
+    join the line (:func:`_command_regressors`).
     """
     on = contact_mask(run.p_act_m)
     guard = 2
@@ -236,10 +262,92 @@ def estimate_noise(run: Run, delay_ticks: int, settle_ticks: int) -> dict[str, N
         out["f_mea_n"] = f_noise
     quiet_p = ~dilate(on, guard, settle_ticks)
     quiet_p[: min(settle_ticks, len(quiet_p))] = False
-    p_noise = ar_from_segments([run.p_act_m[a : b + 1] for a, b in true_runs(quiet_p)], 1)
+    spans = true_runs(quiet_p)
+    p_noise = ar_from_segments(
+        [run.p_act_m[a : b + 1] for a, b in spans],
+        1,
+        regressors=[_command_regressors(run, a, b) for a, b in spans],
+    )
     if p_noise is not None:
         out["p_act_m"] = p_noise
     return out
+
+
+#: A quiet segment's command counts as a straight line when it departs from
+#: one by less than this fraction of the table's noise about a line.
+_STRAIGHT = 0.1
+
+
+def _command_regressors(run: Run, a: int, b: int) -> np.ndarray | None:
+    """Columns that join the straight line of ``p_act``'s trend over ticks
+    ``a..b`` where the command is not a straight line there: the command
+    ``p_des`` and the model's velocity ``v_des`` (the table tracks them, to
+    first order, with a constant lag). That is where the computer's model
+    moved under a force in free flight (a deadband that lets the sensor's
+    noise through: the noise kicks the model's velocity); ``None`` where the
+    command is straight (the table's own noise about a line is then the
+    estimate, as always)."""
+    n = b - a + 1
+    if n < 10:
+        return None
+    t = np.arange(n, dtype=float)
+    cmd = run.p_des_m[a : b + 1]
+    act = run.p_act_m[a : b + 1]
+    bend = cmd - np.polyval(np.polyfit(t, cmd, 1), t)
+    spread = act - np.polyval(np.polyfit(t, act, 1), t)
+    if not float(np.max(np.abs(bend))) > _STRAIGHT * float(np.std(spread)):
+        return None
+    return np.column_stack([bend, run.v_des_m_per_s[a : b + 1]])
+
+
+def run_noise(
+    run: Run, delay_ticks: int, settle_ticks: int
+) -> tuple[dict[str, NoiseModel], list[str]]:
+    """The noise of a recorded run as ``compare`` and ``diagnose`` both use it:
+    :func:`estimate_noise`, and where the record has no quiet stretch of a
+    settled table, ``p_act``'s noise from stretches where it may not have
+    settled, else from third differences of the whole record (white), each
+    said in the notes. ``f_mea_n`` is missing if fewer than 20 ticks are
+    without contact."""
+    noise = estimate_noise(run, delay_ticks, settle_ticks)
+    notes: list[str] = []
+    if "p_act_m" not in noise:
+        p_noise = estimate_noise(run, delay_ticks, 2).get("p_act_m")
+        if p_noise is not None:
+            noise["p_act_m"] = p_noise
+            notes.append("p_act noise from stretches where the table may not have settled")
+        else:
+            third = np.diff(run.p_act_m, 3)
+            noise["p_act_m"] = NoiseModel(float(np.std(third)) / math.sqrt(20.0), 0.0, len(third))
+            notes.append("p_act noise from third differences of the whole record")
+    return noise, notes
+
+
+#: Fewest samples from which a noise's colour is told: on shorter quiet
+#: stretches (the events of a long log) what a straight line leaves of the
+#: table's settling motion reads as correlation.
+MIN_COLOUR_SAMPLES = 200
+
+
+def is_coloured(noise: NoiseModel) -> bool:
+    """True if the noise's lag-1 correlation is significant (beyond 2.58
+    standard errors of a white noise's, ``1 / sqrt(N)``: 1 %) on at least
+    :data:`MIN_COLOUR_SAMPLES` samples."""
+    n = noise.samples
+    return n >= MIN_COLOUR_SAMPLES and abs(noise.phi) > 2.58 / math.sqrt(n)
+
+
+def third_difference_gain(noise: NoiseModel) -> float:
+    """``E[(d3 e)^2] / (20 sigma^2)`` of the noise: how much more (or less) of
+    its variance third differences see than of a white noise's (1 for white
+    noise; ``20 - 30 rho_1 + 12 rho_2 - 2 rho_3`` over 20 for correlations
+    ``rho_k``)."""
+    a = list(noise.coefficients)
+    rho = list(_ar_acf(a))
+    while len(rho) < 4:
+        k = len(rho)
+        rho.append(sum(a[j] * rho[k - 1 - j] for j in range(len(a))))
+    return (20.0 - 30.0 * rho[1] + 12.0 * rho[2] - 2.0 * rho[3]) / 20.0
 
 
 def whiten(e: np.ndarray, noise: NoiseModel) -> np.ndarray:

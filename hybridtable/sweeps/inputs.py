@@ -220,6 +220,10 @@ def _choices(name: str) -> tuple[str, ...]:
         from hybridtable.compensators.paper import CONTACT_GATES
 
         return CONTACT_GATES
+    if name == "computer_integrator":
+        from hybridtable.laws.spacecraft import INTEGRATORS
+
+        return tuple(INTEGRATORS)
     from hybridtable.loop.params import TABLE_INITIAL_STATES
 
     return TABLE_INITIAL_STATES
