@@ -242,7 +242,9 @@ def estimate_noise(run: Run, delay_ticks: int, settle_ticks: int) -> dict[str, N
 
     ``f_mea``: the true force is zero away from contact (2 ticks of guard,
     the readings shifted by the sensor delay), so the readings about each
-    segment's mean are noise (an offset is model error, not noise).
+    segment's mean are noise (an offset is model error, not noise); a
+    stretch after a contact starts where its readings have fallen into the
+    noise (:func:`_past_the_tail`: a sensor's filter rings on).
     ``p_act``: away from contact, after ``settle_ticks`` (the start and the
     end of each contact), the table tracks the command's ramp with a
     constant lag, sampled once per tick: the residuals of a straight line
@@ -257,7 +259,9 @@ def estimate_noise(run: Run, delay_ticks: int, settle_ticks: int) -> dict[str, N
     quiet_f = delayed_labels(quiet.astype(int), delay_ticks).astype(bool)
     quiet_f[: min(delay_ticks, len(quiet_f))] = True
     out: dict[str, NoiseModel] = {}
-    f_noise = ar_from_segments([run.f_mea_n[a : b + 1] for a, b in true_runs(quiet_f)], 0)
+    f_noise = ar_from_segments(
+        [_past_the_tail(run.f_mea_n[a : b + 1], a > 0) for a, b in true_runs(quiet_f)], 0
+    )
     if f_noise is not None:
         out["f_mea_n"] = f_noise
     quiet_p = ~dilate(on, guard, settle_ticks)
@@ -271,6 +275,39 @@ def estimate_noise(run: Run, delay_ticks: int, settle_ticks: int) -> dict[str, N
     if p_noise is not None:
         out["p_act_m"] = p_noise
     return out
+
+
+#: A stretch after a contact starts where the median of the next
+#: :data:`_TAIL_WINDOW` readings is within this many robust noise levels of the
+#: stretch's median.
+_TAIL_LEVELS = 0.5
+_TAIL_WINDOW = 11
+
+
+def _past_the_tail(x: np.ndarray, after_contact: bool) -> np.ndarray:
+    """A quiet stretch of force readings from where they have settled into
+    the noise on, if it follows a contact: a sensor's filter (or a slow
+    release of the contact) holds the reading above the noise for a while
+    after the contact, which no guard of fixed ticks covers. The stretch
+    starts where the median of the next :data:`_TAIL_WINDOW` readings is
+    within :data:`_TAIL_LEVELS` robust noise levels of the stretch's median.
+    Unchanged where the first readings hold no tail (their median within
+    four of its standard errors), or the stretch does not follow a contact."""
+    w = _TAIL_WINDOW
+    if not after_contact or len(x) < 4 * w:
+        return x
+    mid = float(np.median(x))
+    level = 1.4826 * float(np.median(np.abs(x - mid)))
+    if not level > 0.0:
+        return x
+    ahead = np.median(np.lib.stride_tricks.sliding_window_view(x, w), axis=1)
+    # no tail: the first readings' median within 4 of its standard errors
+    # (1.2533 level / sqrt(w) for a noise) leaves the stretch whole
+    if abs(ahead[0] - mid) <= 4.0 * 1.2533 * level / math.sqrt(w):
+        return x
+    settled = np.flatnonzero(np.abs(ahead - mid) <= _TAIL_LEVELS * level)
+    start = int(settled[0]) if settled.size else 0
+    return x[start:] if start < len(x) - 2 * w else x
 
 
 #: A quiet segment's command counts as a straight line when it departs from

@@ -51,3 +51,26 @@ def test_a_null_run_with_ar1_noise_is_within_the_noise_on_every_channel(
     for channel in ("f_mea_n", "p_act_m"):
         assert c.error_to_noise(channel) < 1.2, (channel, c.error_to_noise(channel))
     assert c.noise_rms["p_act_m"] == pytest.approx(3e-6, rel=0.2)
+
+
+def test_a_filters_tail_after_the_contact_is_no_noise():
+    from hybridtable.measurement.noise_model import estimate_noise
+    from hybridtable.measurement.run_format import Run, RunInfo
+
+    rng = np.random.default_rng(5)
+    n, a, b, tau = 3000, 400, 700, 60.0
+    k = np.arange(n)
+    p_act = np.where((k >= a) & (k <= b), 1e-3 * np.sin(np.pi * (k - a) / (b - a)), -1e-3)
+    force = np.where((k >= a) & (k <= b), 500.0 * np.sin(np.pi * (k - a) / (b - a)), 0.0)
+    # a first-order sensor filter: the reading rings on after the contact
+    reading = np.zeros(n)
+    for i in range(1, n):
+        reading[i] = reading[i - 1] + (force[i] - reading[i - 1]) / tau
+    f_mea = reading + 2.0 * rng.standard_normal(n)
+    info = RunInfo(
+        *("r", 1000.0, 100.0, 1e5, 0.0, 30.0, 0.7, "none", 0.0, 1e-3, 0.1, 0.0),
+    )
+    zeros = np.zeros(n)
+    run = Run(info, k * 1e-3, p_act, p_act + 1e-7 * rng.standard_normal(n), f_mea, zeros, zeros)
+    sigma = estimate_noise(run, 0, 2)["f_mea_n"].sigma
+    assert sigma == pytest.approx(2.0, rel=0.1)
