@@ -44,6 +44,12 @@ __all__ = [
 #: second at 1 kHz, 2.7e4 at 10 kHz).
 SAMPLED_MEAN_STEP_S = 5e-5
 
+#: What a tick of a sampled rig computer costs on top of the integrator's
+#: steps, in integrator steps: its discrete update (the compensator, the delay
+#: line) and the restart of the step after it (measured at the Table 1 point,
+#: SDMDC: 10 us a counted step at 1 kHz, 46 us a tick at 100 kHz).
+SAMPLED_TICK_STEPS = 4.0
+
 #: |lambda h| at which an explicit Runge-Kutta step stays stable on a real
 #: pole (about 2.5 for RK3; the error control keeps it below).
 STABLE_STEP_RAD = 2.5
@@ -60,7 +66,8 @@ class SimulationCost:
     step_s : float
         The integrator step the dynamics allow [s].
     steps : float
-        ``duration_s / step_s``: predicted integrator steps.
+        ``duration_s / step_s``: predicted integrator steps, and in a
+        sampled loop :data:`SAMPLED_TICK_STEPS` for each of its ticks.
     limited_by : str
         What sets ``step_s``, in words.
     stiff : bool
@@ -146,7 +153,10 @@ def estimate_cost(
         step, limit, stiff = stable_step, source, True
     else:
         step, stiff = max_step_s, False
-    return SimulationCost(duration_s, step, duration_s / step, limit, stiff)
+    steps = duration_s / step
+    if params.sample_rate_hz is not None:
+        steps += SAMPLED_TICK_STEPS * duration_s * params.sample_rate_hz
+    return SimulationCost(duration_s, step, steps, limit, stiff)
 
 
 def check_budget(
@@ -169,6 +179,11 @@ def check_budget(
     """
     budget = MAX_INTEGRATOR_STEPS if budget is None else budget
     cost = estimate_cost(params, duration_s, max_step_s, integrated)
+    rate = params.sample_rate_hz
+    ticks = (
+        "" if rate is None else f", each of its {rate:.4g} Hz ticks counting {SAMPLED_TICK_STEPS:g}"
+    )
+    slower = "" if rate is None else " or a slower rig computer"
     if not (math.isfinite(cost.steps) and cost.steps <= budget):
         if cost.stiff:
             raise SimulationError(
@@ -180,7 +195,8 @@ def check_budget(
         raise SimulationError(
             f"too long to simulate: {what} lasts {cost.duration_s:.3g} s of simulated time, "
             f"{cost.steps:.2g} integrator steps of {cost.step_s:.2g} s at "
-            f"{cost.limited_by} (budget {budget:.2g} steps); shorten the approach "
+            f"{cost.limited_by}{ticks} (budget {budget:.2g} steps); shorten the approach "
             "(initial_gap_m / initial_velocity_m_per_s) or the record, or use a longer step"
+            f"{slower}"
         )
     return cost

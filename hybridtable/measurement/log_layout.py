@@ -203,12 +203,12 @@ class LogLayout:
         return f"give {flag} (or {toml} in a --log-map file)"
 
     def to_dict(self) -> dict:
-        """The mapping as the JSON outputs list it."""
+        """The mapping as the JSON outputs list it (``comment`` only if given)."""
         return {
             "source": self.source,
             "delimiter": self.delimiter,
             "decimal": self.decimal,
-            "comment": self.comment,
+            **({} if self.comment is None else {"comment": self.comment}),
             "ignore": list(self.ignore),
             "columns": {
                 n: {"column": s.column, "unit": s.unit, "scale": s.scale}

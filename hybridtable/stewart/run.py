@@ -73,13 +73,9 @@ class StewartLimits:
     workspace_m: tuple[float, float]
 
     @staticmethod
-    def min_sample_rate_hz(response_hz: float, sensor_delay_s: float) -> float:
-        """The lowest sample rate that reaches ``response_hz`` and keeps the
-        sensor delay a whole number of periods, Hz."""
-        needed = response_hz / MAX_RESPONSE_PER_SAMPLE_RATE
-        if sensor_delay_s > 0.0:
-            return math.ceil(needed * sensor_delay_s - 1e-9) / sensor_delay_s
-        return float(math.ceil(needed))
+    def min_sample_rate_hz(response_hz: float) -> float:
+        """The lowest whole sample rate that reaches ``response_hz``, Hz."""
+        return float(math.ceil(response_hz / MAX_RESPONSE_PER_SAMPLE_RATE - 1e-9))
 
     def max_initial_gap_m(self, params: HybridLoopParams) -> float:
         """The largest ``initial_gap_m`` whose starting table position (the
@@ -118,9 +114,8 @@ def check_stewart_loop(params: HybridLoopParams, stewart: StewartParams | None =
     Raises
     ------
     ParameterError
-        An infinite or too fast ``table_response_hz`` for the sample rate; a
-        ``sensor_delay_s`` that is not a whole number of the default rate's
-        periods; an ``initial_gap_m`` that starts the table outside its
+        An infinite or too fast ``table_response_hz`` for the sample rate; an
+        ``initial_gap_m`` that starts the table outside its
         workspace; a ``contact_damping_n_s_per_m`` at or above critical (the
         Hunt-Crossley contact has no equivalent of a contact that does not
         rebound).
@@ -136,19 +131,10 @@ def check_stewart_loop(params: HybridLoopParams, stewart: StewartParams | None =
             "table_response_hz"
         )
     if params.sample_rate_hz is None:
-        try:
-            params = params.with_(sample_rate_hz=rate)
-        except ParameterError:
-            d = params.sensor_delay_s
-            raise ParameterError(
-                f"the Stewart table runs the loop sampled at {at_rate} and sensor_delay_s "
-                f"{d:g} is not a whole number of its periods ({1.0 / rate:g} s); give e.g. "
-                f"sensor_delay_s {math.floor(d * rate) / rate:g} or "
-                f"{math.ceil(d * rate) / rate:g}, or a sample_rate_hz that divides it"
-            ) from None
+        params = params.with_(sample_rate_hz=rate)
     limits = stewart_limits(params, stewart)
     if f > limits.max_response_hz * (1.0 + 1e-12):
-        needed = limits.min_sample_rate_hz(f, params.sensor_delay_s)
+        needed = limits.min_sample_rate_hz(f)
         raise ParameterError(
             f"table_response_hz {f:g} is too fast for the Stewart table at {at_rate}: it "
             f"needs table_response_hz <= {limits.max_response_hz:g}, or sample_rate_hz >= "

@@ -241,8 +241,8 @@ def loop_params(values: dict[str, Any]):
     Raises
     ------
     ParameterError
-        If the combination is not a loop (a value out of range, a sampled
-        delay that is not a whole number of ticks, ...), naming the field.
+        If the combination is not a loop (a value out of range, a rule of a
+        sampled computer on a continuous one, ...), naming the field.
     """
     from hybridtable.loop.params import HybridLoopParams
 

@@ -2,8 +2,8 @@
 
 A run never raises: a loop that diverges is recorded as ``diverged``, one
 that fails otherwise (no separation, over the simulation budget) as
-``failed``, inputs that make no loop (a drawn value out of range, a sampled
-delay that is not a whole number of ticks) as ``invalid``, and anything else
+``failed``, inputs that make no loop (a drawn value out of range, an
+integration rule on a continuous computer) as ``invalid``, and anything else
 as ``error`` with the exception's type; each with its one-line message and
 NaN metrics. Rows are plain dicts of plain values, the same on any worker.
 """

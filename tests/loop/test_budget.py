@@ -11,6 +11,7 @@ from hybridtable.laws import separation
 from hybridtable.loop import budget
 from hybridtable.loop.budget import (
     SAMPLED_MEAN_STEP_S,
+    SAMPLED_TICK_STEPS,
     STABLE_STEP_RAD,
     check_budget,
     check_steps_taken,
@@ -46,9 +47,10 @@ def test_cost_is_duration_over_the_step_the_dynamics_allow():
     cost = estimate_cost(p, 1.0, 1e-3)
     pole = 2 * math.pi * 1e4 * (10.0 + math.sqrt(99.0))
     assert cost.stiff and cost.step_s == pytest.approx(STABLE_STEP_RAD / pole)
-    # The same table sampled exactly (not integrated): one step per tick.
+    # The same table sampled exactly (not integrated): one step per tick, and
+    # each tick's own cost.
     cost = estimate_cost(p, 1.0, 1e-3, integrated=False)
-    assert not cost.stiff and cost.steps == pytest.approx(1000.0)
+    assert not cost.stiff and cost.steps == pytest.approx(1000.0 * (1 + SAMPLED_TICK_STEPS))
     # A sampled loop with an integrated table: the mean error-controlled step.
     p = paper_params(sample_rate_hz=1000.0)
     assert estimate_cost(p, 1.0, 1e-3).step_s == SAMPLED_MEAN_STEP_S
@@ -79,5 +81,6 @@ def test_the_running_guard_stops_a_run_past_the_budget(monkeypatch):
     monkeypatch.setattr(budget, "MAX_INTEGRATOR_STEPS", 5000)
     monkeypatch.setattr(separation, "MAX_INTEGRATOR_STEPS", 5000)  # the running guard's
     monkeypatch.setattr(budget, "SAMPLED_MEAN_STEP_S", 1.0)  # estimate: 1 step per tick
+    monkeypatch.setattr(budget, "SAMPLED_TICK_STEPS", 0.0)
     with pytest.raises(SimulationError, match="too stiff to simulate: the integrator took"):
         simulate(p)

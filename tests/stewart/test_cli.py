@@ -68,7 +68,6 @@ ERRORS = {
         "or --sample-rate-hz >= 1200",
     ),
     "infinite": (["--table-response-hz", "inf"], "finite --table-response-hz"),
-    "delay": (["--sensor-delay-s", "0.0055"], "--sensor-delay-s 0.005 or 0.006"),
     "gap": (["--initial-gap-m", "0.3"], "needs --initial-gap-m <= 0.19"),
     "damping": (["--contact-damping-n-s-per-m", "2e5"], "critical damping (31831 N s/m"),
     "magnify": (
