@@ -29,6 +29,7 @@ from hybridtable.diagnosis.model_file import (
 from hybridtable.effects.registry import get_effect
 from hybridtable.effects.spec import RigScale
 from hybridtable.errors import MeasurementError, ParameterError
+from hybridtable.laws.spacecraft import INTEGRATORS
 from hybridtable.limits import check_plausible
 from hybridtable.measurement.rig import COMPUTER_PARAMS
 from hybridtable.measurement.run_format import RunInfo
@@ -148,6 +149,13 @@ def _computer(raw: Any, where: str) -> dict[str, Any]:
                 raise ParameterError(f"{where}.compensator must be a string")
             try:
                 check_choice("compensator", v, compensator_names())
+            except ParameterError as err:
+                raise ParameterError(f"{where}.{err}") from None
+        elif k == "computer_integrator":
+            if not isinstance(v, str):
+                raise ParameterError(f"{where}.computer_integrator must be a string")
+            try:
+                check_choice("computer_integrator", v, tuple(INTEGRATORS))
             except ParameterError as err:
                 raise ParameterError(f"{where}.{err}") from None
         elif not (_finite(v) and v >= 0):

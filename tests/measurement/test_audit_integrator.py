@@ -75,3 +75,23 @@ def test_a_computer_without_mdc_is_not_given_a_stiffness_of_zero():
     audit = Audit([est], [Finding("lead_time_s", 0.005, 0.004, 1e-6, ("r1",), "lead")])
     changes = audit.computer_changes("r1")
     assert changes == {"lead_time_s": 0.004, "compensator": "SDC"}
+
+
+@pytest.mark.slow
+def test_a_saved_model_keeps_the_rule_and_reproduces_the_cor(tmp_path):
+    from hybridtable.cli import main
+
+    runs, _ = _runs(tmp_path, "explicit_euler", "SDC", noisy=True)
+    model = tmp_path / "model.json"
+    folder = str(runs[0].csv_path.parent)
+    assert (
+        main(["diagnose", folder, "--workers", "1", "--no-progress", "--save-model", str(model)])
+        == 0
+    )
+    text = model.read_text()
+    assert '"computer_integrator": "explicit_euler"' in text
+    out = tmp_path / "sim.json"
+    assert main(["simulate", "--model", str(model), "--json", str(out)]) == 0
+    bad = tmp_path / "bad.json"
+    bad.write_text(text.replace('"explicit_euler"', '"leapfrog"'))
+    assert main(["simulate", "--model", str(bad)]) == 2
