@@ -214,21 +214,22 @@ def write_json(path: str | Path, data: Any) -> None:
 
 
 def read_run_arguments(args: argparse.Namespace, tail_s: float | None = None):
-    """The runs of ``RUN...`` (read through :func:`log_layout_of`), every long
+    """The runs of ``RUN...`` read through :func:`log_layout_of`, every long
     log split into its contact events
     (:func:`hybridtable.measurement.events.split_runs`, each cut ``tail_s``
-    after its contact if given): ``(runs, splits)``."""
+    after its contact if given): ``(runs, splits, layout)``."""
     from hybridtable.measurement.events import split_runs
     from hybridtable.measurement.run_reader import read_runs
 
-    return split_runs(read_runs(args.runs, layout=log_layout_of(args)), tail_s)
-
-
-def log_map_entry(args: argparse.Namespace, runs) -> dict | None:
-    """The ``log_map`` entry of a command's JSON: the mapping the logs were
-    read with and each log's columns not read; ``None`` for logs in the
-    format's own CSV."""
     layout = log_layout_of(args)
+    runs, splits = split_runs(read_runs(args.runs, layout=layout), tail_s)
+    return runs, splits, layout
+
+
+def log_map_entry(layout, runs) -> dict | None:
+    """The ``log_map`` entry of a command's JSON: the mapping ``layout`` the
+    logs were read with and each log's columns not read; ``None`` for logs in
+    the format's own CSV."""
     skipped = {str(r.csv_path): list(r.skipped_columns) for r in runs if r.skipped_columns}
     if layout.plain and not skipped:
         return None

@@ -75,7 +75,7 @@ def run(args: argparse.Namespace) -> int:
     load_plugins(args)
     added = parse_added(args)  # a malformed --add before any work
     base = load_model_arg(args)
-    runs, splits = read_run_arguments(args)
+    runs, splits, layout = read_run_arguments(args)
     for r in runs:  # every defect before any work
         check_comparable(r)
     inputs = input_paths(runs)
@@ -124,7 +124,7 @@ def run(args: argparse.Namespace) -> int:
         if not quiet:
             print(f"wrote the model to {args.save_model}: {model.describe()}")
     if args.json:
-        if (log_map := log_map_entry(args, runs)) is not None:
+        if (log_map := log_map_entry(layout, runs)) is not None:
             document["log_map"] = log_map
         write_json(args.json, document)
     if args.report:

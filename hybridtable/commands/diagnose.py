@@ -115,7 +115,7 @@ def run(args: argparse.Namespace) -> int:
             raise CommandError("--effects names no effect")
     # A long log's events keep a second after their contact: a ringing table
     # or a backlash shows there, and the rest is free flight (the fits' time).
-    runs, splits = read_run_arguments(args, tail_s=EVENT_TAIL_S)
+    runs, splits, layout = read_run_arguments(args, tail_s=EVENT_TAIL_S)
     for r in runs:  # no contact, or one that has not ended: no CoR, nothing to fit
         check_comparable(r)
     inputs = input_paths(runs)
@@ -153,7 +153,7 @@ def run(args: argparse.Namespace) -> int:
         document = diagnosis_json(d)
         if splits:
             document["contact_events"] = [s.to_dict() for s in splits]
-        if (log_map := log_map_entry(args, runs)) is not None:
+        if (log_map := log_map_entry(layout, runs)) is not None:
             document["log_map"] = log_map
         write_json(args.json, document)
     if args.report:

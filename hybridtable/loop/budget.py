@@ -179,11 +179,6 @@ def check_budget(
     """
     budget = MAX_INTEGRATOR_STEPS if budget is None else budget
     cost = estimate_cost(params, duration_s, max_step_s, integrated)
-    rate = params.sample_rate_hz
-    ticks = (
-        "" if rate is None else f", each of its {rate:.4g} Hz ticks counting {SAMPLED_TICK_STEPS:g}"
-    )
-    slower = "" if rate is None else " or a slower rig computer"
     if not (math.isfinite(cost.steps) and cost.steps <= budget):
         if cost.stiff:
             raise SimulationError(
@@ -192,6 +187,15 @@ def check_budget(
                 f"{cost.duration_s:.3g} s (budget {budget:.2g} steps); use a slower or "
                 "less damped table, or a softer contact"
             )
+        rate = params.sample_rate_hz
+        ticks, slower = (
+            ("", "")
+            if rate is None
+            else (
+                f", each of its {rate:.4g} Hz ticks counting {SAMPLED_TICK_STEPS:g}",
+                " or a slower rig computer",
+            )
+        )
         raise SimulationError(
             f"too long to simulate: {what} lasts {cost.duration_s:.3g} s of simulated time, "
             f"{cost.steps:.2g} integrator steps of {cost.step_s:.2g} s at "

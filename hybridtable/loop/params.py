@@ -248,11 +248,7 @@ class RigComputer:
             if getattr(self, name) is not None:
                 _set(self, name, check_positive(name, getattr(self, name)))
         _plausible(self, ("rig",), ("sensor_delay_s", "sample_rate_hz", "time_step_s"))
-        if self.integrator not in INTEGRATORS:
-            raise ParameterError(
-                f"computer_integrator must be one of {', '.join(INTEGRATORS)} "
-                f"(got {self.integrator!r})"
-            )
+        check_choice("computer_integrator", self.integrator, tuple(INTEGRATORS))
         if self.sample_rate_hz is None and self.integrator != DEFAULT_INTEGRATOR:
             raise ParameterError(
                 f"computer_integrator {self.integrator!r} needs a sampled rig computer "

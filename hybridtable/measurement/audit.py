@@ -103,16 +103,15 @@ def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
         (h,), (h_se,), _ = _ls(vv[:, None], dx)
     else:
         h, h_se = h_json, math.inf
-    rule, theta, theta_se = _integration_rule(dx, v)
+    rule, weight, weight_se, h_rule, h_rule_se = _integration_rule(dx, v)
     if rule != DEFAULT_INTEGRATOR:
-        h, h_se = theta[1], theta_se[1]
-        weight, weight_se = theta[0], theta_se[0]
-        named = (
-            f"{rule.replace('_', ' ')}"
-            + (" (or RK4 with the force held over the tick)" if rule == "trapezoid" else "")
-            if rule in INTEGRATORS
-            else "a rule the model does not have"
-        )
+        h, h_se = h_rule, h_rule_se
+        if rule == "other":
+            named = "a rule the model does not have"
+        else:
+            named = rule.replace("_", " ")
+            if rule == "trapezoid":
+                named += " (or RK4 with the force held over the tick)"
         found.append(
             Finding(
                 "integrator",
@@ -125,8 +124,6 @@ def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
                 "semi-implicit Euler steps by h v_des[k]",
             )
         )
-    else:
-        weight, weight_se = 1.0, 0.0
     if _differs(h, h_se, h_json, h_json):
         found.append(
             Finding(
@@ -140,11 +137,7 @@ def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
             )
         )
     v_start = v[0] + fc[0] * h / info.spacecraft_mass_kg  # before tick 0's step
-    gap = (
-        -(p_des[0] - v[0] * h)
-        if weight == 1.0
-        else -(p_des[0] - h * (weight * v[0] + (1.0 - weight) * v_start))
-    )
+    gap = -(p_des[0] - h * (weight * v[0] + (1.0 - weight) * v_start))
     if _differs(gap, 10 * abs(h_se * v[0]), info.initial_gap_m, max(info.initial_gap_m, 1e-6)):
         found.append(
             Finding(
@@ -369,31 +362,30 @@ def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
     return est, found
 
 
-def _integration_rule(dx: np.ndarray, v: np.ndarray) -> tuple[str, np.ndarray, np.ndarray]:
+def _integration_rule(dx: np.ndarray, v: np.ndarray) -> tuple[str, float, float, float, float]:
     """The rule by which the computer stepped ``p_des`` (steps ``dx``) from its
     velocities ``v``: the fit ``dx = h v[k] - c (v[k] - v[k-1])``, as
-    ``(rule, [theta, h], [theta_se, h_se])`` with ``theta = 1 - c / h``. The
-    rule is the format's while ``theta`` is within five standard errors or
-    :data:`RELATIVE_TOLERANCE` of 1 (or the velocity never changes: nothing
-    tells), the nearest of :data:`~hybridtable.laws.spacecraft.INTEGRATORS`
-    within the same of it, else ``"other"``."""
+    ``(rule, theta, theta_se, h, h_se)`` with ``theta = 1 - c / h``. The
+    rule is the format's (``theta`` 1, its standard error 0, ``h`` NaN) while
+    ``theta`` is within five standard errors or :data:`RELATIVE_TOLERANCE` of
+    1, or the velocity never changes (nothing tells); else the nearest of
+    :data:`~hybridtable.laws.spacecraft.INTEGRATORS` within the same of it,
+    else ``"other"``."""
+    fmt = (DEFAULT_INTEGRATOR, 1.0, 0.0, math.nan, math.nan)
     dv = np.diff(v)
     if len(dx) < 3 or not np.any(dv != 0.0):
-        return DEFAULT_INTEGRATOR, np.array([1.0, math.nan]), np.zeros(2)
+        return fmt
     (h, c), (h_se, c_se), _ = _ls(np.column_stack([v[1:], -dv]), dx)
     if not (math.isfinite(h) and h > 0.0 and math.isfinite(c_se)):
-        return DEFAULT_INTEGRATOR, np.array([1.0, math.nan]), np.zeros(2)
+        return fmt
     theta = 1.0 - c / h
     theta_se = math.hypot(c_se / h, c * h_se / (h * h))
-    values, errors = np.array([theta, h]), np.array([theta_se, h_se])
-
-    def near(target: float) -> bool:
-        return abs(theta - target) <= max(SIGNIFICANCE * theta_se, 1e-2)
-
     if abs(theta - 1.0) <= max(SIGNIFICANCE * theta_se, RELATIVE_TOLERANCE):
-        return DEFAULT_INTEGRATOR, values, errors
+        return fmt
     rule = min(INTEGRATORS, key=lambda r: abs(theta - INTEGRATORS[r]))
-    return (rule if near(INTEGRATORS[rule]) else "other"), values, errors
+    if abs(theta - INTEGRATORS[rule]) > max(SIGNIFICANCE * theta_se, 1e-2):
+        rule = "other"
+    return rule, theta, theta_se, h, h_se
 
 
 def audit_runs(runs: Sequence[Run]) -> Audit:

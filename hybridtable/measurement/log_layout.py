@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import MappingProxyType
 
@@ -82,6 +82,26 @@ class ColumnSource:
     def plain(self) -> bool:
         """True if the value is read as it stands (SI, scale 1)."""
         return self.scale == 1.0 and self.unit in ("s", "m", "N", "m/s")
+
+
+def _over(
+    columns: Mapping[str, ColumnSource],
+    names: Mapping[str, str] | None = None,
+    units: Mapping[str, str] | None = None,
+) -> dict[str, ColumnSource]:
+    """``columns`` (format column -> source; a column not there is read from
+    its own name in SI) with the log names ``names`` and the units ``units``
+    of format columns over them; an unknown format column is refused."""
+    out = dict(columns)
+    for changes, field_name in ((names, "column"), (units, "unit")):
+        for fmt, value in (changes or {}).items():
+            if fmt not in RUN_COLUMNS:
+                raise MeasurementError(
+                    f"{fmt!r} is not a column of the format (one of {', '.join(RUN_COLUMNS)})"
+                )
+            old = out.get(fmt, ColumnSource(fmt, RUN_COLUMNS[fmt]))
+            out[fmt] = replace(old, **{field_name: value})
+    return out
 
 
 def _default_columns() -> Mapping[str, ColumnSource]:
@@ -201,6 +221,13 @@ class LogLayout:
         if self.source.lower().endswith(".toml"):
             return f"give {toml} in {self.source} (or {flag})"
         return f"give {flag} (or {toml} in a --log-map file)"
+
+    def with_columns(
+        self, names: Mapping[str, str] | None = None, source: str | None = None
+    ) -> LogLayout:
+        """This layout with the log names ``names`` (format column -> log
+        column) over its own, said to come from ``source``."""
+        return replace(self, columns=_over(self.columns, names), source=source or self.source)
 
     def to_dict(self) -> dict:
         """The mapping as the JSON outputs list it (``comment`` only if given)."""
@@ -368,17 +395,12 @@ def log_layout(
         if v
     ]
     where = " and ".join([str(log_map)] * (log_map is not None) + flags) or "the format"
-    for fmt, log in names.items():
-        old = columns.get(fmt, ColumnSource(fmt, RUN_COLUMNS[fmt]))
-        columns[fmt] = ColumnSource(log, old.unit, old.scale)
     for fmt, unit in given_units.items():
-        old = columns.get(fmt, ColumnSource(fmt, RUN_COLUMNS[fmt]))
         if unit not in _units_of(fmt):
             raise MeasurementError(
                 f"--unit: unknown unit {unit!r} for {fmt} (one of {', '.join(_units_of(fmt))})"
             )
-        columns[fmt] = ColumnSource(old.column, unit, old.scale)
-    kwargs["columns"] = columns
+    kwargs["columns"] = _over(columns, names, given_units)
     kwargs["source"] = where
     if delimiter is not None:
         kwargs["delimiter"] = _delimiter(delimiter, "--delimiter")

@@ -24,7 +24,6 @@ the column and the unit that fits (:mod:`~hybridtable.measurement.log_units`).
 from __future__ import annotations
 
 import csv
-import dataclasses
 import json
 import math
 from collections.abc import Iterable, Iterator, Mapping, Sequence
@@ -411,12 +410,10 @@ def _layout(layout: LogLayout | None, column_map: Mapping[str, str] | None) -> L
     base = layout or DEFAULT_LAYOUT
     if not column_map:
         return base
-    columns = dict(base.columns)
-    for fmt, log in column_map.items():
-        if fmt not in columns:
-            parse_column_map([f"{fmt}={log}"])  # names the unknown column
-        columns[fmt] = dataclasses.replace(columns[fmt], column=log)
-    return dataclasses.replace(base, columns=columns, source="--column-map")
+    try:
+        return base.with_columns(column_map, source="--column-map")
+    except MeasurementError as err:
+        raise MeasurementError(f"--column-map: {err}") from None
 
 
 def read_runs(
