@@ -57,9 +57,9 @@ def table1_docking(table: str, compensator: str, stiffness_model: str, horizon_s
     mass = 1e5 / (2.0 * math.pi) ** 2
     contact = DockingContactParams(1e5)
     base = DockingLoopParams(
-        RigidBodyParams(mass, (1689.0, 1689.0, 1689.0), 1.5),
-        contact,
-        ApproachParams(0.1, 0.001),
+        spacecraft=RigidBodyParams(mass, (1689.0, 1689.0, 1689.0), 1.5),
+        contact=contact,
+        approach=ApproachParams(0.1, 0.001),
         sample_rate_hz=1000.0,
         sensor_delay_s=0.005,
         duration_s=horizon_s,

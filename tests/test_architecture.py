@@ -34,6 +34,7 @@ LAYERS: dict[str, int] = {
     "_validation": 0,
     "_files": 0,
     "_components": 0,
+    "_nested": 0,
     "limits": 0,
     "data": 0,
     "laws": 1,

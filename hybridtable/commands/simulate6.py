@@ -63,7 +63,6 @@ def _progress(enabled: bool):
 
 
 def run(args: argparse.Namespace) -> int:
-    import dataclasses
     import math
 
     from hybridtable.commands._common import (
@@ -122,7 +121,7 @@ def run(args: argparse.Namespace) -> int:
         "metrics": m.to_dict(),
         "reference": None if reference is None else reference.to_dict(),
         "margins": modes.to_dict(),
-        "params": dataclasses.asdict(params),
+        "params": params.to_dict(),
         "simulated_s": sim_s,
         "wall_time_s": result.wall_time_s,
     }

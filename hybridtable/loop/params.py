@@ -29,9 +29,10 @@ through those names are one concept; apart, each would import the others.
 from __future__ import annotations
 
 import math
-from dataclasses import MISSING, dataclass, fields, replace
-from typing import Any, get_type_hints
+from dataclasses import dataclass
+from typing import Any, ClassVar
 
+from hybridtable._nested import NestedParams, flat_properties
 from hybridtable._validation import check_choice, check_nonnegative, check_positive
 from hybridtable.compensators.paper import CONTACT_GATES, CompensatorParams
 from hybridtable.compensators.registry import compensator_names
@@ -93,7 +94,6 @@ FIELDS: dict[str, tuple[str, ...]] = {
     "passivity": ("rig", "compensator", "passivity"),
     "computer_integrator": ("rig", "integrator"),
 }
-_FLAT_NAME: dict[tuple[str, ...], str] = {path: name for name, path in FIELDS.items()}
 
 
 def believed(params: Any, belief: str) -> float:
@@ -312,37 +312,9 @@ class Approach:
         _plausible(self, ("approach",), ("initial_velocity_m_per_s", "initial_gap_m"))
 
 
-_HINTS: dict[type, dict[str, Any]] = {}
-
-
-def _build(cls: type, prefix: tuple[str, ...], base: Any, changes: dict[tuple, Any]) -> Any:
-    """Config ``cls`` at ``prefix``: ``base`` (an instance, or ``None``: the
-    defaults) with ``changes`` ({path below ``prefix``: value}). A component's
-    error that names its own field is said with the field's flat name."""
-    hints = _HINTS.get(cls) or _HINTS.setdefault(cls, get_type_hints(cls))
-    values: dict[str, Any] = {}
-    for f in fields(cls):
-        below = {path[1:]: v for path, v in changes.items() if path[0] == f.name}
-        if () in below:
-            values[f.name] = below.pop(())
-        if below:
-            inner = values.get(f.name, getattr(base, f.name) if base is not None else None)
-            if inner is None and f.default is not MISSING:
-                inner = f.default
-            values[f.name] = _build(hints[f.name], (*prefix, f.name), inner, below)
-    try:
-        return replace(base, **values) if base is not None else cls(**values)
-    except ParameterError as err:
-        text = str(err)
-        for key in values:
-            flat = _FLAT_NAME.get((*prefix, key))
-            if flat and text.startswith(key + " "):
-                raise ParameterError(flat + text[len(key) :]) from None
-        raise
-
-
+@flat_properties
 @dataclass(frozen=True, init=False)
-class HybridLoopParams:
+class HybridLoopParams(NestedParams):
     """Every parameter of one hybrid-loop run, SI units, one config per
     component (the module's docstring draws the tree).
 
@@ -364,40 +336,12 @@ class HybridLoopParams:
     rig: RigComputer = RigComputer()
     approach: Approach = Approach()
 
-    def __init__(
-        self,
-        plant: Plant | None = None,
-        rig: RigComputer | None = None,
-        approach: Approach | None = None,
-        **named: Any,
-    ) -> None:
-        unknown = sorted(set(named) - set(FIELDS))
-        if unknown:
-            raise TypeError(
-                f"HybridLoopParams got unknown {', '.join(unknown)} "
-                f"(known: plant, rig, approach, {', '.join(FIELDS)})"
-            )
-        changes = {FIELDS[name]: value for name, value in named.items()}
-        parts = {"plant": plant, "rig": rig or RigComputer(), "approach": approach or Approach()}
-        types = {"plant": Plant, "rig": RigComputer, "approach": Approach}
-        for name, config in parts.items():
-            below = {path[1:]: v for path, v in changes.items() if path[0] == name}
-            if below:
-                try:
-                    config = _build(types[name], (name,), config, below)
-                except TypeError:
-                    config = None
-            if not isinstance(config, types[name]):
-                if name == "plant" and config is None:
-                    raise TypeError(
-                        "HybridLoopParams needs plant= or spacecraft_mass_kg and "
-                        "contact_stiffness_n_per_m"
-                    )
-                raise ParameterError(
-                    f"{name} must be a {types[name].__name__} (got {type(config).__name__}; "
-                    "give single quantities by name, e.g. spacecraft_mass_kg=...)"
-                )
-            object.__setattr__(self, name, config)
+    PARTS: ClassVar[dict[str, type]] = {"plant": Plant, "rig": RigComputer, "approach": Approach}
+    FIELDS: ClassVar[dict[str, tuple[str, ...]]] = FIELDS
+    REQUIRED: ClassVar[dict[str, str]] = {
+        "plant": "plant= or spacecraft_mass_kg and contact_stiffness_n_per_m"
+    }
+    EXAMPLE: ClassVar[str] = "spacecraft_mass_kg"
 
     # -- derived quantities ------------------------------------------------
     @classmethod
@@ -440,23 +384,6 @@ class HybridLoopParams:
     def effective_delay_s(self) -> float:
         """tau_eff = T_fms + 2 zeta / omega_resp, the loop's low-frequency delay."""
         return self.sensor_delay_s + self.plant.table.ramp_lag_s
-
-    def with_(self, **changes: Any) -> HybridLoopParams:
-        """A copy with some quantities (flat names, :data:`FIELDS`) or configs
-        (``plant``, ``rig``, ``approach``) changed, validated again."""
-        configs = {
-            name: changes.pop(name) for name in ("plant", "rig", "approach") if name in changes
-        }
-        return HybridLoopParams(
-            configs.get("plant", self.plant),
-            configs.get("rig", self.rig),
-            configs.get("approach", self.approach),
-            **changes,
-        )
-
-    def quantities(self) -> dict[str, Any]:
-        """Every quantity by its flat name (:data:`FIELDS`, in that order)."""
-        return {name: getattr(self, name) for name in FIELDS}
 
     # -- what the compensator believes -----------------------------------------
     def beliefs(self) -> dict[str, float]:
@@ -525,17 +452,3 @@ class HybridLoopParams:
         else:
             pa, va = x0 - self.plant.table.ramp_lag_s * v0, v0
         return {"p_des_m": x0, "v_des_m_per_s": v0, "p_act_m": pa, "v_act_m_per_s": va}
-
-
-def _flat_property(name: str, path: tuple[str, ...]) -> property:
-    def read(params: HybridLoopParams) -> Any:
-        value: Any = params
-        for key in path:
-            value = getattr(value, key)
-        return value
-
-    return property(read, doc=f"``{'.'.join(path)}`` (flat name ``{name}``).")
-
-
-for _name, _path in FIELDS.items():
-    setattr(HybridLoopParams, _name, _flat_property(_name, _path))

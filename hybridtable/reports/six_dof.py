@@ -40,7 +40,7 @@ def format_docking(compensator: str, metrics, reference, modes, wall_time_s: flo
         crit = (
             "none up to 50 ms"
             if math.isinf(modes.critical_delay_s)
-            else f"{1000 * modes.critical_delay_s:.0f} ms"
+            else f"{1000 * modes.critical_delay_s:.3g} ms"
         )
         slow = ", ".join(
             f"{f:.3f} Hz ({g:+.4f}/s)"

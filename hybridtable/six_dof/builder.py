@@ -67,7 +67,7 @@ class TableModelBackend(Diagram):
         Diagram.__init__(self)
         builder = DiagramBuilder()
         self.table: PoseTable = add_pose_table(
-            builder, params.table_response_hz, params.table_damping_ratio, params.sample_period_s
+            builder, params.plant.table.response, params.sample_period_s
         )
         contact = builder.AddNamedSystem("contact", DockingContactSystem(params.contact))
         builder.Connect(self.table.system.get_output_port(), contact.get_input_port())
@@ -100,10 +100,8 @@ class DockingLoop:
         sc = self.diagram.GetMutableSubsystemContext(self.spacecraft, root_context)
         sc.SetDiscreteState(body)
         table_state = command.copy()
-        if np.isfinite(self.params.table_response_hz):
-            # Steady tracking of the approach ramp (the 1-D "tracking" start).
-            w = 2.0 * np.pi * self.params.table_response_hz
-            table_state[:6] -= 2.0 * self.params.table_damping_ratio / w * command[6:]
+        # Steady tracking of the approach ramp (the 1-D "tracking" start).
+        table_state[:6] -= self.params.plant.table.response.ramp_lag_s * command[6:]
         bc = self.diagram.GetMutableSubsystemContext(self.backend, root_context)
         self.backend.set_initial_state(bc, table_state, command)
 
@@ -167,14 +165,7 @@ def add_docking_loop(
     h = params.sample_period_s
     spacecraft = builder.AddNamedSystem("spacecraft", RigidSpacecraft(params.spacecraft, h))
     backend = builder.AddNamedSystem("table_backend", backend or _backend(params))
-    sensor_in, sensor_out = add_wrench_sensor(
-        builder,
-        params.sensor_delay_s,
-        h,
-        params.force_noise_n,
-        params.moment_noise_n_m,
-        params.seed,
-    )
+    sensor_in, sensor_out = add_wrench_sensor(builder, params.rig.sensor, h, params.rig.noise)
     compensator = builder.AddNamedSystem(
         "compensator", compensator or make_wrench_compensator(params, _stiffness_model(params))
     )

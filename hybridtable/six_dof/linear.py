@@ -27,6 +27,7 @@ from hybridtable.six_dof.contact import DockingContact
 from hybridtable.six_dof.params import DockingLoopParams
 from hybridtable.six_dof.pose import skew
 from hybridtable.six_dof.table import table_tick_matrices
+from hybridtable.systems.sensor import sample_taps
 
 __all__ = ["ContactModes", "contact_modes", "tick_matrix", "critical_delay_s"]
 
@@ -87,13 +88,16 @@ class ContactModes:
 
 
 def tick_matrix(
-    params: DockingLoopParams, K: np.ndarray, C: np.ndarray, delay_ticks: int | None = None
+    params: DockingLoopParams, K: np.ndarray, C: np.ndarray, delay_ticks: float | None = None
 ) -> np.ndarray:
     """``A`` of the linearized loop over one tick (see the module docstring),
-    with the contact's ``K``, ``C`` (6x6) and a delay of ``delay_ticks``
-    (default: the scenario's)."""
+    with the contact's ``K``, ``C`` (6x6) and a delay of ``delay_ticks`` ticks
+    (default: the scenario's). A delay between ticks reads the two
+    neighbouring samples mixed, as the sensor does
+    (:func:`~hybridtable.systems.sensor.sample_taps`)."""
     h = params.sample_period_s
-    M = params.delay_ticks if delay_ticks is None else int(delay_ticks)
+    M, alpha = params.delay_taps if delay_ticks is None else sample_taps(float(delay_ticks), 1.0)
+    L = M + (1 if alpha else 0)  # samples the delay line holds
     body = params.spacecraft
     m = body.mass_kg
     r = body.port_position_m  # attitude deviations about the aligned pose
@@ -108,7 +112,7 @@ def tick_matrix(
     lead = params.effective_lead_time_s if kind in ("SDC", "SDMDC") else 0.0
     mdc = kind in ("MDC", "SDMDC")
     n_table = 0 if tick is None else 12
-    sizes = {"body": 12, "table": n_table, "delay": 6 * M, "prev": 6}
+    sizes = {"body": 12, "table": n_table, "delay": 6 * L, "prev": 6}
     n = sum(sizes.values())
     start = {}
     i = 0
@@ -137,11 +141,14 @@ def tick_matrix(
             table = np.concatenate([y[:, 0], y[:, 1]])
             out[start["table"] : start["table"] + 12] = y.ravel()
         w_act = -K @ table[:6] - C @ table[6:]
-        line = x[start["delay"] : start["delay"] + 6 * M].reshape(M, 6) if M else None
-        w_mea = w_act if M == 0 else line[0]
-        if M:
+        # line[j] is the contact's wrench of tick k - L + j
+        line = x[start["delay"] : start["delay"] + 6 * L].reshape(L, 6) if L else None
+        w_mea = w_act if M == 0 else line[L - M]
+        if alpha:
+            w_mea = (1.0 - alpha) * w_mea + alpha * line[L - M - 1]
+        if L:
             shifted = np.vstack([line[1:], w_act[None, :]])
-            out[start["delay"] : start["delay"] + 6 * M] = shifted.ravel()
+            out[start["delay"] : start["delay"] + 6 * L] = shifted.ravel()
         prev = x[start["prev"] : start["prev"] + 6]
         w = w_mea + (lead / h) * (w_mea - prev)
         if mdc:
@@ -171,14 +178,28 @@ def _modes(A: np.ndarray, h: float):
 def critical_delay_s(
     params: DockingLoopParams, K: np.ndarray, C: np.ndarray, max_delay_s: float = 0.05
 ) -> float:
-    """The shortest sensor delay (a whole number of ticks, up to
-    ``max_delay_s``) at which the linearized loop has a growing mode."""
+    """The shortest sensor delay (up to ``max_delay_s``) at which the
+    linearized loop has a growing mode: the first whole tick that grows, then
+    bisected within the tick before it to 1e-3 of a tick (the rig computer
+    reads a delay between ticks as the mix of its neighbours)."""
     h = params.sample_period_s
-    for ticks in range(0, int(round(max_delay_s / h)) + 1):
+
+    def grows(ticks: float) -> bool:
         _, s = _modes(tick_matrix(params, K, C, ticks), h)
-        if s.size and float(np.max(s.real)) > _NEUTRAL_PER_S:
-            return ticks * h
-    return math.inf
+        return bool(s.size) and float(np.max(s.real)) > _NEUTRAL_PER_S
+
+    for ticks in range(0, int(round(max_delay_s / h)) + 1):
+        if grows(ticks):
+            break
+    else:
+        return math.inf
+    if ticks == 0:
+        return 0.0
+    low, high = ticks - 1.0, float(ticks)
+    while high - low > 1e-3:
+        mid = 0.5 * (low + high)
+        low, high = (low, mid) if grows(mid) else (mid, high)
+    return high * h
 
 
 def contact_modes(params: DockingLoopParams, max_delay_s: float = 0.05) -> ContactModes:

@@ -1,30 +1,39 @@
 """Parameters of the 6-DoF docking loop, SI units, validated on construction.
 
-:class:`DockingLoopParams` gathers the spacecraft's rigid body
-(:class:`RigidBodyParams`), the docking devices and their contact
-(:class:`DockingContactParams`), the approach (:class:`ApproachParams`) and
-the rig: computer rate, sensor delay and noise, table back-end, compensator.
-The frames and equations are in ``docs/six_dof.md``.
+:class:`DockingLoopParams` is the 1-D loop's nested scenario
+(:class:`~hybridtable._nested.NestedParams`) for the full pose: a plant (the
+spacecraft's rigid body :class:`RigidBodyParams`, the docking devices and
+their contact :class:`DockingContactParams`, the table :class:`DockingTable`),
+a rig computer (:class:`DockingRig`: the 1-D sensor config, rate, wrench
+compensator, F/T noise) and an approach (:class:`ApproachParams`). The frames
+and equations are in ``docs/six_dof.md``.
+
+Why one module: the component configs, the flat names their checks are worded
+in and the tree that builds them by those names are one concept, as in
+:mod:`hybridtable.loop.params`.
 """
 
 from __future__ import annotations
 
 import math
 import numbers
-from dataclasses import dataclass, field, replace
+from dataclasses import asdict, dataclass, is_dataclass
+from typing import ClassVar
 
 import numpy as np
 
+from hybridtable._nested import NestedParams, flat_properties
 from hybridtable._validation import (
     check_choice,
     check_finite,
     check_nonnegative,
     check_positive,
-    check_positive_or_inf,
 )
 from hybridtable.errors import ParameterError
 from hybridtable.limits import LIMITS, check_plausible
 from hybridtable.loop.params import believed
+from hybridtable.systems.sensor import SensorParams, sample_taps
+from hybridtable.systems.table import TableParams
 
 __all__ = [
     "MAX_MISALIGNMENT_RAD",
@@ -33,6 +42,11 @@ __all__ = [
     "RigidBodyParams",
     "DockingContactParams",
     "ApproachParams",
+    "DockingTable",
+    "DockingPlant",
+    "WrenchCompensatorConfig",
+    "FTNoiseParams",
+    "DockingRig",
     "DockingLoopParams",
     "inertia_matrix",
 ]
@@ -80,6 +94,16 @@ def inertia_matrix(name: str, value) -> np.ndarray:
             "violate the triangle inequality I1 + I2 >= I3 that every real body obeys"
         )
     return 0.5 * (a + a.T)
+
+
+def _pair(name: str, value) -> tuple[float, float]:
+    try:
+        items = [float(v) for v in value]
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be 2 numbers (got {value!r})") from None
+    if len(items) != 2:
+        raise ParameterError(f"{name} must be 2 numbers (got {value!r})")
+    return (check_finite(name, items[0]), check_finite(name, items[1]))
 
 
 @dataclass(frozen=True)
@@ -236,125 +260,142 @@ class ApproachParams:
 
 
 @dataclass(frozen=True)
-class DockingLoopParams:
-    """Every parameter of one 6-DoF docking run, SI units.
+class DockingTable:
+    """The table that carries the active device.
 
     Parameters
     ----------
-    spacecraft : RigidBodyParams
-    contact : DockingContactParams
-    approach : ApproachParams
-    sample_rate_hz : float
-        Rate of the rig computer (spacecraft model, compensator, sensor), > 0.
-    sensor_delay_s : float
-        Delay of the F/T sensor, a whole number of ticks, >= 0.
-    table : {"model", "stewart"}
-        ``"model"``: the table model, each pose coordinate a second-order
-        response (``table_response_hz``, ``table_damping_ratio``; inf: the
-        ideal table); ``"stewart"``: the Stewart platform's MultibodyPlant.
-    table_response_hz, table_damping_ratio : float
-        The table model's response (> 0 or inf; >= 0). On the Stewart table
-        they are its legs' reference model's (left at inf: taken from it).
-    compensator : str
-        A registered wrench compensator (``"none"``, ``"SDC"``, ``"MDC"``,
-        ``"SDMDC"`` or a plug-in).
+    backend : {"model", "stewart"}
+        ``"model"``: the table model, each pose coordinate the 1-D loop's
+        second-order table (``response``); ``"stewart"``: the Stewart
+        platform's MultibodyPlant.
+    response : TableParams
+        The 1-D table's config (``table_response_hz``, ``math.inf``: the ideal
+        table; ``table_damping_ratio``). On the Stewart table it is its legs'
+        reference model's (left at inf: taken from it).
+    stewart : StewartParams or None
+        The platform for ``backend="stewart"`` (None: its defaults).
+    """
+
+    backend: str = "model"
+    response: TableParams = TableParams(math.inf, 0.8)
+    stewart: object | None = None
+
+    def __post_init__(self) -> None:
+        check_choice("table", self.backend, TABLE_BACKENDS)
+        if not isinstance(self.response, TableParams):
+            raise ParameterError("response must be a TableParams")
+        f = self.response.response_frequency_hz
+        if math.isfinite(f):
+            check_plausible("table_response_hz", f)
+        if self.backend != "stewart":
+            return
+        from hybridtable.stewart.params import StewartParams
+
+        stewart = self.stewart if self.stewart is not None else StewartParams()
+        if not isinstance(stewart, StewartParams):
+            raise ParameterError("stewart must be a StewartParams")
+        object.__setattr__(self, "stewart", stewart)
+        # One response for one table: the legs' reference model's.
+        ref = stewart.reference_response_hz
+        ref_hz = math.inf if ref is None else ref
+        zeta = self.response.damping_ratio
+        if math.isinf(f):
+            object.__setattr__(
+                self, "response", TableParams(ref_hz, stewart.reference_damping_ratio)
+            )
+        elif ref is None or not (
+            math.isclose(f, ref_hz, rel_tol=1e-9)
+            and math.isclose(zeta, stewart.reference_damping_ratio, abs_tol=1e-12)
+        ):
+            raise ParameterError(
+                f"table_response_hz {f:g} Hz / table_damping_ratio {zeta:g} must be the "
+                f"Stewart table's reference model ({ref_hz:g} Hz / "
+                f"{stewart.reference_damping_ratio:g}): give it once"
+            )
+
+
+@dataclass(frozen=True)
+class DockingPlant:
+    """What is physically there: the spacecraft model's rigid body, the
+    docking devices and their contact, the table."""
+
+    spacecraft: RigidBodyParams
+    contact: DockingContactParams
+    table: DockingTable = DockingTable()
+
+    def __post_init__(self) -> None:
+        for name, kind in (("spacecraft", RigidBodyParams), ("contact", DockingContactParams)):
+            if not isinstance(getattr(self, name), kind):
+                raise ParameterError(f"{name} must be a {kind.__name__}")
+
+
+@dataclass(frozen=True)
+class WrenchCompensatorConfig:
+    """The wrench compensator the rig computer runs, and what it believes.
+
+    Parameters
+    ----------
+    name : str
+        A registered wrench compensator (``compensator``: ``"none"``,
+        ``"SDC"``, ``"MDC"``, ``"SDMDC"`` or a plug-in).
     lead_time_s : float or None
-        SDC lead; None: the sensor delay.
+        SDC lead; None: the sensor delay (:func:`~hybridtable.loop.params.believed`).
     stiffness_model : {"linearized", "nominal", "given"}
         The MDC's 6x6 stiffness (and damping): Drake's contact, without
         friction, linearized at the table's pose at every tick of the contact
         (zero where the table has left the contact); linearized once at the
         nominal docked pose (aligned, on axis, every pad pressed by half the
         undamped peak penetration ``v0 / omega``: on axis the 1-D MDC's
-        constant ``k``); or ``compensator_stiffness_matrix``.
-    compensator_stiffness_matrix : 6x6 or None
-        ``K`` for ``stiffness_model="given"``, rows/columns ``[x, y, z, rx,
-        ry, rz]`` with the moment rows first in the wrench: ``-dw/dq``
-        (N/m, N, N m/m, N m/rad).
+        constant ``k``); or ``stiffness_matrix``.
+    stiffness_matrix : 6x6 or None
+        ``K`` (``compensator_stiffness_matrix``) for ``stiffness_model="given"``,
+        rows/columns ``[x, y, z, rx, ry, rz]`` with the moment rows first in
+        the wrench: ``-dw/dq`` (N/m, N, N m/m, N m/rad).
     force_deadband_n : float
         The compensator acts while the measured force's norm exceeds it.
-    force_noise_n, moment_noise_n_m : float
-        Standard deviation of the sensor's white noise per axis, >= 0.
-    seed : int
-        Seed of the noise.
-    duration_s : float or None
-        Simulated time; None: until the contact has ended.
-    stewart : StewartParams or None
-        The platform for ``table="stewart"`` (None: its defaults).
     """
 
-    spacecraft: RigidBodyParams
-    contact: DockingContactParams
-    approach: ApproachParams = field(default_factory=ApproachParams)
-    sample_rate_hz: float = 1000.0
-    sensor_delay_s: float = 0.0
-    table: str = "model"
-    table_response_hz: float = math.inf
-    table_damping_ratio: float = 0.8
-    compensator: str = "none"
+    name: str = "none"
     lead_time_s: float | None = None
     stiffness_model: str = "linearized"
-    compensator_stiffness_matrix: tuple | None = None
+    stiffness_matrix: tuple | None = None
     force_deadband_n: float = 0.0
-    force_noise_n: float = 0.0
-    moment_noise_n_m: float = 0.0
-    seed: int = 0
-    duration_s: float | None = None
-    stewart: object | None = None
 
     def __post_init__(self) -> None:
         from hybridtable.six_dof.registry import wrench_compensator_names
-        from hybridtable.systems.sensor import delay_samples
 
         s = object.__setattr__
-        for name, kind in (
-            ("spacecraft", RigidBodyParams),
-            ("contact", DockingContactParams),
-            ("approach", ApproachParams),
-        ):
-            if not isinstance(getattr(self, name), kind):
-                raise ParameterError(f"{name} must be a {kind.__name__}")
-        rate = check_positive("sample_rate_hz", self.sample_rate_hz)
-        s(self, "sample_rate_hz", check_plausible("sample_rate_hz", rate))
-        delay = check_nonnegative("sensor_delay_s", self.sensor_delay_s)
-        s(self, "sensor_delay_s", check_plausible("sensor_delay_s", delay))
-        delay_samples(self.sensor_delay_s, self.sample_period_s)
-        check_choice("table", self.table, TABLE_BACKENDS)
-        f = check_positive_or_inf("table_response_hz", self.table_response_hz)
-        if math.isfinite(f):
-            check_plausible("table_response_hz", f)
-        s(self, "table_response_hz", f)
-        s(
-            self,
-            "table_damping_ratio",
-            check_nonnegative("table_damping_ratio", self.table_damping_ratio),
-        )
-        check_choice("compensator", self.compensator, wrench_compensator_names())
+        check_choice("compensator", self.name, wrench_compensator_names())
         if self.lead_time_s is not None:
             s(self, "lead_time_s", check_nonnegative("lead_time_s", self.lead_time_s))
         check_choice("stiffness_model", self.stiffness_model, STIFFNESS_MODELS)
-        if self.compensator_stiffness_matrix is not None:
-            try:
-                K = np.array(self.compensator_stiffness_matrix, dtype=float)
-            except (TypeError, ValueError):
-                raise ParameterError("compensator_stiffness_matrix must be a 6x6 matrix") from None
-            if K.shape != (6, 6) or not np.all(np.isfinite(K)):
-                raise ParameterError(
-                    f"compensator_stiffness_matrix must be a finite 6x6 matrix (got shape {K.shape})"
-                )
-            most = LIMITS["compensator_stiffness_n_per_m"].high
-            if np.any(np.abs(K) > most):
-                i, j = np.unravel_index(int(np.argmax(np.abs(K))), K.shape)
-                raise ParameterError(
-                    f"compensator_stiffness_matrix ([compensator] stiffness_matrix of a scenario) "
-                    f"entries must be at most {most:g} in magnitude (N/m, N m/rad; no docking "
-                    f"contact is stiffer); got {K[i, j]:g} at row {i}, column {j}"
-                )
-            s(self, "compensator_stiffness_matrix", tuple(map(tuple, K.tolist())))
-        if self.stiffness_model == "given" and self.compensator_stiffness_matrix is None:
+        if self.stiffness_matrix is not None:
+            s(self, "stiffness_matrix", _stiffness_matrix(self.stiffness_matrix))
+        if self.stiffness_model == "given" and self.stiffness_matrix is None:
             raise ParameterError('stiffness_model "given" needs compensator_stiffness_matrix')
-        for name in ("force_deadband_n", "force_noise_n", "moment_noise_n_m"):
-            s(self, name, check_nonnegative(name, getattr(self, name)))
+        s(self, "force_deadband_n", check_nonnegative("force_deadband_n", self.force_deadband_n))
+
+
+@dataclass(frozen=True)
+class FTNoiseParams:
+    """White noise of the F/T sensor, per axis, drawn at the rig computer's ticks.
+
+    Parameters
+    ----------
+    force_std_n, moment_std_n_m : float
+        Standard deviations (``force_noise_n``, ``moment_noise_n_m``), >= 0.
+    seed : int
+        Seed of the noise, a whole number >= 0.
+    """
+
+    force_std_n: float = 0.0
+    moment_std_n_m: float = 0.0
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        for name in ("force_std_n", "moment_std_n_m"):
+            object.__setattr__(self, name, check_nonnegative(name, getattr(self, name)))
         if (
             isinstance(self.seed, bool)
             or not isinstance(self.seed, numbers.Real)  # numpy's integers too
@@ -363,35 +404,113 @@ class DockingLoopParams:
             or self.seed < 0
         ):
             raise ParameterError(f"seed must be a whole number >= 0 (got {self.seed!r})")
-        s(self, "seed", int(self.seed))
-        if self.duration_s is not None:
-            s(self, "duration_s", check_positive("duration_s", self.duration_s))
-            if self.duration_s > 600.0:
-                raise ParameterError(f"duration_s must be <= 600 s (got {self.duration_s:g})")
-        if self.table == "stewart":
-            from hybridtable.stewart.params import StewartParams
+        object.__setattr__(self, "seed", int(self.seed))
 
-            stewart = self.stewart if self.stewart is not None else StewartParams()
-            if not isinstance(stewart, StewartParams):
-                raise ParameterError("stewart must be a StewartParams")
-            s(self, "stewart", stewart)
-            # One response for one table: the legs' reference model's.
-            ref = stewart.reference_response_hz
-            ref_hz = math.inf if ref is None else ref
-            if math.isinf(self.table_response_hz):
-                s(self, "table_response_hz", ref_hz)
-                s(self, "table_damping_ratio", stewart.reference_damping_ratio)
-            elif ref is None or not (
-                math.isclose(self.table_response_hz, ref_hz, rel_tol=1e-9)
-                and math.isclose(
-                    self.table_damping_ratio, stewart.reference_damping_ratio, abs_tol=1e-12
-                )
-            ):
-                raise ParameterError(
-                    f"table_response_hz {self.table_response_hz:g} Hz / table_damping_ratio "
-                    f"{self.table_damping_ratio:g} must be the Stewart table's reference model "
-                    f"({ref_hz:g} Hz / {stewart.reference_damping_ratio:g}): give it once"
-                )
+
+@dataclass(frozen=True)
+class DockingRig:
+    """The rig's computer: the wrench it reads, its rate, its compensator.
+
+    Parameters
+    ----------
+    sensor : SensorParams
+        The 1-D loop's sensor config: the F/T delay (``sensor_delay_s``), >= 0.
+        A delay between ticks reads the two neighbouring samples interpolated,
+        as the 1-D sampled rig does
+        (:func:`~hybridtable.systems.sensor.sample_taps`).
+    sample_rate_hz : float
+        Rate of the rig computer (spacecraft model, compensator, sensor), > 0.
+    compensator : WrenchCompensatorConfig
+    noise : FTNoiseParams
+        The F/T sensor's noise.
+    duration_s : float or None
+        How long it records; None: until the contact has ended.
+    """
+
+    sensor: SensorParams = SensorParams()
+    sample_rate_hz: float = 1000.0
+    compensator: WrenchCompensatorConfig = WrenchCompensatorConfig()
+    noise: FTNoiseParams = FTNoiseParams()
+    duration_s: float | None = None
+
+    def __post_init__(self) -> None:
+        rate = check_positive("sample_rate_hz", self.sample_rate_hz)
+        object.__setattr__(self, "sample_rate_hz", check_plausible("sample_rate_hz", rate))
+        check_plausible("sensor_delay_s", self.sensor.sensor_delay_s)
+        if self.duration_s is not None:
+            d = check_positive("duration_s", self.duration_s)
+            if d > 600.0:
+                raise ParameterError(f"duration_s must be <= 600 s (got {d:g})")
+            object.__setattr__(self, "duration_s", d)
+
+
+@flat_properties
+@dataclass(frozen=True, init=False)
+class DockingLoopParams(NestedParams):
+    """Every parameter of one 6-DoF docking run, SI units, one config per
+    component, as the 1-D loop's :class:`~hybridtable.loop.params.HybridLoopParams`
+    (the same :class:`~hybridtable._nested.NestedParams`)::
+
+        DockingLoopParams
+          plant: DockingPlant
+            spacecraft: RigidBodyParams      mass, inertia, port
+            contact: DockingContactParams    stiffness, dissipation, friction, pads
+            table: DockingTable              backend, response (the 1-D TableParams), stewart
+          rig: DockingRig
+            sensor: SensorParams             sensor_delay_s (the 1-D sensor's)
+            sample_rate_hz, duration_s
+            compensator: WrenchCompensatorConfig
+            noise: FTNoiseParams
+          approach: ApproachParams           speed, gap, misalignment
+
+    Build it nested or by flat names (:data:`FIELDS`), e.g.
+    ``DockingLoopParams(spacecraft=body, contact=contact, sensor_delay_s=0.005,
+    compensator="SDMDC")``; every flat name reads as a property and
+    :meth:`with_` changes by flat name or by config. ``spacecraft`` and
+    ``contact`` are required.
+    """
+
+    plant: DockingPlant
+    rig: DockingRig = DockingRig()
+    approach: ApproachParams = ApproachParams()
+
+    PARTS: ClassVar[dict[str, type]] = {
+        "plant": DockingPlant,
+        "rig": DockingRig,
+        "approach": ApproachParams,
+    }
+    FIELDS: ClassVar[dict[str, tuple[str, ...]]] = {
+        "spacecraft": ("plant", "spacecraft"),
+        "contact": ("plant", "contact"),
+        "sample_rate_hz": ("rig", "sample_rate_hz"),
+        "sensor_delay_s": ("rig", "sensor", "sensor_delay_s"),
+        "table": ("plant", "table", "backend"),
+        "table_response_hz": ("plant", "table", "response", "response_frequency_hz"),
+        "table_damping_ratio": ("plant", "table", "response", "damping_ratio"),
+        "compensator": ("rig", "compensator", "name"),
+        "lead_time_s": ("rig", "compensator", "lead_time_s"),
+        "stiffness_model": ("rig", "compensator", "stiffness_model"),
+        "compensator_stiffness_matrix": ("rig", "compensator", "stiffness_matrix"),
+        "force_deadband_n": ("rig", "compensator", "force_deadband_n"),
+        "force_noise_n": ("rig", "noise", "force_std_n"),
+        "moment_noise_n_m": ("rig", "noise", "moment_std_n_m"),
+        "seed": ("rig", "noise", "seed"),
+        "duration_s": ("rig", "duration_s"),
+        "stewart": ("plant", "table", "stewart"),
+    }
+    REQUIRED: ClassVar[dict[str, str]] = {"plant": "plant= or spacecraft= and contact="}
+    EXAMPLE: ClassVar[str] = "sensor_delay_s"
+
+    def to_dict(self) -> dict:
+        """Every quantity by flat name, a config (spacecraft, contact,
+        approach, stewart) as a dict of its fields: the layout of
+        ``simulate6 --json``'s ``params``."""
+        out: dict = {}
+        for name, value in self.quantities().items():
+            out[name] = asdict(value) if is_dataclass(value) else value
+            if name == "contact":
+                out["approach"] = asdict(self.approach)
+        return out
 
     # -- derived --------------------------------------------------------
     @property
@@ -400,9 +519,17 @@ class DockingLoopParams:
         return 1.0 / self.sample_rate_hz
 
     @property
+    def delay_taps(self) -> tuple[int, float]:
+        """The sensor delay as whole ticks ``M`` and a fraction ``alpha`` of a
+        tick (:func:`~hybridtable.systems.sensor.sample_taps`)."""
+        return sample_taps(self.sensor_delay_s, self.sample_period_s)
+
+    @property
     def delay_ticks(self) -> int:
-        """The sensor delay in ticks."""
-        return int(round(self.sensor_delay_s * self.sample_rate_hz))
+        """The ticks a reading can lag the contact: ``M``, or ``M + 1`` for a
+        delay between ticks."""
+        m, alpha = self.delay_taps
+        return m + (1 if alpha else 0)
 
     @property
     def effective_lead_time_s(self) -> float:
@@ -421,16 +548,23 @@ class DockingLoopParams:
         omega = 2.0 * math.pi * self.contact_frequency_hz
         return np.array([0.0, 0.0, 0.5 * self.approach.initial_velocity_m_per_s / omega, 0, 0, 0])
 
-    def with_(self, **changes) -> DockingLoopParams:
-        """A copy with some fields changed (validated again)."""
-        return replace(self, **changes)
 
-
-def _pair(name: str, value) -> tuple[float, float]:
+def _stiffness_matrix(value) -> tuple:
+    """A finite 6x6 stiffness no stiffer than any docking contact."""
     try:
-        items = [float(v) for v in value]
+        K = np.array(value, dtype=float)
     except (TypeError, ValueError):
-        raise ParameterError(f"{name} must be 2 numbers (got {value!r})") from None
-    if len(items) != 2:
-        raise ParameterError(f"{name} must be 2 numbers (got {value!r})")
-    return (check_finite(name, items[0]), check_finite(name, items[1]))
+        raise ParameterError("compensator_stiffness_matrix must be a 6x6 matrix") from None
+    if K.shape != (6, 6) or not np.all(np.isfinite(K)):
+        raise ParameterError(
+            f"compensator_stiffness_matrix must be a finite 6x6 matrix (got shape {K.shape})"
+        )
+    most = LIMITS["compensator_stiffness_n_per_m"].high
+    if np.any(np.abs(K) > most):
+        i, j = np.unravel_index(int(np.argmax(np.abs(K))), K.shape)
+        raise ParameterError(
+            f"compensator_stiffness_matrix ([compensator] stiffness_matrix of a scenario) "
+            f"entries must be at most {most:g} in magnitude (N/m, N m/rad; no docking "
+            f"contact is stiffer); got {K[i, j]:g} at row {i}, column {j}"
+        )
+    return tuple(map(tuple, K.tolist()))

@@ -166,7 +166,7 @@ def _parse(raw: Mapping[str, Any]) -> DockingLoopParams:
     }
     for key, value in cp.items():
         kwargs[renames.get(key, key)] = value
-    return DockingLoopParams(body, contact, approach, **kwargs)
+    return DockingLoopParams(spacecraft=body, contact=contact, approach=approach, **kwargs)
 
 
 def _stewart(value: Any):

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 from pydrake.systems.framework import BasicVector, DiagramBuilder, LeafSystem, System
 
+from hybridtable.six_dof.params import FTNoiseParams
 from hybridtable.systems.noise import noise_sample
 from hybridtable.systems.sensor import ForceSensorDelay, SensorParams
 
@@ -45,22 +46,21 @@ class WrenchNoise(LeafSystem):
 
 def add_wrench_sensor(
     builder: DiagramBuilder,
-    delay_s: float,
+    sensor: SensorParams,
     period_s: float,
-    force_noise_n: float = 0.0,
-    moment_noise_n_m: float = 0.0,
-    seed: int = 0,
+    noise: FTNoiseParams | None = None,
 ) -> tuple[System, System]:
-    """Add the sensor; returns ``(input system, output system)``: connect the
-    contact wrench to the first's input ``force`` (6) and read the measured
-    wrench from the last's output 0."""
+    """Add the sensor: the 1-D sensor's sampled delay (``sensor``) on six
+    channels, then ``noise``. Returns ``(input system, output system)``:
+    connect the contact wrench to the first's input ``force`` (6) and read the
+    measured wrench from the last's output 0."""
     delay = builder.AddNamedSystem(
-        "ft_sensor", ForceSensorDelay(SensorParams(delay_s), "sampled", period_s, size=6)
+        "ft_sensor", ForceSensorDelay(sensor, "sampled", period_s, size=6)
     )
-    if force_noise_n == 0.0 and moment_noise_n_m == 0.0:
+    if noise is None or (noise.force_std_n == 0.0 and noise.moment_std_n_m == 0.0):
         return delay, delay
     noise = builder.AddNamedSystem(
-        "ft_noise", WrenchNoise(moment_noise_n_m, force_noise_n, seed, period_s)
+        "ft_noise", WrenchNoise(noise.moment_std_n_m, noise.force_std_n, noise.seed, period_s)
     )
     builder.Connect(delay.GetOutputPort("measured_force"), noise.get_input_port())
     return delay, noise

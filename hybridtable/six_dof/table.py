@@ -15,13 +15,12 @@ the last interval), and its update stores that output. So the contact at tick
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from pydrake.systems.framework import DiagramBuilder, System
 from pydrake.systems.primitives import LinearSystem, PassThrough
 
 from hybridtable.laws.table import second_order_tick
+from hybridtable.systems.table import TableParams
 
 __all__ = ["PoseTable", "add_pose_table", "table_tick_matrices"]
 
@@ -64,14 +63,14 @@ class PoseTable:
         context.SetDiscreteState(s)
 
 
-def add_pose_table(
-    builder: DiagramBuilder, response_hz: float, damping_ratio: float, period_s: float
-) -> PoseTable:
-    """Add the table model (``math.inf``: the ideal table) to ``builder``."""
-    if math.isinf(response_hz):
+def add_pose_table(builder: DiagramBuilder, table: TableParams, period_s: float) -> PoseTable:
+    """Add the table model to ``builder``: the 1-D table (``table``; an ideal
+    one passes its command through) on each of the six pose coordinates,
+    stepped over the rig computer's held tick."""
+    if table.is_ideal:
         system = builder.AddNamedSystem("table", PassThrough(12))
         return PoseTable(system, None)
-    Phi, Gamma = table_tick_matrices(response_hz, damping_ratio, period_s)
+    Phi, Gamma = table_tick_matrices(table.response_frequency_hz, table.damping_ratio, period_s)
     A = np.zeros((12, 12))
     B = np.zeros((12, 12))
     P = np.zeros((12, 12))  # state [x_j, x'_j]... -> output [q; qd]

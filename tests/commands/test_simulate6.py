@@ -71,7 +71,7 @@ def test_json_to_stdout_is_only_json(capsys):
             ),
             "symmetric",
         ),
-        (("sensor_delay_s = 0.005", "sensor_delay_s = 0.0055"), "sensor_delay_s"),
+        (("sensor_delay_s = 0.005", "sensor_delay_s = -0.005"), "sensor_delay_s"),
         (("pad_count = 8", "pad_count = 2"), "pad_count"),
         (("pad_count = 8", "pad_counts = 8"), "unknown key 'pad_counts'"),
         (('name = "SDMDC"', 'name = "PID"'), "compensator must be one of"),

@@ -31,4 +31,4 @@ def docking_params(
     )
     approach = ApproachParams(0.1, 0.001, (0.0, math.radians(pitch_deg)))
     kwargs.setdefault("sample_rate_hz", 1000.0)
-    return DockingLoopParams(body, contact, approach, **kwargs)
+    return DockingLoopParams(spacecraft=body, contact=contact, approach=approach, **kwargs)

@@ -15,11 +15,11 @@ from tests.six_dof.conftest import MASS_KG, docking_params
 COMPENSATORS = ("none", "SDC", "MDC", "SDMDC")
 
 
-def _one_d(compensator: str, response_hz: float) -> float:
+def _one_d(compensator: str, response_hz: float, delay_s: float = 0.005) -> float:
     params = HybridLoopParams(
         spacecraft_mass_kg=MASS_KG,
         contact_stiffness_n_per_m=1e5,
-        sensor_delay_s=0.005,
+        sensor_delay_s=delay_s,
         table_response_hz=response_hz,
         compensator=compensator,
         sample_rate_hz=1000.0,
@@ -55,6 +55,47 @@ def test_on_axis_cor_is_the_1d_loops(compensator, response_hz):
         # On axis there is no rotation and no lateral motion.
         assert linearized.metrics.rotational_energy_j < 1e-12
         assert linearized.metrics.lateral_velocity_m_per_s < 1e-12
+
+
+@pytest.mark.parametrize("compensator", ["none", "SDMDC"])
+def test_a_delay_between_ticks_is_the_1d_sampled_rigs(compensator):
+    """The F/T sensor is the 1-D sensor config on six channels: a 3.4 ms delay
+    on a 1 kHz rig computer reads the two neighbouring samples mixed 0.6/0.4,
+    as the 1-D sampled rig does, and on axis gives its CoR to round-off.
+    Uncompensated, the CoR lies between the whole-tick neighbours'."""
+    run = simulate6(
+        docking_params(
+            sensor_delay_s=0.0034,
+            table_response_hz=25.0,
+            compensator=compensator,
+            stiffness_model="nominal",
+        )
+    )
+    assert run.params.delay_taps == (3, pytest.approx(0.4))
+    expected = _one_d(compensator, 25.0, 0.0034)
+    assert run.metrics.cor_normal == pytest.approx(expected, abs=1e-7)
+    if compensator == "none":
+        low, high = (_one_d(compensator, 25.0, d) for d in (0.003, 0.004))
+        assert low < run.metrics.cor_normal < high
+
+
+def test_the_linearized_loop_reads_a_delay_between_ticks():
+    """The linearized loop's delay line mixes the two neighbouring samples:
+    the growth of the contact's mode moves monotonically between the whole
+    ticks' (3 and 4 ms), and a mix of 0 is the whole-tick matrix exactly."""
+    from hybridtable.six_dof.contact import DockingContact
+    from hybridtable.six_dof.linear import contact_modes, tick_matrix
+
+    growth = [
+        contact_modes(
+            docking_params(sensor_delay_s=d, table_response_hz=25.0)
+        ).max_growth_rate_per_s
+        for d in (0.003, 0.0032, 0.0036, 0.004)
+    ]
+    assert growth == sorted(growth) and growth[0] < growth[-1]
+    p = docking_params(sensor_delay_s=0.003, table_response_hz=25.0)
+    K, C = DockingContact(p.contact).stiffness(p.nominal_pose())
+    np.testing.assert_array_equal(tick_matrix(p, K, C), tick_matrix(p, K, C, 3))
 
 
 @pytest.mark.parametrize("offset_m,pitch_deg", [(0.0, 0.0), (0.02, 3.0), (0.01, 0.0)])

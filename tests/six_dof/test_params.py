@@ -50,7 +50,7 @@ def test_a_rotated_box_inertia_is_accepted():
         (lambda: ApproachParams(-0.1), "initial_velocity_m_per_s"),
         (lambda: ApproachParams(0.1, 0.001, (0.0, 0.7)), "misalignment_rad"),
         (lambda: RigidBodyParams(0.0), "mass_kg"),
-        (lambda: docking_params(sensor_delay_s=0.0015), "sensor_delay_s"),
+        (lambda: docking_params(sensor_delay_s=-0.001), "sensor_delay_s"),
         (lambda: docking_params(compensator="PID"), "compensator"),
         (lambda: docking_params(stiffness_model="given"), "compensator_stiffness_matrix"),
         (lambda: docking_params(compensator_stiffness_matrix=np.eye(5)), "6x6"),
