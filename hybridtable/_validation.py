@@ -8,6 +8,7 @@ deep inside Drake.
 from __future__ import annotations
 
 import math
+import numbers
 
 from hybridtable.errors import ParameterError
 
@@ -18,6 +19,7 @@ __all__ = [
     "check_nonnegative",
     "check_positive_or_inf",
     "check_choice",
+    "check_seed",
 ]
 
 
@@ -64,3 +66,17 @@ def check_choice(name: str, value: str, choices: tuple[str, ...]) -> str:
     if value not in choices:
         raise ParameterError(f"{name} must be one of {', '.join(choices)} (got {value!r})")
     return value
+
+
+def check_seed(name: str, value: object) -> int:
+    """Return a noise seed as an ``int``, or raise unless it is a whole number
+    >= 0 (numpy's integers too; not a bool)."""
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, numbers.Real)
+        or not math.isfinite(value)
+        or int(value) != value
+        or value < 0
+    ):
+        raise ParameterError(f"{name} must be a whole number >= 0 (got {value!r})")
+    return int(value)

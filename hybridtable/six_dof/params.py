@@ -16,7 +16,6 @@ in and the tree that builds them by those names are one concept, as in
 from __future__ import annotations
 
 import math
-import numbers
 from dataclasses import asdict, dataclass, is_dataclass
 from typing import ClassVar
 
@@ -28,6 +27,7 @@ from hybridtable._validation import (
     check_finite,
     check_nonnegative,
     check_positive,
+    check_seed,
 )
 from hybridtable.errors import ParameterError
 from hybridtable.limits import LIMITS, check_plausible
@@ -396,15 +396,7 @@ class FTNoiseParams:
     def __post_init__(self) -> None:
         for name in ("force_std_n", "moment_std_n_m"):
             object.__setattr__(self, name, check_nonnegative(name, getattr(self, name)))
-        if (
-            isinstance(self.seed, bool)
-            or not isinstance(self.seed, numbers.Real)  # numpy's integers too
-            or not math.isfinite(self.seed)
-            or int(self.seed) != self.seed
-            or self.seed < 0
-        ):
-            raise ParameterError(f"seed must be a whole number >= 0 (got {self.seed!r})")
-        object.__setattr__(self, "seed", int(self.seed))
+        object.__setattr__(self, "seed", check_seed("seed", self.seed))
 
 
 @dataclass(frozen=True)

@@ -24,7 +24,7 @@ from pydrake.autodiffutils import AutoDiffXd
 from pydrake.systems.framework import BasicVector_, Diagram, DiagramBuilder, LeafSystem_, System
 from pydrake.systems.scalar_conversion import TemplateSystem
 
-from hybridtable._validation import check_nonnegative, check_positive
+from hybridtable._validation import check_nonnegative, check_positive, check_seed
 from hybridtable.errors import ParameterError
 
 __all__ = [
@@ -105,9 +105,7 @@ class MeasurementNoiseParams:
     def __post_init__(self) -> None:
         for name in ("force_std_n", "position_std_m"):
             object.__setattr__(self, name, check_nonnegative(name, getattr(self, name)))
-        if isinstance(self.seed, bool) or int(self.seed) != self.seed or self.seed < 0:
-            raise ParameterError(f"seed must be a whole number >= 0 (got {self.seed!r})")
-        object.__setattr__(self, "seed", int(self.seed))
+        object.__setattr__(self, "seed", check_seed("seed", self.seed))
         phi = float(self.ar1_coefficient)
         if not (math.isfinite(phi) and -1.0 < phi < 1.0):
             raise ParameterError(f"ar1_coefficient must be in (-1, 1) (got {self.ar1_coefficient})")
