@@ -16,7 +16,7 @@ from hybridtable.loop.params import (
     Plant,
     RigComputer,
 )
-from hybridtable.loop.simulation import SimulationResult, run_loop, simulate
+from hybridtable.loop.simulation import SimulationResult, collect_result, run_loop, simulate
 from hybridtable.systems.contact import ContactParams, UnilateralSpringContact
 from hybridtable.systems.sensor import ForceSensorDelay, SensorParams
 from hybridtable.systems.spacecraft import Spacecraft, SpacecraftParams
@@ -46,6 +46,7 @@ __all__ = [
     "UnilateralSpringContact",
     "add_hybrid_loop",
     "build_hybrid_loop",
+    "collect_result",
     "contact_metrics",
     "run_loop",
     "simulate",

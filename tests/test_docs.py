@@ -2,7 +2,11 @@
 repository with nothing beside it.
 
 A fenced block marked ``sh`` is a command to run; synopses and printed output
-are marked ``text``. The ``sh`` blocks of one file run in order, in one shell
+are marked ``text``. A block marked ``python`` runs too, after the file's
+``sh`` blocks (the file's ``python`` blocks in order, as one script, in the
+same copy: a block may read what a command above it wrote); a piece of a
+larger program that cannot run alone is marked ``python fragment``. The ``sh``
+blocks of one file run in order, in one shell
 (a variable set in one block is seen by the next), in a fresh copy of the
 repository's files (``git ls-files``) whose parent holds nothing else, with the
 project's ``.venv/bin`` first on ``PATH`` (in CI the copy is of a fresh clone
@@ -28,6 +32,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 FENCE = re.compile(r"^```(\w*)[^\n]*\n(.*?)^```", re.M | re.S)
+INFO_FENCE = re.compile(r"^```(\w*)([^\n]*)\n(.*?)^```", re.M | re.S)
 
 
 def doc_files() -> list[Path]:
@@ -37,6 +42,15 @@ def doc_files() -> list[Path]:
 def shell_blocks(path: Path) -> list[str]:
     """The ``sh`` blocks of ``path``, in order."""
     return [m.group(2) for m in FENCE.finditer(path.read_text()) if m.group(1) == "sh"]
+
+
+def python_blocks(path: Path) -> list[str]:
+    """The ``python`` blocks of ``path`` that run (not ``python fragment``), in order."""
+    return [
+        m.group(3)
+        for m in INFO_FENCE.finditer(path.read_text())
+        if m.group(1) == "python" and "fragment" not in m.group(2).split()
+    ]
 
 
 def _script(blocks: list[str]) -> str:
@@ -101,13 +115,21 @@ def test_no_document_or_file_needs_anything_beside_the_repository():
     assert offenders == [], f"files that point outside the repository: {offenders}"
 
 
+def test_every_python_block_compiles():
+    """A ``python`` block is Python (the run itself is ``make test-docs``'s)."""
+    for path in doc_files():
+        for block in python_blocks(path):
+            compile(block, str(path), "exec")
+
+
 @pytest.mark.docs
 @pytest.mark.parametrize("doc", [p.name for p in doc_files()])
 def test_every_shell_block_runs(doc, tmp_path):
     path = ROOT / doc if doc == "README.md" else ROOT / "docs" / doc
     blocks = shell_blocks(path)
-    if not blocks:
-        pytest.skip(f"{doc} has no sh block")
+    code = python_blocks(path)
+    if not blocks and not code:
+        pytest.skip(f"{doc} has no sh or python block")
     repo = _copy_repository(tmp_path)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["repo"]  # nothing beside it
     site = repo / "out" / "pip-target"
@@ -120,16 +142,18 @@ def test_every_shell_block_runs(doc, tmp_path):
         "PIP_NO_DEPS": "1",
         "PIP_DISABLE_PIP_VERSION_CHECK": "1",
     }
-    result = subprocess.run(
-        ["bash", "-c", _script(blocks)],
-        cwd=repo,
-        env=env,
-        capture_output=True,
-        text=True,
-        timeout=1800,
-    )
-    assert result.returncode == 0, (
-        f"{doc}: a command failed (exit {result.returncode})\n"
-        f"--- stderr (tail) ---\n{result.stderr[-4000:]}\n--- stdout (tail) ---\n"
-        f"{result.stdout[-2000:]}"
-    )
+    runs = [("a command", ["bash", "-c", _script(blocks)])] if blocks else []
+    if code:
+        script = repo / "out" / "doc_blocks.py"
+        script.parent.mkdir(parents=True, exist_ok=True)
+        script.write_text("\n".join(code))
+        runs.append(("a python block", [str(repo / ".venv" / "bin" / "python"), str(script)]))
+    for what, command in runs:
+        result = subprocess.run(
+            command, cwd=repo, env=env, capture_output=True, text=True, timeout=1800
+        )
+        assert result.returncode == 0, (
+            f"{doc}: {what} failed (exit {result.returncode})\n"
+            f"--- stderr (tail) ---\n{result.stderr[-4000:]}\n--- stdout (tail) ---\n"
+            f"{result.stdout[-2000:]}"
+        )

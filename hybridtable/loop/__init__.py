@@ -32,7 +32,7 @@ from hybridtable.loop.params import (
     Plant,
     RigComputer,
 )
-from hybridtable.loop.simulation import SimulationResult, run_loop, simulate
+from hybridtable.loop.simulation import SimulationResult, collect_result, run_loop, simulate
 
 __all__ = [
     "Approach",
@@ -49,6 +49,7 @@ __all__ = [
     "contact_metrics",
     "fast_unsupported",
     "run_loop",
+    "collect_result",
     "simulate",
     "simulate_fast",
 ]

@@ -24,6 +24,7 @@ __all__ = [
     "SimulationResult",
     "simulate",
     "run_loop",
+    "collect_result",
     "default_t_max_s",
     "expected_duration_s",
     "settle_window_s",
@@ -187,7 +188,7 @@ def run_loop(
         ):
             break
     rule.verdict()
-    return _collect(loop, context, simulator.get_num_steps_taken())
+    return collect_result(loop, context, simulator.get_num_steps_taken())
 
 
 def separation_rule(
@@ -212,9 +213,20 @@ def separation_rule(
     )
 
 
-def _collect(loop: HybridLoop, context, steps: int) -> SimulationResult:
+def collect_result(loop: HybridLoop, root_context, steps: int = 0) -> SimulationResult:
+    """The run recorded in ``loop``'s log, as a :class:`SimulationResult`
+    (signals by name and the contact metrics): for a loop added to one's own
+    diagram (:func:`~hybridtable.loop.builder.add_hybrid_loop`) and simulated
+    through its contact with one's own ``Simulator``; ``root_context`` is that
+    diagram's, ``steps`` the simulator's step count, if wanted.
+
+    Raises
+    ------
+    SimulationError
+        If the record holds no contact, or ends before the contact's force has.
+    """
     params = loop.params
-    log = loop.logger.FindLog(context)
+    log = loop.logger.FindLog(root_context)
     t = log.sample_times()
     data = log.data()
     if params.sample_rate_hz is not None:
