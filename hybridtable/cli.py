@@ -102,6 +102,15 @@ def _flag_message(err: Exception, parser: argparse.ArgumentParser | None) -> str
     return text
 
 
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("hybridtable")
+    except PackageNotFoundError:  # run from a checkout without an install
+        return "unknown (not installed)"
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="hybridtable",
@@ -109,6 +118,9 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="Every command: --help (units, ranges, defaults), --json FILE (- for stdout), "
         "--force to replace an existing output. New here: docs/tutorial.md; first command: "
         "hybridtable simulate --compensator SDMDC.",
+    )
+    parser.add_argument(
+        "--version", action="version", version=f"hybridtable {_version()}", help="print the version"
     )
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     for command in COMMANDS:

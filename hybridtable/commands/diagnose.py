@@ -39,9 +39,9 @@ def register(sub) -> None:
         "and deadband it used are solved from the record by arithmetic and compared with "
         "the JSON. Then fit every registered physical effect to the replay of the runs and "
         "add effects one by one while one is significant (delta BIC > 10 and leave-one-"
-        "run-out z > 3) and removes >= 25%% of the held-out excess error; pairs and swaps "
+        "run-out z > 3) and removes >= 25% of the held-out excess error; pairs and swaps "
         "are tried when that leaves a misfit. An end test of the residuals against the "
-        "no-contact noise (false-alarm rate 1%% per set) decides 'explained'. The verdict "
+        "no-contact noise (false-alarm rate 1% per set) decides 'explained'. The verdict "
         "is 'none', the effect(s) named, or 'unexplained'. Built-in effects: "
         + ", ".join(BUILTIN_EFFECT_NAMES)
         + " (plus registered plug-ins). The console opens with one sentence; --json "

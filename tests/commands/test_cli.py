@@ -1,6 +1,7 @@
 """The ``hybridtable`` CLI: simulate, reproduce, bad input."""
 
 import json
+import re
 import subprocess
 import sys
 
@@ -75,6 +76,24 @@ def test_help_for_every_command():
         with pytest.raises(SystemExit) as exc:
             main(cmd)
         assert exc.value.code == 0
+
+
+def test_every_help_reads_as_written_and_the_version_is_given(capsys):
+    """No command's help shows a doubled ``%%`` (argparse formats only the
+    options' help, not a description), and ``--version`` names the version."""
+    from hybridtable.cli import COMMANDS, build_parser
+
+    parser = build_parser()
+    for name in ["", *(m.__name__.rsplit(".", 1)[-1] for m in COMMANDS)]:
+        with pytest.raises(SystemExit) as exc:
+            parser.parse_args([name, "--help"] if name else ["--help"])
+        assert exc.value.code == 0
+        text = capsys.readouterr().out
+        assert "%%" not in text, f"{name or 'hybridtable'} --help prints %%"
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0
+    assert re.fullmatch(r"hybridtable \d+\.\d+\.\d+\S*\n", capsys.readouterr().out)
 
 
 def test_reproduce_json_shape_and_tables(tmp_path):
