@@ -57,6 +57,8 @@ def build_config(
             inner = values.get(f.name, getattr(base, f.name) if base is not None else None)
             if inner is None and f.default is not MISSING:
                 inner = f.default
+            elif inner is None and f.default_factory is not MISSING:
+                inner = f.default_factory()
             values[f.name] = build_config(hints[f.name], (*prefix, f.name), inner, below, flat_name)
     try:
         return replace(base, **values) if base is not None else cls(**values)

@@ -29,7 +29,7 @@ through those names are one concept; apart, each would import the others.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 from hybridtable._nested import NestedParams, flat_properties
@@ -240,10 +240,14 @@ class RigComputer:
     sensor: SensorParams = SensorParams()
     sample_rate_hz: float | None = None
     time_step_s: float | None = None
-    compensator: CompensatorConfig = CompensatorConfig()
+    # Built on use, not at import: a compensator plug-in may import this module.
+    compensator: CompensatorConfig = field(default_factory=CompensatorConfig)
     integrator: str = DEFAULT_INTEGRATOR
 
     def __post_init__(self) -> None:
+        for name, kind in (("sensor", SensorParams), ("compensator", CompensatorConfig)):
+            if not isinstance(getattr(self, name), kind):
+                raise ParameterError(f"{name} must be a {kind.__name__}")
         for name in ("sample_rate_hz", "time_step_s"):
             if getattr(self, name) is not None:
                 _set(self, name, check_positive(name, getattr(self, name)))
@@ -333,7 +337,7 @@ class HybridLoopParams(NestedParams):
     """
 
     plant: Plant
-    rig: RigComputer = RigComputer()
+    rig: RigComputer = field(default_factory=RigComputer)
     approach: Approach = Approach()
 
     PARTS: ClassVar[dict[str, type]] = {"plant": Plant, "rig": RigComputer, "approach": Approach}

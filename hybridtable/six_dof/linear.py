@@ -2,7 +2,8 @@
 
 The loop is linearized about the docked pose (:meth:`DockingLoopParams.nominal_pose`,
 every pad pressed; the contact's K and C from Drake's contact) with the
-spacecraft's rigid body, the table model, the F/T delay of ``M`` ticks and
+spacecraft's rigid body, the table model, the F/T delay (``M`` ticks, and a
+reading between ticks mixed from its two neighbouring samples) and
 the compensator, as the map of one rig-computer tick ``x[k+1] = A x[k]``
 (state: the body's pose and twist deviations, the table's state, the delay
 line, the compensator's stored wrench). Its eigenvalues ``lambda`` give the
@@ -199,6 +200,8 @@ def critical_delay_s(
     while high - low > 1e-3:
         mid = 0.5 * (low + high)
         low, high = (low, mid) if grows(mid) else (mid, high)
+    if low == 0.0:  # every delay above zero grows: the critical delay is zero
+        return 0.0
     return high * h
 
 

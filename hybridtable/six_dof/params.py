@@ -16,7 +16,7 @@ in and the tree that builds them by those names are one concept, as in
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, is_dataclass
+from dataclasses import asdict, dataclass, field, is_dataclass
 from typing import ClassVar
 
 import numpy as np
@@ -421,11 +421,19 @@ class DockingRig:
 
     sensor: SensorParams = SensorParams()
     sample_rate_hz: float = 1000.0
-    compensator: WrenchCompensatorConfig = WrenchCompensatorConfig()
+    # Built on use, not at import: a wrench compensator plug-in may import this module.
+    compensator: WrenchCompensatorConfig = field(default_factory=WrenchCompensatorConfig)
     noise: FTNoiseParams = FTNoiseParams()
     duration_s: float | None = None
 
     def __post_init__(self) -> None:
+        for name, kind in (
+            ("sensor", SensorParams),
+            ("compensator", WrenchCompensatorConfig),
+            ("noise", FTNoiseParams),
+        ):
+            if not isinstance(getattr(self, name), kind):
+                raise ParameterError(f"{name} must be a {kind.__name__}")
         rate = check_positive("sample_rate_hz", self.sample_rate_hz)
         object.__setattr__(self, "sample_rate_hz", check_plausible("sample_rate_hz", rate))
         check_plausible("sensor_delay_s", self.sensor.sensor_delay_s)
@@ -463,7 +471,7 @@ class DockingLoopParams(NestedParams):
     """
 
     plant: DockingPlant
-    rig: DockingRig = DockingRig()
+    rig: DockingRig = field(default_factory=DockingRig)
     approach: ApproachParams = ApproachParams()
 
     PARTS: ClassVar[dict[str, type]] = {
@@ -491,7 +499,7 @@ class DockingLoopParams(NestedParams):
         "stewart": ("plant", "table", "stewart"),
     }
     REQUIRED: ClassVar[dict[str, str]] = {"plant": "plant= or spacecraft= and contact="}
-    EXAMPLE: ClassVar[str] = "sensor_delay_s"
+    EXAMPLE: ClassVar[str] = "spacecraft"
 
     def to_dict(self) -> dict:
         """Every quantity by flat name, a config (spacecraft, contact,

@@ -57,3 +57,15 @@ def test_critical_delay_of_a_damped_contact_and_of_sdmdc():
         )
     )
     assert sdmdc.critical_delay_s > damped.critical_delay_s
+
+
+def test_a_loop_that_grows_at_any_delay_has_a_critical_delay_of_zero():
+    """Ideal table, undamped contact, no compensator: any delay above zero
+    pumps energy (the 1-D loop's "critical delay zero"); the bisection within
+    the first tick must not report its resolution (h / 1024) instead."""
+    from hybridtable.six_dof.contact import DockingContact
+    from hybridtable.six_dof.linear import critical_delay_s
+
+    p = docking_params(table_response_hz=math.inf)
+    K, C = DockingContact(p.contact).stiffness(p.nominal_pose())
+    assert critical_delay_s(p, K, C) == 0.0

@@ -79,3 +79,49 @@ def test_a_plugin_wrench_compensator_registers_itself_and_runs():
         for name in ("none", "half-lead", "SDC")
     }
     assert cor["SDC"] < cor["half-lead"] < cor["none"]
+
+
+@pytest.mark.parametrize(
+    "group,module",
+    [
+        ("hybridtable.wrench_compensators", "hybridtable.six_dof.params"),
+        ("hybridtable.compensators", "hybridtable.loop.params"),
+    ],
+)
+def test_a_plugin_that_imports_the_parameters_loads(tmp_path, group, module):
+    """A compensator plug-in (an installed entry point) whose module imports
+    the loop's parameters: the parameters' defaults are built on use, not at
+    import, so the registry's load of the plug-in does not meet a half-loaded
+    module (it did for the 6-DoF loop: every simulate6 failed)."""
+    import subprocess
+    import sys
+
+    (tmp_path / "ht_plug.py").write_text(
+        f"from {module} import *  # a plug-in typing its factory\n"
+        "def make(*args):\n    raise NotImplementedError\n"
+    )
+    info = tmp_path / "ht_plug-0.1.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: ht-plug\nVersion: 0.1\n")
+    (info / "entry_points.txt").write_text(f"[{group}]\nplug = ht_plug:make\n")
+    names = (
+        "from hybridtable.six_dof.registry import wrench_compensator_names as names"
+        if "wrench" in group
+        else "from hybridtable.compensators.registry import compensator_names as names"
+    )
+    code = f"import {module}\n{names}\nprint('plug' in names())"
+    env = {**__import__("os").environ, "PYTHONPATH": str(tmp_path)}
+    out = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120
+    )
+    assert out.returncode == 0, out.stderr[-1500:]
+    assert out.stdout.strip() == "True"
+
+
+def test_a_config_of_the_wrong_kind_is_named():
+    from hybridtable.six_dof.params import DockingRig
+
+    with pytest.raises(ParameterError, match="compensator must be a WrenchCompensatorConfig"):
+        DockingRig(compensator="SDC")
+    with pytest.raises(ParameterError, match=r"e\.g\. spacecraft="):
+        docking_params().with_(plant=docking_params().spacecraft)
