@@ -374,8 +374,8 @@ def _with_notes(data: dict) -> dict:
     grid_words = {
         "critical_delay_s": "critical_delay_s inf: stable at every delay of the search at "
         "that table frequency",
-        "critical_table_hz": "critical_table_hz inf: stable at every table frequency of the "
-        "grid at that delay",
+        "critical_table_hz": "critical_table_hz inf: no table is fast enough at that delay "
+        "(unstable with an ideal table or, sampled, at half the sample rate)",
         "cor_limited_delay_s": "cor_limited_delay_s inf: the predicted CoR stays within "
         "--cor-limit at every delay of the search at that table frequency",
         "cor_limited_table_hz": "cor_limited_table_hz inf: the predicted CoR stays within "

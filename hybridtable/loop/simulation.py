@@ -141,6 +141,12 @@ def run_loop(
     """
     params = loop.params
     diagram = loop.diagram
+    if diagram is None:
+        raise ValueError(
+            "run_loop: loop.diagram is None: the loop was added to a builder of yours; "
+            "set loop.diagram = builder.Build(), or run your own Simulator and read the "
+            "run with collect_result(loop, context)"
+        )
     t_max = default_t_max_s(params) if t_max_s is None else t_max_s
     # The estimate of a run that stops at separation is its expected length;
     # one that does not separate is stopped by the steps it really takes.
@@ -188,7 +194,9 @@ def run_loop(
         ):
             break
     rule.verdict()
-    return collect_result(loop, context, simulator.get_num_steps_taken())
+    # The separation rule decided how the run ends (a record of a given length may
+    # end mid-contact).
+    return collect_result(loop, context, simulator.get_num_steps_taken(), check_ended=False)
 
 
 def separation_rule(
@@ -213,7 +221,9 @@ def separation_rule(
     )
 
 
-def collect_result(loop: HybridLoop, root_context, steps: int = 0) -> SimulationResult:
+def collect_result(
+    loop: HybridLoop, root_context, steps: int = 0, check_ended: bool = True
+) -> SimulationResult:
     """The run recorded in ``loop``'s log, as a :class:`SimulationResult`
     (signals by name and the contact metrics): for a loop added to one's own
     diagram (:func:`~hybridtable.loop.builder.add_hybrid_loop`) and simulated
@@ -223,7 +233,8 @@ def collect_result(loop: HybridLoop, root_context, steps: int = 0) -> Simulation
     Raises
     ------
     SimulationError
-        If the record holds no contact, or ends before the contact's force has.
+        If the record holds no contact, or (``check_ended``) ends while a
+        force still acts: the CoR would be read mid-contact.
     """
     params = loop.params
     log = loop.logger.FindLog(root_context)
@@ -240,6 +251,12 @@ def collect_result(loop: HybridLoop, root_context, steps: int = 0) -> Simulation
         keep = np.append(np.diff(t) > 0, True)
         t, data = t[keep], data[:, keep]
     rows = dict(zip(LOG_ROWS, data, strict=True))
+    if check_ended and len(t) and (rows["f_act_n"][-1] > 0.0 or rows["f_comp_n"][-1] != 0.0):
+        raise SimulationError(
+            f"the record ends at {t[-1]:.3g} s while a force still acts (contact "
+            f"{rows['f_act_n'][-1]:.4g} N, compensated {rows['f_comp_n'][-1]:.4g} N): "
+            "simulate past the end of the contact"
+        )
     try:
         metrics = contact_metrics(
             t, rows["v_des_m_per_s"], rows["f_act_n"], rows["f_comp_n"], params.spacecraft_mass_kg

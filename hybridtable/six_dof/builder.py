@@ -97,12 +97,12 @@ class DockingLoop:
     def set_initial_conditions(self, root_context) -> None:
         """Write the approach of :attr:`params` into a root context."""
         command, body = initial_port_state(self.params, self.spacecraft)
-        sc = self.diagram.GetMutableSubsystemContext(self.spacecraft, root_context)
+        sc = self.spacecraft.GetMyMutableContextFromRoot(root_context)
         sc.SetDiscreteState(body)
         table_state = command.copy()
         # Steady tracking of the approach ramp (the 1-D "tracking" start).
         table_state[:6] -= self.params.plant.table.response.ramp_lag_s * command[6:]
-        bc = self.diagram.GetMutableSubsystemContext(self.backend, root_context)
+        bc = self.backend.GetMyMutableContextFromRoot(root_context)
         self.backend.set_initial_state(bc, table_state, command)
 
 

@@ -149,6 +149,11 @@ def simulate6(
             "a shorter duration_s)"
         )
     loop = loop or build_docking_loop(params)
+    if loop.diagram is None:
+        raise ValueError(
+            "simulate6: loop.diagram is None: the loop was added to a builder of yours; "
+            "set loop.diagram = builder.Build() first"
+        )
     if on_loop is not None:
         on_loop(loop)
     simulator = Simulator(loop.diagram)

@@ -79,10 +79,11 @@ def paper_params(compensator: str = "none", **kwargs: Any) -> HybridLoopParams:
 def table1_params(
     compensator: str, tables: dict[str, Any] | None = None, **kwargs: Any
 ) -> HybridLoopParams:
-    """Parameters of Table 1 for one compensator."""
+    """Parameters of Table 1 for one compensator; ``kwargs`` change any
+    quantity (e.g. ``table_response_hz=math.inf``, ``sample_rate_hz=1000.0``)."""
     tables = tables or load_tables()
     p = dict(tables["table1_simulation"]["parameters"])
-    return paper_params(compensator=compensator, **p, **kwargs)
+    return paper_params(compensator=compensator, **{**p, **kwargs})
 
 
 def table2_rows(tables: dict[str, Any] | None = None) -> list[dict[str, float]]:

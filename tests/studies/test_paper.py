@@ -58,3 +58,17 @@ def test_compensation_ordering_of_table1(table1):
     _, runs = table1
     cor = {c: v[0] for c, v in runs.items()}
     assert cor["none"] > cor["SDC"] > cor["MDC"] > cor["SDMDC"]
+
+
+def test_table1_params_takes_any_quantity_of_the_table_too():
+    """A quantity Table 1 states (the table's response) and one it does not
+    (the rig computer's rate) both change the point; the rest stays Table 1's
+    (a stated one raised 'got multiple values for keyword argument')."""
+    import math
+
+    from hybridtable.studies.paper import table1_params
+
+    base = table1_params("SDC")
+    ideal = table1_params("SDC", table_response_hz=math.inf, sample_rate_hz=1000.0)
+    assert ideal.table_response_hz == math.inf and ideal.sample_rate_hz == 1000.0
+    assert ideal.with_(table_response_hz=base.table_response_hz, sample_rate_hz=None) == base
