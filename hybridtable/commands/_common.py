@@ -25,6 +25,7 @@ __all__ = [
     "flag_words",
     "UNIT_METAVARS",
     "write_json",
+    "command_inputs",
     "note_unset",
     "input_paths",
     "read_run_arguments",
@@ -201,11 +202,35 @@ def note_unset(document: dict, reasons: Mapping[str, str]) -> dict:
     return document
 
 
-def write_json(path: str | Path, data: Any) -> None:
+def command_inputs(args: argparse.Namespace) -> dict[str, Any]:
+    """What the command was asked: its name and every option as parsed
+    (defaults applied), as plain JSON values."""
+
+    def plain(value: Any) -> Any:
+        if value is None or isinstance(value, bool | int | float | str):
+            return value
+        if isinstance(value, list | tuple):
+            return [plain(v) for v in value]
+        if isinstance(value, dict):
+            return {str(k): plain(v) for k, v in value.items()}
+        return str(value)
+
+    out: dict[str, Any] = {"command": getattr(args, "command", None)}
+    for name, value in sorted(vars(args).items()):
+        if name not in ("command", "func") and not name.startswith("_") and not callable(value):
+            out[name] = plain(value)
+    return out
+
+
+def write_json(path: str | Path, data: Any, args: argparse.Namespace | None = None) -> None:
     """Write ``data`` as JSON (NaN -> null, inf -> "inf"); ``-`` is stdout.
+    With the command's ``args``, a document (a dict) opens with ``inputs``:
+    what it was asked (:func:`command_inputs`).
 
     A file is written through a temporary file and a rename: a reader never
     sees half a file, and an error leaves the old one in place."""
+    if args is not None and isinstance(data, dict):
+        data = {"inputs": command_inputs(args), **data}
     text = _json_text(data)
     if str(path) == "-":
         sys.stdout.write(text)

@@ -126,7 +126,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         if (log_map := log_map_entry(layout, runs)) is not None:
             document["log_map"] = log_map
-        write_json(args.json, document)
+        write_json(args.json, document, args)
     if args.report:
         with staged_folder(args.report) as stage:
             files = write_report(comparisons, stage.path, verdict_text=sentence)

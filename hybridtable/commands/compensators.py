@@ -223,7 +223,7 @@ def run(args: argparse.Namespace) -> int:
         for f in result.figures:
             print(f"wrote {f}")
     if args.json:
-        write_json(args.json, result.to_json())
+        write_json(args.json, result.to_json(), args)
     return 0
 
 
@@ -364,5 +364,5 @@ def _run_model(args: argparse.Namespace, model) -> int:
             "verdict": model_verdict(result),
             **result.to_json(),
         }
-        write_json(args.json, data)
+        write_json(args.json, data, args)
     return 0

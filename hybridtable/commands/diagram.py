@@ -82,5 +82,5 @@ def run(args: argparse.Namespace) -> int:
             "files": [str(p) for p in out.files],
             **out.data,
         }
-        write_json(args.json, data)
+        write_json(args.json, data, args)
     return 0

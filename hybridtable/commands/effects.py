@@ -241,5 +241,5 @@ def run(args: argparse.Namespace) -> int:
     if args.json != "-":
         print(format_effects(items))
     if args.json:
-        write_json(args.json, items)
+        write_json(args.json, items, args)
     return 0

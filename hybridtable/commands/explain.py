@@ -180,5 +180,5 @@ def run(args: argparse.Namespace) -> int:
         if not quiet:
             print(f"wrote {args.plot}")
     if args.json:
-        write_json(args.json, out)
+        write_json(args.json, out, args)
     return 0

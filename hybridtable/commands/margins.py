@@ -352,7 +352,7 @@ def run(args: argparse.Namespace) -> int:
             print(f"wrote {exported} (the linear loop with {export_comp}, for control.ss)")
         print(f"wall time {wall:.1f} s")
     if args.json:
-        write_json(args.json, _with_notes(data))
+        write_json(args.json, _with_notes(data), args)
     return 0
 
 

@@ -75,5 +75,5 @@ def run(args: argparse.Namespace) -> int:
             print(f"wrote {f}")
         print(f"wall time {wall:.1f} s")
     if args.json:
-        write_json(args.json, data)
+        write_json(args.json, data, args)
     return 0

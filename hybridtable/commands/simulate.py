@@ -83,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
             )
         out = run_record(args, model) if args.record else run_model(args, model)
         if args.json:
-            write_json(args.json, out)
+            write_json(args.json, out, args)
         return 0
     for flag in ("runs", "velocities", "noise_force_n", "noise_position_m", "duration_s"):
         if getattr(args, flag) is not None:
@@ -121,6 +121,8 @@ def run(args: argparse.Namespace) -> int:
             math.pi**2 * params.contact_frequency_hz * params.effective_delay_s
         ),
         "wall_time_s": wall,
+        # The loop simulated: every quantity by its flat name, defaults applied.
+        "params": params.quantities(),
         **extra,
     }
     if args.json != "-":
@@ -137,7 +139,7 @@ def run(args: argparse.Namespace) -> int:
             f"({wall:.2f} s)"
         )
     if args.json:
-        write_json(args.json, out)
+        write_json(args.json, out, args)
     if args.plot:
         from hybridtable.reports.figures import plot_run
 

@@ -163,5 +163,5 @@ def run(args: argparse.Namespace) -> int:
                 f"1 m per {drawn['force_scale_n_per_m']:g} N)"
             )
     if args.json:
-        write_json(args.json, out)
+        write_json(args.json, out, args)
     return 0

@@ -205,7 +205,7 @@ def run(args: argparse.Namespace) -> int:
                 + ")"
             )
     if args.json:
-        write_json(args.json, _json_document(args, spec, summary, result, figures))
+        write_json(args.json, _json_document(args, spec, summary, result, figures), args)
     if result.interrupted:
         print(
             f"hybridtable sweep: interrupted: {result.written} of {spec.n_runs} runs are in "

@@ -211,3 +211,21 @@ def test_a_closed_pipe_stops_quietly_and_the_files_are_written(tmp_path):
     proc.stdout.close()
     err = proc.stderr.read()
     assert proc.wait() == 141 and "Traceback" not in err, err
+
+
+def test_every_json_document_records_its_inputs(tmp_path):
+    """A document opens with what the command was asked (every option, the
+    defaults applied); simulate's also holds the loop it simulated."""
+    out = tmp_path / "s.json"
+    assert (
+        main(["simulate", "--compensator", "SDC", "--sensor-delay-s", "0.004", "--json", str(out)])
+        == 0
+    )
+    data = json.loads(out.read_text())
+    assert next(iter(data)) == "inputs"
+    inputs = data["inputs"]
+    assert inputs["command"] == "simulate" and inputs["compensator"] == "SDC"
+    assert inputs["sensor_delay_s"] == 0.004 and inputs["table_response_hz"] is None
+    assert not any(k.startswith("_") for k in inputs)
+    assert data["params"]["sensor_delay_s"] == 0.004
+    assert data["params"]["table_response_hz"] == 25.0  # the default, resolved
