@@ -19,11 +19,23 @@ def docking_verdict(compensator: str, metrics, reference) -> str:
         judgement = f"creates {100 * excess:.1f} % more energy than the ideal rig"
     else:
         judgement = f"removes {100 * -excess:.1f} % more energy than the ideal rig"
+    pushed = metrics.peak_compensated_force_n / metrics.peak_force_n
+    but = (
+        f"; but the compensator fed the model forces up to {metrics.peak_compensated_force_n:.0f} N, "
+        f"{pushed:.1f} times the contact's peak"
+        if pushed > _PUSHED
+        else ""
+    )
     return (
         f"{compensator}: the docking contact {judgement} (energy ratio {er:.4f} against "
         f"{er0:.4f}); CoR along the normal {metrics.cor_normal:.4f} "
-        f"(ideal rig {reference.cor_normal:.4f})."
+        f"(ideal rig {reference.cor_normal:.4f}){but}."
     )
+
+
+#: A compensated force above this many times the contact's peak is said in the
+#: verdict: the compensator, not the contact, pushes the model.
+_PUSHED = 1.5
 
 
 def format_docking(compensator: str, metrics, reference, modes, wall_time_s: float, sim_s: float):
@@ -42,13 +54,16 @@ def format_docking(compensator: str, metrics, reference, modes, wall_time_s: flo
             if math.isinf(modes.critical_delay_s)
             else f"{1000 * modes.critical_delay_s:.3g} ms"
         )
-        slow = ", ".join(
-            f"{f:.3f} Hz ({g:+.4f}/s)"
-            for f, g in list(zip(modes.frequencies_hz, modes.growth_rates_per_s, strict=True))[:3]
-        )
+        reported = list(zip(modes.frequencies_hz, modes.growth_rates_per_s, strict=True))
+        slow = ", ".join(f"{f:.3f} Hz ({g:+.4f}/s)" for f, g in reported[:3])
+        if modes.stable:
+            state = "stable"
+        else:  # name the mode that grows: it need not be among the slowest
+            f, g = max(reported, key=lambda mode: mode[1])
+            state = f"a mode grows: {f:.3f} Hz at {g:+.4f}/s, the fastest-growing"
         lines.append(
-            f"linearized in contact: {'stable' if modes.stable else 'a mode grows'} "
-            f"(slowest modes {slow}); growth starts at a sensor delay of {crit}"
+            f"linearized in contact: {state}; slowest modes {slow}; growth starts at a "
+            f"sensor delay of {crit}"
         )
     rtf = sim_s / wall_time_s if wall_time_s > 0 else math.inf
     lines.append(f"{sim_s:.2f} s simulated in {wall_time_s:.2f} s ({rtf:.2f} x real time)")

@@ -38,6 +38,10 @@ class DockingMetrics:
         Time the devices touched (ticks with a contact force times the tick).
     lateral_velocity_m_per_s : float
         Norm of the port's velocity across the docking axis at the end.
+    peak_compensated_force_n : float
+        Largest norm of the force the compensator fed the model: above the
+        contact's peak, the compensator itself pushes the model (a stiffness
+        model that overshoots off axis).
     """
 
     cor_normal: float
@@ -50,6 +54,7 @@ class DockingMetrics:
     peak_moment_n_m: float
     contact_duration_s: float
     lateral_velocity_m_per_s: float
+    peak_compensated_force_n: float = 0.0
 
     def to_dict(self) -> dict[str, float]:
         return asdict(self)
@@ -115,4 +120,5 @@ def docking_metrics(
         peak_moment_n_m=float(moment.max()),
         contact_duration_s=float(np.count_nonzero(force > 0) * h),
         lateral_velocity_m_per_s=float(np.linalg.norm(port_velocity_m_per_s[-1, :2])),
+        peak_compensated_force_n=float(np.linalg.norm(compensated_wrench[:, 3:], axis=1).max()),
     )

@@ -137,3 +137,21 @@ def test_a_stewart_scenario_out_of_reach_gets_one_line_and_exit_2(tmp_path, caps
     assert main(["simulate6", str(path), "--no-progress"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and words in err[0], err
+
+
+def test_the_verdict_says_when_the_compensator_pushes_harder_than_the_contact():
+    """Energy alone can match the ideal rig while the compensator feeds the
+    model lateral spikes (offset.toml with SDMDC: about 4.9 kN against a
+    1.5 kN contact): the verdict says so, above 1.5 times the contact's peak."""
+    from hybridtable.reports.six_dof import docking_verdict
+    from hybridtable.six_dof.metrics import DockingMetrics
+
+    def metrics(pushed_n: float) -> DockingMetrics:
+        return DockingMetrics(1.0, 0.1, -0.1, 1.0, 0.0, 0.0, 1500.0, 0.0, 0.5, 0.0, pushed_n)
+
+    ideal = metrics(1500.0)
+    assert "but the compensator" not in docking_verdict("SDMDC", metrics(2200.0), ideal)
+    words = docking_verdict("SDMDC", metrics(4861.0), ideal)
+    assert (
+        "matches the ideal rig" in words and "up to 4861 N, 3.2 times the contact's peak" in words
+    )
