@@ -127,10 +127,23 @@ def verdict(comparisons: Sequence[RunComparison], subject: str = "The model") ->
         f"position {ratios['p_act_m']}x the noise; fit {fits['f_mea_n']} % force, "
         f"{fits['p_act_m']} % position)"
     )
+    for ch in chans:  # structure too small to matter is still said, not hidden
+        shaped = [c for c in judged if ch in c.whiteness and not _is_white(c.whiteness[ch])]
+        if shaped:
+            where = "the run" if len(judged) == 1 else f"{len(shaped)} of {len(judged)} runs"
+            text += (
+                f"; the {_CHANNEL_WORDS[ch]} residual still has structure in {where} (a "
+                f"systematic effect too small to matter: error at most "
+                f"{max(c.error_to_noise(ch) for c in shaped):.2f}x the noise)"
+            )
     if unjudged:
         names = ", ".join(c.run_id for c in unjudged)
         text += f"; {names}: no noise estimate (no quiet ticks), not judged"
     return text
+
+
+def _is_white(corr) -> bool:
+    return bool(corr.auto_white and corr.cross_white)
 
 
 def _why_not_white(s: dict, kind: str) -> str:

@@ -5,6 +5,7 @@ whose every figure has a caption, outputs replaced only with ``--force``."""
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -40,7 +41,14 @@ def test_console_opens_with_the_verdict_on_the_examples(tmp_path, capsys):
     out, err = capsys.readouterr()
     lines = out.splitlines()
     assert lines[0].startswith("The model matches the 3 runs within the noise (force error ")
-    assert "the noise; fit " in lines[0] and lines[0].endswith("% position)")
+    assert "the noise; fit " in lines[0]
+    # The examples' position residual follows the command (docs/compare.md,
+    # Limitations): the verdict says it, as too small to matter.
+    assert re.search(
+        r"% position\); the position residual still has structure in 3 of 3 runs \(a "
+        r"systematic effect too small to matter: error at most 1\.\d\dx the noise\)$",
+        lines[0],
+    )
     assert "compare" not in out.replace("hybridtable compare", "")  # progress bar on stderr
     data = json.loads(out_json.read_text())
     assert data["verdict"] == lines[0]

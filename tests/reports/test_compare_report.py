@@ -61,10 +61,20 @@ def test_verdict_sentences(runs):
     ok = report.verdict([long])
     ratio_f, ratio_p = long.error_to_noise("f_mea_n"), long.error_to_noise("p_act_m")
     fit_f = long.replay_errors["f_mea_n"].fit_percent
+    shaped = {
+        ch: not (long.whiteness[ch].auto_white and long.whiteness[ch].cross_white)
+        for ch in ("f_mea_n", "p_act_m")
+    }
     assert ok == (
         f"The model matches the run within the noise (force error {ratio_f:.2f}x, position "
         f"{ratio_p:.2f}x the noise; fit {fit_f:.1f} % force, "
         f"{report._fit(long.replay_errors['p_act_m'].fit_percent)} % position)"
+        + "".join(
+            f"; the {word} residual still has structure in the run (a systematic effect too "
+            f"small to matter: error at most {long.error_to_noise(ch):.2f}x the noise)"
+            for ch, word in (("f_mea_n", "force"), ("p_act_m", "position"))
+            if shaped[ch]
+        )
     )
     missed = report.verdict([long, damped])
     assert missed.startswith("The model misses something in 1 of 2 runs: force error ")
