@@ -209,15 +209,18 @@ def plot_critical(
     # inf / 0 of a curve read off the grid sit at the grid's edges, the searches' at the axes'
     grid_d = float(d_ms.max())
     grid_f = (float(ff.min()), float(ff.max())) if ff.size else (bottom_f, top_f)
+    drawn = set()  # (compensator, style) of every curve with a point on the axes
     for c, style, y in delays:
         y, inf, _ = _clip(y, 0.0, grid_d if style == "--" else top_d)
         a1.plot(f, y, style, color=cols[c])
         a1.plot(f[inf], y[inf], "^", color=cols[c], ms=5)
+        drawn |= {(c, style)} if np.isfinite(y).any() else set()
     for c, style, y in tables:
         y, inf, zero = _clip(y, *(grid_f if style == "--" else (bottom_f, top_f)))
         a2.plot(d_ms, y, style, color=cols[c])
         a2.plot(d_ms[inf], y[inf], "^", color=cols[c], ms=5)
         a2.plot(d_ms[zero], y[zero], "v", color=cols[c], ms=5)
+        drawn |= {(c, style)} if np.isfinite(y).any() else set()
     a1.set_ylim(-0.03 * top_d, 1.04 * top_d)
     a2.set_ylim(bottom_f / 1.1, top_f * 1.1)
     a1.set_xlabel("table response frequency [Hz]")
@@ -227,12 +230,20 @@ def plot_critical(
     a2.set_ylabel("table response frequency [Hz]")
     a2.set_yscale("log")
     a2.set_title("Table frequency the loop needs")
-    handles = [Line2D([], [], color=cols[c], label=c) for c in result.compensators]
-    if damped:
+    # The legend names only what is drawn: a compensator or a kind of curve
+    # with no finite point (never stable, no grid point within the limit) is left out.
+    styles = {style for _, style in drawn}
+    handles = [
+        Line2D([], [], color=cols[c], label=c)
+        for c in result.compensators
+        if any((c, style) in drawn for style in ("-", "--"))
+    ]
+    if damped and "-" in styles:
         handles.append(Line2D([], [], color="0.3", ls="-", label="stability boundary"))
-    else:
+    elif not damped:
         handles.append(Line2D([], [], ls="none", label="undamped: no stability boundary"))
-    handles.append(Line2D([], [], color="0.3", ls="--", label=f"CoR = {cor_limit:g}"))
+    if "--" in styles:
+        handles.append(Line2D([], [], color="0.3", ls="--", label=f"CoR = {cor_limit:g}"))
     for ax in (a1, a2):
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(handles=handles, fontsize=8)

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 
+from hybridtable.reports.colour_scale import colour_scale, crosses, ticks_both_sides
 from hybridtable.reports.figure_text import literal
 from hybridtable.reports.sweep_summary import COR_GAIN_TOLERANCE, verdict
 from hybridtable.sweeps.inputs import input_of
@@ -212,25 +213,6 @@ def _panels(d, plt):
     return fig, flat[:n]
 
 
-def _norm(values, metric):
-    from matplotlib.colors import Normalize, TwoSlopeNorm
-
-    if metric == "stable":
-        return Normalize(0.0, 1.0), "RdYlGn"
-    lo, hi = float(values.min()), float(values.max())
-    if lo == hi:
-        lo, hi = lo - (abs(lo) * 1e-3 or 1e-3), hi + (abs(hi) * 1e-3 or 1e-3)
-    level, higher_worse = _LOOK[metric]
-    if level is not None and lo < level < hi:
-        return TwoSlopeNorm(level, lo, hi), "RdBu_r" if higher_worse else "RdBu"
-    return Normalize(lo, hi), "viridis"
-
-
-def _crosses(level, values) -> bool:
-    v = np.asarray(values)[np.isfinite(values)]
-    return level is not None and v.size > 0 and v.min() < level < v.max()
-
-
 def _plane_figure(path, d, stability: bool = False) -> str:
     """The metric (or the fraction of stable runs) over the plane; returns the caption."""
     import matplotlib.pyplot as plt
@@ -240,7 +222,7 @@ def _plane_figure(path, d, stability: bool = False) -> str:
     finite = d["v"][ok & np.isfinite(d["v"])]
     norm, cmap = None, ""
     if stability or finite.size:
-        norm, cmap = _norm(finite, "stable" if stability else metric)
+        norm, cmap = colour_scale(finite, *_LOOK[metric], fraction=stability)
     fig, axes = _panels(d, plt)
     drawn, most, contour = None, 0, False
     for ax, comp in zip(axes, d["comps"], strict=True):
@@ -271,14 +253,15 @@ def _plane_figure(path, d, stability: bool = False) -> str:
             z, look = np.ma.masked_invalid(z), {"alpha": 0.6 if stability else None, "zorder": 0}
             look["shading"] = "flat" if d["grid"] else "nearest"
             drawn = ax.pcolormesh(ex, ey, z, norm=norm, cmap=cmap, **look)
-            if min(z.shape) > 1 and _crosses(level, z.filled(np.nan)):
+            if min(z.shape) > 1 and crosses(level, z.filled(np.nan)):
                 ax.contour(gx, gy, z, levels=[level], colors="k")
                 contour = True
         s = status == "diverged"
         ax.scatter(x[s], y[s], marker="x", color="k", s=30, zorder=3)
     label = "fraction of runs stable [1]" if stability else axis_label(metric)
     if drawn is not None:
-        fig.colorbar(drawn, ax=axes, label=label, shrink=0.9)
+        bar = fig.colorbar(drawn, ax=axes, label=label, shrink=0.9)
+        ticks_both_sides(bar, norm)
     fig.savefig(path, dpi=120)
     plt.close(fig)
     plane = f"over {axis_label(d['xname'])} and {axis_label(d['yname'])}, one panel per compensator"
