@@ -5,7 +5,7 @@ STAMP := $(VENV)/.installed
 BROWSER_STAMP := $(VENV)/.installed-browser
 CHROMIUM := /usr/bin/chromium
 
-.PHONY: run test test-browser test-docs test-fuzz lint setup clean
+.PHONY: run test check test-browser test-docs test-fuzz lint setup clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -18,10 +18,20 @@ setup: $(STAMP)
 run: $(STAMP)
 	$(VENV)/bin/hybridtable reproduce --out-dir out/reproduce --json out/reproduce/reproduce.json --force
 
+# The whole suite, one pytest worker per CPU (pytest-xdist; a test file stays
+# on one worker, so its module fixtures are computed once). WORKERS=1 runs it
+# in one process.
+WORKERS ?= auto
 test: $(STAMP)
 	$(VENV)/bin/ruff check .
 	$(VENV)/bin/ruff format --check .
-	MPLBACKEND=Agg $(VENV)/bin/python -m pytest -q
+	MPLBACKEND=Agg $(VENV)/bin/python -m pytest -q -n $(WORKERS) --dist loadfile
+
+# The inner loop: lint and every test not marked slow or cluster (under 90 s).
+check: $(STAMP)
+	$(VENV)/bin/ruff check .
+	MPLBACKEND=Agg $(VENV)/bin/python -m pytest -q -x -n $(WORKERS) --dist load \
+	  -m "not slow and not cluster and not browser and not docs and not fuzz"
 
 $(BROWSER_STAMP): $(STAMP)
 	$(VENV)/bin/python -m pip install --quiet -e '.[test,browser]'

@@ -297,3 +297,33 @@ def test_this_test_sees_a_cycle_an_upward_import_and_a_function_level_import(tmp
     }
     assert LAYERS[_room("hybridtable.cli")] > LAYERS[_room("hybridtable.loop.fake")]
     assert _cycles({"x": {"y"}, "y": {"z"}, "z": {"x"}}) == [["x", "y", "z"]]
+
+
+@pytest.mark.slow
+def test_every_test_measured_slow_still_exists():
+    """tests/slow_tests.txt names tests by node id: a renamed or removed test
+    must leave the list too (else make check would run it again unmarked)."""
+    import subprocess
+    import sys
+
+    from tests.conftest import MEASURED_SLOW
+
+    collected = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pytest",
+            "--collect-only",
+            "-q",
+            "-m",
+            "",
+            "-p",
+            "no:cacheprovider",
+        ],
+        cwd=PACKAGE.parent,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    ).stdout.splitlines()
+    stale = sorted(MEASURED_SLOW - set(collected))
+    assert not stale, f"tests/slow_tests.txt names tests that do not exist: {stale}"

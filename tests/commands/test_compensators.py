@@ -6,7 +6,12 @@ from __future__ import annotations
 import json
 import re
 
+import pytest
+
 from hybridtable.cli import main
+
+#: Whole loops, fits or commands, many times: make test runs them, make check does not.
+pytestmark = pytest.mark.slow
 
 
 def test_compensators_command_quick(tmp_path, capsys):

@@ -31,6 +31,9 @@ import pytest
 
 from hybridtable.cli import build_parser, main
 
+#: Whole loops, fits or commands, many times: make test runs them, make check does not.
+pytestmark = pytest.mark.slow
+
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "explain"
 TABLE1 = EXAMPLES / "table1_simulation.csv"
 TABLE3 = EXAMPLES / "table3_experiment.csv"

@@ -26,6 +26,9 @@ from tests.diagnosis.support import sensor_gain_effect
 from tests.generators.effectsim import make_runs, simulate_hidden
 from tests.generators.rigsim import NOMINAL
 
+#: Whole loops, fits or commands, many times: make test runs them, make check does not.
+pytestmark = pytest.mark.slow
+
 VELOCITIES = (0.06, 0.1)
 COMPENSATORS = ("SDMDC", "none")
 

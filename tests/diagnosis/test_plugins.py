@@ -37,6 +37,9 @@ from hybridtable.measurement.run_reader import read_runs
 from hybridtable.systems.noise import MeasurementNoiseParams
 from tests.examples import example_info
 
+#: Whole loops, fits or commands, many times: make test runs them, make check does not.
+pytestmark = pytest.mark.slow
+
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "plugins"
 BACKLASH = EXAMPLE / "backlash.py"
 #: The plug-in as a user gives it: ``--plugin path/to/backlash.py:EFFECT``.

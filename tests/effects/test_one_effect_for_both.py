@@ -41,6 +41,9 @@ from tests.explain.conftest import TWO_FREQUENCIES, generated_table
 from tests.generators.effectsim import simulate_hidden
 from tests.generators.rigsim import NOMINAL, write_run
 
+#: Whole loops, fits or commands, many times: make test runs them, make check does not.
+pytestmark = pytest.mark.slow
+
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 #: The user's effect, as a user gives it: ``--plugin path/to/table_lag.py:EFFECT``.

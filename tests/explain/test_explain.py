@@ -24,6 +24,9 @@ from hybridtable.effects.registry import default_effects
 from hybridtable.explain.separate import LOOKALIKE_BIC
 from tests.explain.conftest import TWO_FREQUENCIES
 
+#: Whole loops, fits or commands, many times: make test runs them, make check does not.
+pytestmark = pytest.mark.slow
+
 #: Hidden effect -> (the generator's parameters, the library's parameter, its true value).
 #: Sizes as in tests/generators/test_cortable.py (each moves some CoR by >= 0.02).
 HIDDEN = {

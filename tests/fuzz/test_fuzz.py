@@ -21,6 +21,9 @@ from hypothesis import HealthCheck, Phase, given, settings
 from tests.fuzz.corpus import Case, corpus, flag_strategy, runs_strategy
 from tests.fuzz.runner import Result, json_findings, refusal_lines, run_cases
 
+#: Whole loops, fits or commands, many times: make test runs them, make check does not.
+pytestmark = pytest.mark.slow
+
 __all__: list[str] = []
 
 #: Children at a time: the cores, at most 4.

@@ -11,6 +11,9 @@ import pytest
 
 from tests.generators import rigzoo as rz
 
+#: Whole loops, fits or commands, many times: make test runs them, make check does not.
+pytestmark = pytest.mark.slow
+
 FORMAT_KEYS = {
     "format",
     "run_id",

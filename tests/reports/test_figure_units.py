@@ -19,6 +19,9 @@ import pytest
 from hybridtable.cli import main
 from tests.examples import EXAMPLES
 
+#: Whole loops, fits or commands, many times: make test runs them, make check does not.
+pytestmark = pytest.mark.slow
+
 EXAMPLE_RUN = EXAMPLES / "run1.csv"
 
 #: A unit in brackets anywhere in the label.

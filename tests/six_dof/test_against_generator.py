@@ -11,6 +11,9 @@ from hybridtable.six_dof.simulation import simulate6
 from tests.generators.rig6 import pad_ring, simulate_rig6, wrench, wrench_jacobians
 from tests.six_dof.conftest import MASS_KG, docking_params
 
+#: Whole loops, fits or commands, many times: make test runs them, make check does not.
+pytestmark = pytest.mark.slow
+
 INERTIA = (1689.0, 2100.0, 2600.0)
 
 

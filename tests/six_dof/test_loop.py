@@ -12,6 +12,9 @@ from hybridtable.loop.simulation import simulate
 from hybridtable.six_dof.simulation import simulate6
 from tests.six_dof.conftest import MASS_KG, docking_params
 
+#: Whole loops, fits or commands, many times: make test runs them, make check does not.
+pytestmark = pytest.mark.slow
+
 COMPENSATORS = ("none", "SDC", "MDC", "SDMDC")
 
 

@@ -16,6 +16,9 @@ import pytest
 
 from hybridtable.cli import main
 
+#: A real `dask scheduler` and two `dask worker` processes (make test runs it; `-m "not cluster"` leaves it out).
+pytestmark = pytest.mark.cluster
+
 DASK = Path(sys.executable).parent / "dask"
 
 SPEC = """

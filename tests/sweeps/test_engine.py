@@ -12,9 +12,13 @@ import time
 from pathlib import Path
 
 import pyarrow.parquet as pq
+import pytest
 
 from hybridtable.cli import main
 from hybridtable.studies.paper import table2_params, table2_rows
+
+#: Whole loops, fits or commands, many times: make test runs them, make check does not.
+pytestmark = pytest.mark.slow
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "sweeps"
 
