@@ -61,11 +61,16 @@ def check_positive_or_inf(name: str, value: float) -> float:
     return x
 
 
-def check_choice(name: str, value: str, choices: tuple[str, ...]) -> str:
-    """Return ``value`` if it is one of ``choices``."""
-    if value not in choices:
-        raise ParameterError(f"{name} must be one of {', '.join(choices)} (got {value!r})")
-    return value
+def check_choice(name: str, value: str, choices: tuple[str, ...], any_case: bool = False) -> str:
+    """Return ``value`` if it is one of ``choices``; with ``any_case``, the one
+    choice it spells in other letter case (``"sdmdc"`` -> ``"SDMDC"``) too."""
+    if value in choices:
+        return value
+    if any_case and isinstance(value, str):
+        same = [c for c in choices if c.casefold() == value.casefold()]
+        if len(same) == 1:
+            return same[0]
+    raise ParameterError(f"{name} must be one of {', '.join(choices)} (got {value!r})")
 
 
 def check_seed(name: str, value: object) -> int:

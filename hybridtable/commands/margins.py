@@ -216,12 +216,13 @@ def _base_params(args: argparse.Namespace, model=None):
 
 def run(args: argparse.Namespace) -> int:
     from hybridtable._files import staged_folder
+    from hybridtable._validation import check_choice
     from hybridtable.analysis.robustness import grid_cor_limits
     from hybridtable.analysis.validation import validate_sweep
     from hybridtable.commands._common import check_outputs, write_json
     from hybridtable.commands._model_options import load_model_arg, load_plugins
     from hybridtable.compensators.paper import COMPENSATORS
-    from hybridtable.errors import CommandError
+    from hybridtable.errors import CommandError, ParameterError
     from hybridtable.reports.margin_point import (
         format_grid,
         format_point,
@@ -241,10 +242,14 @@ def run(args: argparse.Namespace) -> int:
     load_plugins(args)
     model = load_model_arg(args)
 
-    comps = [c.strip() for c in args.compensator.split(",") if c.strip()]
-    for c in comps:
-        if c not in COMPENSATORS:
-            raise CommandError(f"--compensator: {c!r} is not one of {', '.join(COMPENSATORS)}")
+    try:  # any letter case, as everywhere a compensator is named
+        comps = [
+            check_choice("--compensator", c.strip(), COMPENSATORS, any_case=True)
+            for c in args.compensator.split(",")
+            if c.strip()
+        ]
+    except ParameterError as err:
+        raise CommandError(str(err)) from None
     if not comps or len(set(comps)) != len(comps):
         raise CommandError("--compensator: give each compensator once")
     base = _base_params(args, model)

@@ -192,7 +192,9 @@ class CompensatorConfig:
 
     def __post_init__(self) -> None:
         _set(self, "force_deadband_n", check_nonnegative("force_deadband_n", self.force_deadband_n))
-        check_choice("compensator", self.name, compensator_names())
+        _set(
+            self, "name", check_choice("compensator", self.name, compensator_names(), any_case=True)
+        )
         check_choice("contact_gate", self.contact_gate, CONTACT_GATES)
         for key, name in (
             ("lead_time_s", "lead_time_s"),

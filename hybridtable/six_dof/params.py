@@ -366,7 +366,11 @@ class WrenchCompensatorConfig:
         from hybridtable.six_dof.registry import wrench_compensator_names
 
         s = object.__setattr__
-        check_choice("compensator", self.name, wrench_compensator_names())
+        s(
+            self,
+            "name",
+            check_choice("compensator", self.name, wrench_compensator_names(), any_case=True),
+        )
         if self.lead_time_s is not None:
             s(self, "lead_time_s", check_nonnegative("lead_time_s", self.lead_time_s))
         check_choice("stiffness_model", self.stiffness_model, STIFFNESS_MODELS)

@@ -229,3 +229,21 @@ def test_every_json_document_records_its_inputs(tmp_path):
     assert not any(k.startswith("_") for k in inputs)
     assert data["params"]["sensor_delay_s"] == 0.004
     assert data["params"]["table_response_hz"] == 25.0  # the default, resolved
+
+
+def test_a_compensator_is_named_in_any_letter_case_everywhere(tmp_path):
+    """simulate refused ``sdmdc`` while explain accepted it: a registered name
+    spelled in other letter case is that compensator in every command and in
+    the API; an unknown one is still one line naming the choices."""
+    from hybridtable.errors import ParameterError
+    from hybridtable.studies.paper import table1_params
+
+    assert table1_params("sdmdc").compensator == "SDMDC"
+    assert table1_params("Sdmdc-Online").compensator == "sdmdc-online"
+    with pytest.raises(ParameterError, match="compensator must be one of"):
+        table1_params("pid")
+    out = tmp_path / "s.json"
+    assert main(["simulate", "--compensator", "sdmdc", "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["compensator"] == "SDMDC"
+    argv = ["margins", "--compensator", "sdc,SDMDC", "--sensor-delay-s", "0.005"]
+    assert main([*argv, "--table-response-hz", "25", "--no-progress"]) == 0
