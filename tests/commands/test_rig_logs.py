@@ -186,11 +186,12 @@ def _differences(
     tiny: float = 0.0,
 ) -> list[str]:
     """Where the JSON results differ: numbers beyond ``rel`` relative (and
-    ``tiny`` absolute), other values at all; ``log_map`` and the keys ``skip``
+    ``tiny`` absolute), other values at all; ``log_map``, ``inputs`` (the
+    flags the command was given, which differ by design) and the keys ``skip``
     left out, the run folders' paths made equal."""
     if isinstance(want, dict) and isinstance(got, dict):
         out = []
-        keys = (set(got) | set(want)) - {"log_map"} - set(skip)
+        keys = (set(got) | set(want)) - {"log_map", "inputs"} - set(skip)
         for key in sorted(keys):
             if key not in got or key not in want:
                 out.append(f"{where}/{key}: only in the {'log' if key in got else 'run'}'s")
