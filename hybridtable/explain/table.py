@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from hybridtable._files import read_user_text
+from hybridtable._validation import check_choice
 from hybridtable.errors import MeasurementError, ParameterError
 from hybridtable.explain.conditions import CONDITION_FIELDS, PAPER_CONDITIONS, Conditions
 
@@ -165,13 +166,12 @@ def _number(path: str, line: int, column: str, cell: str) -> float:
 
 
 def _compensator(path: str, line: int, cell: str) -> str:
-    names = {n.lower(): n for n in COMPENSATOR_NAMES}
-    name = names.get(cell.strip().lower())
-    if name is None:
+    try:  # any letter case, as everywhere a compensator is named
+        return check_choice("compensator", cell.strip(), COMPENSATOR_NAMES, any_case=True)
+    except ParameterError:
         raise MeasurementError(
             f"{path}:{line}: compensator {cell!r} is not one of {', '.join(COMPENSATOR_NAMES)}"
-        )
-    return name
+        ) from None
 
 
 def cor_table(

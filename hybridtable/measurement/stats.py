@@ -167,6 +167,11 @@ class Correlation:
             and (cross.size == 0 or cross.max() <= self._peak(cross.size))
         )
 
+    @property
+    def white(self) -> bool:
+        """Both tests pass: what is left is noise, with no memory and nothing of the input."""
+        return self.auto_white and self.cross_white
+
     def summary(self) -> dict[str, float | int | bool]:
         """Counts, largest values and limits of both tests (lags in s)."""
         auto = np.abs(self.auto[1:])

@@ -9,7 +9,9 @@ import numpy as np
 __all__ = ["colour_scale", "crosses", "ticks_both_sides"]
 
 
-def colour_scale(values, level: float | None, higher_worse: bool, fraction: bool = False):
+def colour_scale(
+    values, level: float | None = None, higher_worse: bool = True, fraction: bool = False
+):
     """``(norm, cmap)`` for ``values``: a fraction on [0, 1] (red to green);
     centred on ``level`` (blue to red, red the worse side) when the values
     cross it; else their range (viridis)."""

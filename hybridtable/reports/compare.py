@@ -128,7 +128,7 @@ def verdict(comparisons: Sequence[RunComparison], subject: str = "The model") ->
         f"{fits['p_act_m']} % position)"
     )
     for ch in chans:  # structure too small to matter is still said, not hidden
-        shaped = [c for c in judged if ch in c.whiteness and not _is_white(c.whiteness[ch])]
+        shaped = [c for c in judged if ch in c.whiteness and not c.whiteness[ch].white]
         if shaped:
             where = "the run" if len(judged) == 1 else f"{len(shaped)} of {len(judged)} runs"
             text += (
@@ -140,10 +140,6 @@ def verdict(comparisons: Sequence[RunComparison], subject: str = "The model") ->
         names = ", ".join(c.run_id for c in unjudged)
         text += f"; {names}: no noise estimate (no quiet ticks), not judged"
     return text
-
-
-def _is_white(corr) -> bool:
-    return bool(corr.auto_white and corr.cross_white)
 
 
 def _why_not_white(s: dict, kind: str) -> str:
@@ -169,7 +165,7 @@ def whiteness_sentence(c: RunComparison, channel: str) -> str:
     corr = c.whiteness[channel]
     s = corr.summary()
     ratio = _fmt(c.error_to_noise(channel), ".2f")
-    if corr.auto_white and corr.cross_white:
+    if corr.white:
         counts = (
             f"{s['auto_lags_outside']} of {s['auto_lags']} autocorrelation lags, "
             f"{s['cross_lags_outside']} of {s['cross_lags']} command cross-correlation lags "

@@ -214,13 +214,15 @@ def plot_critical(
         y, inf, _ = _clip(y, 0.0, grid_d if style == "--" else top_d)
         a1.plot(f, y, style, color=cols[c])
         a1.plot(f[inf], y[inf], "^", color=cols[c], ms=5)
-        drawn |= {(c, style)} if np.isfinite(y).any() else set()
+        if np.isfinite(y).any():
+            drawn.add((c, style))
     for c, style, y in tables:
         y, inf, zero = _clip(y, *(grid_f if style == "--" else (bottom_f, top_f)))
         a2.plot(d_ms, y, style, color=cols[c])
         a2.plot(d_ms[inf], y[inf], "^", color=cols[c], ms=5)
         a2.plot(d_ms[zero], y[zero], "v", color=cols[c], ms=5)
-        drawn |= {(c, style)} if np.isfinite(y).any() else set()
+        if np.isfinite(y).any():
+            drawn.add((c, style))
     a1.set_ylim(-0.03 * top_d, 1.04 * top_d)
     a2.set_ylim(bottom_f / 1.1, top_f * 1.1)
     a1.set_xlabel("table response frequency [Hz]")

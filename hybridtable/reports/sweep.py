@@ -222,7 +222,11 @@ def _plane_figure(path, d, stability: bool = False) -> str:
     finite = d["v"][ok & np.isfinite(d["v"])]
     norm, cmap = None, ""
     if stability or finite.size:
-        norm, cmap = colour_scale(finite, *_LOOK[metric], fraction=stability)
+        norm, cmap = (
+            colour_scale(finite, fraction=True)
+            if stability
+            else colour_scale(finite, *_LOOK[metric])
+        )
     fig, axes = _panels(d, plt)
     drawn, most, contour = None, 0, False
     for ax, comp in zip(axes, d["comps"], strict=True):

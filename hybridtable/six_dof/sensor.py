@@ -59,8 +59,8 @@ def add_wrench_sensor(
     )
     if noise is None or (noise.force_std_n == 0.0 and noise.moment_std_n_m == 0.0):
         return delay, delay
-    noise = builder.AddNamedSystem(
+    noisy = builder.AddNamedSystem(
         "ft_noise", WrenchNoise(noise.moment_std_n_m, noise.force_std_n, noise.seed, period_s)
     )
-    builder.Connect(delay.GetOutputPort("measured_force"), noise.get_input_port())
-    return delay, noise
+    builder.Connect(delay.GetOutputPort("measured_force"), noisy.get_input_port())
+    return delay, noisy
