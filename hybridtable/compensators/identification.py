@@ -45,6 +45,7 @@ prior).
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass
 
 import numpy as np
@@ -270,7 +271,9 @@ class RecursiveContactIdentifier:
         return out
 
 
-@TemplateSystem.define("ContactIdentifierLeaf_", T_list=[float, AutoDiffXd])
+@TemplateSystem.define(
+    "ContactIdentifierLeaf_", T_list=[float, AutoDiffXd], scope=sys.modules[__name__]
+)
 def ContactIdentifierLeaf_(T):
     class Impl(LeafSystem_[T]):
         """Recursive least-squares identifier of ``f = k delta + c delta_dot``,

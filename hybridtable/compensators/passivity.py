@@ -31,6 +31,7 @@ may spend, as in every PO/PC scheme.
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass
 
 from pydrake.autodiffutils import AutoDiffXd
@@ -142,7 +143,7 @@ def _sign(x) -> float:
     return 1.0 if x >= 0.0 else -1.0
 
 
-@TemplateSystem.define("PassivityGuard_", T_list=[float, AutoDiffXd])
+@TemplateSystem.define("PassivityGuard_", T_list=[float, AutoDiffXd], scope=sys.modules[__name__])
 def PassivityGuard_(T):
     class Impl(LeafSystem_[T]):
         """Passivity observer and controller between a compensator and the

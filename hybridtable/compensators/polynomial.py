@@ -25,6 +25,7 @@ Gating and clamping follow :class:`hybridtable.compensators.paper.Compensator`
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass
 
 import numpy as np
@@ -117,7 +118,9 @@ class PolynomialParams:
         )
 
 
-@TemplateSystem.define("PolynomialExtrapolator_", T_list=[float, AutoDiffXd])
+@TemplateSystem.define(
+    "PolynomialExtrapolator_", T_list=[float, AutoDiffXd], scope=sys.modules[__name__]
+)
 def PolynomialExtrapolator_(T):
     class Impl(LeafSystem_[T]):
         """Polynomial extrapolation of the measured force.

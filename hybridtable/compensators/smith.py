@@ -25,6 +25,7 @@ deadband).
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass
 
 from pydrake.autodiffutils import AutoDiffXd
@@ -83,7 +84,7 @@ def unilateral_force(k, c, p, v):
     return spring_contact_force(k, c, p, v)
 
 
-@TemplateSystem.define("SmithPredictor_", T_list=[float, AutoDiffXd])
+@TemplateSystem.define("SmithPredictor_", T_list=[float, AutoDiffXd], scope=sys.modules[__name__])
 def SmithPredictor_(T):
     class Impl(LeafSystem_[T]):
         """Smith predictor of the contact force.

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 import operator
+import sys
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
@@ -124,7 +125,7 @@ class _Signals(dict):
         return value
 
 
-@TemplateSystem.define("LawSystem_", T_list=[float, AutoDiffXd])
+@TemplateSystem.define("LawSystem_", T_list=[float, AutoDiffXd], scope=sys.modules[__name__])
 def LawSystem_(T):
     class Impl(LeafSystem_[T]):
         """A law evaluated by a Python callback (``float`` or ``AutoDiffXd``).

@@ -138,6 +138,34 @@ def _quiet_dask() -> None:
         logging.getLogger(name).setLevel(logging.ERROR)
 
 
+def _refused(scheduler: str) -> None:
+    """Fail at once when nothing listens at a TCP ``scheduler``.
+
+    Dask's client retries a refused connection until its timeout (20 s); a
+    closed port (a typo, a scheduler not started) is known after one try. A
+    port that does not answer at all (a firewall) is still left to the client.
+    """
+    import socket
+
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    try:
+        protocol, location = parse_address(scheduler)
+        host, port = parse_host_port(location)
+    except (TypeError, ValueError):
+        return  # not host:port; the client says what is wrong with it
+    if protocol != "tcp":
+        return
+    try:
+        socket.create_connection((host, port), timeout=5.0).close()
+    except ConnectionRefusedError:
+        raise CommandError(
+            f"--scheduler {scheduler}: no Dask scheduler answers there (connection refused)"
+        ) from None
+    except OSError:
+        return  # unreachable or slow: the client's own timeout decides
+
+
 def open_client(scheduler: str | None, workers: int | None):
     """A Dask client and its local cluster (None with ``scheduler``).
 
@@ -159,6 +187,7 @@ def open_client(scheduler: str | None, workers: int | None):
 
     _quiet_dask()
     if scheduler:
+        _refused(scheduler)
         try:
             client = Client(scheduler, timeout="20s")
         except (OSError, TimeoutError) as err:

@@ -4,6 +4,7 @@ damping, Coulomb friction, series compliance (:class:`ContactLaw`).
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass
 
 from pydrake.autodiffutils import AutoDiffXd
@@ -156,7 +157,7 @@ def contact_law_force(params: ContactLawParams, p, v, a=0.0):
     return f, rate
 
 
-@TemplateSystem.define("ContactLaw_", T_list=[float, AutoDiffXd])
+@TemplateSystem.define("ContactLaw_", T_list=[float, AutoDiffXd], scope=sys.modules[__name__])
 def ContactLaw_(T):
     class Impl(LeafSystem_[T]):
         """A unilateral contact with the law of :class:`ContactLawParams`.

@@ -16,6 +16,7 @@ noise, and :func:`noise_series` gives the samples the computer read.
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -112,7 +113,7 @@ class MeasurementNoiseParams:
         object.__setattr__(self, "ar1_coefficient", phi)
 
 
-@TemplateSystem.define("MeasurementNoise_", T_list=[float, AutoDiffXd])
+@TemplateSystem.define("MeasurementNoise_", T_list=[float, AutoDiffXd], scope=sys.modules[__name__])
 def MeasurementNoise_(T):
     class Impl(LeafSystem_[T]):
         """Adds held noise (white or AR(1)) to the measured force and table position.
