@@ -67,7 +67,8 @@ class LeastSquares:
     otherwise they stay about the origin, and scipy's finite-difference step,
     ``diff_step`` times ``max(1, |u|)``, grows with the distance from it (a
     coarser step over a residual that is rough at fine scales, as ln CoR of a
-    delay interpolated between ticks is). ``each_start``: every informed start
+    delay on the continuous engine is: its delay line's period moves with the
+    delay). ``each_start``: every informed start
     given is polished (the origin only when none is), not only the best of them
     and the origin: where a residual is cheap, a start from earlier fits can
     lead to a better valley than a null point of lower chi2.

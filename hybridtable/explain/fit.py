@@ -131,7 +131,8 @@ class ModelFit:
 #: The optimizer's settings for ln CoR rows: a row costs milliseconds on the fast
 #: engine (more, finer steps, each start off the bounds); coordinates about the
 #: null point, so that the difference step grows away from it (a delay's ln CoR is
-#: interpolated between ticks, and rough at fine scales: centred on a start far
+#: rough at fine scales, the continuous delay line's period moving with the delay:
+#: centred on a start far
 #: from the null, the Table 3 fits with an extra delay end 40 times worse in chi2);
 #: each given start polished (a pair's start from its single effects' fits can lead
 #: to a better valley than the stated loop, whose chi2 is lower).

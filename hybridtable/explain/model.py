@@ -6,9 +6,9 @@ effects' :class:`~hybridtable.effects.spec.ModelSpec`
 (:meth:`~hybridtable.effects.spec.ModelSpec.realize`). Where every change is
 one of the loop's parameters, :func:`hybridtable.loop.fast.simulate_fast` runs
 it (the Drake diagram's CoR to its integrator's error, in milliseconds); on a
-sampled rig computer the delay is then a whole number of ticks, and a delay
-between two (an extra delay being fitted) takes ln CoR interpolated linearly
-between them. Any other change (a nonlinear contact law, a filter, a mode, a
+sampled rig computer a delay between two ticks (stated, or an extra delay being
+fitted) reads the two neighbouring samples mixed, as the sampled sensor of
+every engine does (``docs/run-format.md``). Any other change (a nonlinear contact law, a filter, a mode, a
 user's system) runs through the Drake diagram with the systems that carry it
 (about 0.1 s a row). A loop that diverges or never lets go gets
 :data:`FAILED_LN_COR`, so a fit is pushed away from it.
@@ -115,23 +115,13 @@ def loop_of(
     """The true loop of ``case`` under ``effects`` with parameter ``values``.
 
     Returns its parameters and, when a change is not one of them, the systems
-    that carry it (:meth:`~hybridtable.effects.spec.ModelSpec.realize`). Without
-    such systems the rig computer is continuous: an effect may move the delay
-    between two ticks of the conditions' ``sample_rate_hz``, which
-    :func:`ln_cor` then interpolates; with them, the loop is the conditions'.
+    that carry it (:meth:`~hybridtable.effects.spec.ModelSpec.realize`).
     """
     compensator, conditions = case
     spec = ModelSpec()
     for effect in effects:
         spec = effect.spec(values, spec)
-    stated = conditions.loop_params(compensator)
-    if stated.sample_rate_hz is not None:
-        try:
-            params, physics = spec.realize(stated.with_(sample_rate_hz=None))
-        except ParameterError:  # systems that need the rig computer's own ticks
-            return spec.realize(stated)
-        return (params, None) if physics is None else spec.realize(stated)
-    return spec.realize(stated)
+    return spec.realize(conditions.loop_params(compensator))
 
 
 def _ln_cor_systems(params: HybridLoopParams, physics: RigPhysics) -> float:
@@ -153,33 +143,12 @@ def _ln_cor_of(params: HybridLoopParams) -> float:
         return FAILED_LN_COR
 
 
-def _ln_cor_sampled(params: HybridLoopParams, sample_rate_hz: float) -> float:
-    h = 1.0 / sample_rate_hz
-    ticks = params.sensor_delay_s / h
-    params = params.with_(sensor_delay_s=0.0, sample_rate_hz=sample_rate_hz)
-    low = math.floor(ticks + 1e-9)
-    frac = ticks - low
-    if frac < 1e-6:
-        return _ln_cor_of(params.with_(sensor_delay_s=low * h))
-    a = _ln_cor_of(params.with_(sensor_delay_s=low * h))
-    b = _ln_cor_of(params.with_(sensor_delay_s=(low + 1) * h))
-    return (1.0 - frac) * a + frac * b
-
-
-def ln_cor(
-    params: HybridLoopParams,
-    sample_rate_hz: float | None = None,
-    physics: RigPhysics | None = None,
-) -> float:
-    """ln CoR of one loop (:data:`FAILED_LN_COR` if it diverges or never lets go),
-    on a rig computer at ``sample_rate_hz`` (None: ``params``' own); with
-    ``physics``, through the Drake diagram with its systems (``params``' own
-    computer)."""
+def ln_cor(params: HybridLoopParams, physics: RigPhysics | None = None) -> float:
+    """ln CoR of one loop (:data:`FAILED_LN_COR` if it diverges or never lets go):
+    on the fast engine, or with ``physics`` through the Drake diagram with its
+    systems."""
     if physics is not None:
         return _ln_cor_systems(params, physics)
-    rate = sample_rate_hz or params.sample_rate_hz
-    if rate is not None:
-        return _ln_cor_sampled(params.with_(sample_rate_hz=None), rate)
     return _ln_cor_of(params)
 
 
@@ -261,7 +230,7 @@ class CorModel:
         except ParameterError:  # e.g. a lead just above zero, below any a rig states
             return FAILED_LN_COR
         if physics is None:
-            return ln_cor(params, case[1].sample_rate_hz)
+            return ln_cor(params)
         key = (case, tuple(values.items()))  # the diagram's systems are new each time
         if key not in self._systems:
             self._systems[key] = ln_cor(params, physics=physics)

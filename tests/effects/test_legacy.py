@@ -43,6 +43,7 @@ def test_an_old_cor_effect_changes_the_loop_as_its_apply_says(builtins_only):
     params, systems = loop_of(case, (at,), {"force_deadband_n": 12.5})
     assert systems is None  # a change of the loop's parameters: the fast engine runs it
     assert params.force_deadband_n == 12.5
-    # the fast engine's loop is continuous (ln CoR is interpolated at the rig's ticks)
-    stated = case[1].loop_params("SDMDC").with_(sample_rate_hz=None)
+    # the stated loop, at its rig computer's rate, with the dead band changed
+    stated = case[1].loop_params("SDMDC")
+    assert params.sample_rate_hz == 1000.0
     assert params.with_(force_deadband_n=stated.force_deadband_n) == stated

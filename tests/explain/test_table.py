@@ -78,21 +78,23 @@ def test_an_unknown_compensator_is_named_with_the_known_ones(tmp_path):
     _refused(path, f"{path}:3", "'PID'", "none", "SDC", "MDC", "SDMDC")
 
 
-def test_a_delay_that_is_not_whole_ticks_of_the_stated_rate_is_refused(tmp_path):
-    # 2.5 ms at 1 kHz is 2.5 ticks: no sampled rig has that delay.
+def test_a_delay_between_ticks_of_the_stated_rate_is_read_as_stated(tmp_path):
+    # 2.5 ms at 1 kHz is 2.5 ticks: the rig computer reads the two neighbouring
+    # samples mixed, as every engine of the loop models it (no refusal).
     path = _write(
         tmp_path,
         "compensator,cor,sensor_delay_s,sample_rate_hz\nnone,1.16,0.003,1000\nSDC,1.10,0.0025,1000\n",
     )
-    _refused(path, f"{path}:3", "sensor_delay_s")
+    table = read_cor_table(path)
+    assert [r.conditions.sensor_delay_s for r in table.rows] == [0.003, 0.0025]
+    assert {r.conditions.sample_rate_hz for r in table.rows} == {1000.0}
 
 
-def test_a_rate_from_a_flag_checks_the_delay_of_every_row(tmp_path):
+def test_a_rate_from_a_flag_applies_to_every_row(tmp_path):
     path = _write(tmp_path, "compensator,cor,sensor_delay_s\nnone,1.16,0.0025\n")
-    _refused(path, f"{path}:2", "sensor_delay_s", defaults={"sample_rate_hz": 1000.0})
-    # the same rows at a rate whose tick divides 2.5 ms are read
-    table = read_cor_table(path, {"sample_rate_hz": 2000.0})
-    assert table.rows[0].conditions.sample_rate_hz == 2000.0
+    table = read_cor_table(path, {"sample_rate_hz": 1000.0})
+    assert table.rows[0].conditions.sample_rate_hz == 1000.0
+    assert table.rows[0].conditions.sensor_delay_s == 0.0025
 
 
 def test_a_missing_file_is_named(tmp_path):
