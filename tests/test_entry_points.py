@@ -69,7 +69,9 @@ def forget_plugins():
         sys.modules.pop(module, None)
 
 
-def test_entry_points_add_a_compensator_and_an_effect(tmp_path, monkeypatch, forget_plugins):
+def test_entry_points_add_a_compensator_and_an_effect(
+    tmp_path, monkeypatch, forget_plugins, paper_run
+):
     _install(
         tmp_path,
         monkeypatch,
@@ -91,8 +93,8 @@ def test_entry_points_add_a_compensator_and_an_effect(tmp_path, monkeypatch, for
     # Table 1 with the plug-in: the same loop, hence the same CoR, as SDC.
     cor = simulate(table1_params("demo-sdc")).metrics.cor
     assert plugin.CALLS  # the plug-in's factory built the compensator
-    assert cor == simulate(table1_params("SDC")).metrics.cor
-    assert cor != simulate(table1_params("none")).metrics.cor
+    assert cor == paper_run("SDC").metrics.cor
+    assert cor != paper_run("none").metrics.cor
 
     builtin_effects = tuple(e.name for e in BUILTIN_EFFECTS)
     names = effects.effect_names()

@@ -19,8 +19,8 @@ def test_ideal_loop_conserves_energy():
     assert r.metrics.peak_force_n == pytest.approx(v0 * math.sqrt(k * m), rel=1e-4)
 
 
-def test_energy_gain_matches_cor():
-    r = simulate(table1_params("none"))
+def test_energy_gain_matches_cor(paper_run):
+    r = paper_run("none")
     m, v_in = r.params.spacecraft_mass_kg, r.metrics.v_in_m_per_s
     assert r.metrics.energy_gain_j == pytest.approx(
         0.5 * m * v_in**2 * (r.metrics.cor**2 - 1), rel=1e-9
@@ -39,8 +39,8 @@ def test_sampled_loop_momentum_equals_impulse_of_fed_force():
     np.testing.assert_allclose(np.diff(r.time_s), h, rtol=1e-9)
 
 
-def test_sampled_loop_converges_to_continuous_as_rate_grows():
-    cont = simulate(table1_params("none")).metrics.cor
+def test_sampled_loop_converges_to_continuous_as_rate_grows(paper_run):
+    cont = paper_run("none").metrics.cor
     errs = [
         abs(simulate(table1_params("none", sample_rate_hz=fs)).metrics.cor - cont)
         for fs in (1000, 4000)

@@ -21,16 +21,14 @@ def _own(compensator: str):
     return loop, simulator, context
 
 
-def test_the_readme_flow_gives_simulates_cor_exactly():
+def test_the_readme_flow_gives_simulates_cor_exactly(paper_run):
     """Own builder, own Simulator (its default integrator), collect_result: the
     CoR of simulate() (RK3 at 1e-8, stopped at separation) to 1e-9 (measured
     1.2e-12)."""
     loop, simulator, context = _own("SDMDC")
     simulator.AdvanceTo(1.0)
     mine = hybridtable.collect_result(loop, context)
-    assert mine.metrics.cor == pytest.approx(
-        hybridtable.simulate(table1_params("SDMDC")).metrics.cor, abs=2e-4
-    )
+    assert mine.metrics.cor == pytest.approx(paper_run("SDMDC").metrics.cor, abs=1e-9)
     assert mine.f_act_n[-1] == 0.0 and len(mine.time_s) == len(mine.f_mea_n)
 
 

@@ -30,13 +30,13 @@ def test_uncompensated_cor_matches_effective_delay_estimate(delay_s, table_hz, c
 
 
 @pytest.fixture(scope="module")
-def table1():
+def table1(paper_run):
     paper = load_tables()["table1_simulation"]["cor"]
     runs = {}
     for c in ("none", "SDC", "MDC", "SDMDC"):
         p = table1_params(c)
         runs[c] = (
-            simulate(p).metrics.cor,
+            paper_run(c).metrics.cor,
             simulate(p.with_(time_step_s=p.step_s / 2)).metrics.cor,
         )
     return paper, runs

@@ -15,7 +15,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from hybridtable.cli import main
-from hybridtable.studies.paper import table2_params, table2_rows
+from hybridtable.studies.paper import table2_rows
 
 #: Whole loops, fits or commands, many times: make test runs them, make check does not.
 pytestmark = pytest.mark.slow
@@ -186,14 +186,12 @@ def test_resume_refuses_another_specs_file(tmp_path, capsys):
     assert "input" in capsys.readouterr().err and spec.read_text() == text
 
 
-def test_the_table2_spec_gives_reproduce_s_cors_exactly(tmp_path):
-    from hybridtable.loop.simulation import simulate
-
+def test_the_table2_spec_gives_reproduce_s_cors_exactly(tmp_path, table2_run):
     out = tmp_path / "table2.parquet"
     spec = EXAMPLES / "table2.toml"
     assert main(["sweep", str(spec), "--out", str(out), "--workers", "2", "--no-progress"]) == 0
     rows = pq.read_table(out).to_pylist()
-    expected = [simulate(table2_params(r)).metrics.cor for r in table2_rows()]
+    expected = [table2_run(i).metrics.cor for i in range(len(table2_rows()))]
     # bit for bit what `hybridtable reproduce` computes for each row
     assert [r["cor"] for r in rows] == expected
     assert [r["engine"] for r in rows] == ["diagram"] * 15
