@@ -48,8 +48,8 @@ test-browser: $(BROWSER_STAMP)
 	fi
 	HYBRIDTABLE_REQUIRE_BROWSER=1 MPLBACKEND=Agg $(VENV)/bin/python -m pytest -q -m browser
 
-# Every sh block of README.md and docs/*.md, run as written in a copy of the
-# repository with nothing beside it (tests/test_docs.py).
+# Every sh and python block of README.md and docs/*.md, run as written in a
+# copy of the repository with nothing beside it (tests/test_docs.py).
 test-docs: $(STAMP)
 	MPLBACKEND=Agg $(VENV)/bin/python -m pytest -q -m docs tests/test_docs.py
 
