@@ -304,8 +304,9 @@ def critical_sensor_delay(
 
     Returns 0 when the loop is not asymptotically stable at zero delay (e.g.
     an undamped contact), ``inf`` when it stays stable up to ``max_delay_s``
-    (default: a quarter of the contact period). A sampled model is searched
-    over whole samples (the result is a multiple of the sample period).
+    (default: a quarter of the contact period). A sampled model is scanned
+    over whole samples and refined within the tick where it turns unstable
+    (between two ticks the sensor reads the neighbouring samples mixed).
     The search scans ``scan_points`` delays, then refines the first sign
     change of the growth rate with Brent's method; a stable window narrower
     than the scan step can be missed.
@@ -323,8 +324,8 @@ def critical_sensor_delay(
     if bracket is None:
         return math.inf
     last_stable, first_unstable = bracket
-    if params.sample_period_s is not None:
-        return first_unstable  # the first unstable whole sample
+    if not sig(first_unstable) > 0.0:
+        return first_unstable  # neutral within the tolerance: no crossing to refine
     return brentq(sig, last_stable, first_unstable, xtol=1e-12, rtol=1e-10)
 
 

@@ -211,8 +211,9 @@ def cor_limited_delay(
     Returns 0 when the limit is exceeded already at zero delay (or at the
     first delay of the scan's refinement), ``inf`` when the CoR stays within
     it up to ``max_delay_s`` (default: a quarter of the contact period). A
-    sampled model is searched over whole samples (the result is the largest
-    whole-sample delay within the limit). The scan of ``scan_points`` delays
+    sampled model is scanned over whole samples and refined within the tick
+    of the first excess (between two ticks the sensor reads the neighbouring
+    samples mixed). The scan of ``scan_points`` delays
     is refined with Brent's method at the first excess; a window narrower than
     a scan step can be missed. A NaN CoR counts as an excess.
     """
@@ -232,8 +233,8 @@ def cor_limited_delay(
     if bracket is None:
         return math.inf
     within, beyond = bracket
-    if params.sample_period_s is not None or not math.isfinite(seen[beyond]):
-        return within  # the last whole sample (or scanned delay) within the limit
+    if not math.isfinite(seen[beyond]):
+        return within  # the last scanned delay within the limit
     return brentq(excess, within, beyond, xtol=1e-12, rtol=1e-10)
 
 
@@ -287,8 +288,8 @@ def cor_limited_table_on_grid(tables_hz: np.ndarray, cor: np.ndarray, cor_limit:
 
 def grid_cor_limits(result: SweepResult, cor_limit: float) -> dict[str, dict[str, np.ndarray]]:
     """Per compensator, read off the grid: ``cor_limited_delay_s[j]`` (per
-    table frequency, interpolated between grid delays; whole grid delays when
-    sampled; inf: within the limit over the whole grid) and
+    table frequency, interpolated between grid delays, sampled or not; inf:
+    within the limit over the whole grid) and
     ``cor_limited_table_hz[i]`` (per delay, the slowest table with the CoR
     within the limit at it and every faster grid table; 0: every grid table)."""
     out = {}
@@ -298,10 +299,7 @@ def grid_cor_limits(result: SweepResult, cor_limit: float) -> dict[str, dict[str
         cor = cs.predicted_cor[np.ix_(order_d, order_f)]
         out[c] = {
             "cor_limited_delay_s": np.array(
-                [
-                    cor_limited_delay_on_grid(d[order_d], cor[:, j], cor_limit, not result.sampled)
-                    for j in range(f.size)
-                ]
+                [cor_limited_delay_on_grid(d[order_d], cor[:, j], cor_limit) for j in range(f.size)]
             )[np.argsort(order_f)],
             "cor_limited_table_hz": np.array(
                 [cor_limited_table_on_grid(f[order_f], cor[i, :], cor_limit) for i in range(d.size)]

@@ -9,7 +9,9 @@ discrete groups), so each block is linearized by Drake on its own:
   zero-order hold over one period ``h``;
 - the spacecraft model (semi-implicit Euler, period ``h``);
 - the sensor's ``DiscreteTimeDelay`` of ``M`` samples, which linearizes to
-  ``z^-M``;
+  ``z^-M``; a delay between two ticks, ``(M + alpha) h``, is the two taps
+  mixed, ``(1 - alpha) z^-M + alpha z^-(M+1)``, as the rig computer reads it
+  (:func:`~hybridtable.systems.sensor.sample_taps`);
 - the compensator with its backward-difference lead (one discrete state),
   ungated.
 
@@ -40,6 +42,7 @@ from dataclasses import replace
 import numpy as np
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import Multiplexer
+from scipy.linalg import block_diag
 
 from hybridtable._validation import check_positive
 from hybridtable.analysis.blockwise import ContactLoopLinearizer, check_close
@@ -51,7 +54,7 @@ from hybridtable.laws.table import held_tick
 from hybridtable.loop.params import HybridLoopParams
 from hybridtable.loop.wiring import LOOP_WIRING, channel_wiring, edge
 from hybridtable.systems.contact import UnilateralSpringContact
-from hybridtable.systems.sensor import ForceSensorDelay, SensorParams, delay_samples
+from hybridtable.systems.sensor import ForceSensorDelay, SensorParams, sample_taps
 from hybridtable.systems.spacecraft import Spacecraft, SpacecraftParams
 from hybridtable.systems.table import SecondOrderTable
 
@@ -189,16 +192,32 @@ class SampledLoopLinearizer:
         return self._memo(("spacecraft", mass_kg, period_s), make)
 
     def sensor_block(self, delay_s: float, period_s: float) -> StateSpaceBlock:
-        """The sampled sensor delay, ``z^-M`` with ``M = delay / h``."""
-        m = delay_samples(delay_s, period_s)
+        """The sampled sensor delay, ``z^-M`` with ``M = delay / h``; between two
+        ticks, ``(M + alpha) h``, the taps ``z^-M`` and ``z^-(M+1)`` side by side,
+        mixed ``(1 - alpha, alpha)`` as :class:`~hybridtable.systems.sensor.ForceSensorDelay`
+        wires them (Drake linearizes each tap; the two together have two discrete
+        groups, which its ``Linearize`` refuses)."""
+        m, alpha = sample_taps(delay_s, period_s)
 
-        def make():
-            b = linearize_system(
-                ForceSensorDelay(SensorParams(m * period_s), "sampled", period_s), "force_sensor"
-            )
-            return replace(b, dt=period_s)
+        def whole(n: int) -> StateSpaceBlock:
+            def make():
+                b = linearize_system(
+                    ForceSensorDelay(SensorParams(n * period_s), "sampled", period_s),
+                    "force_sensor",
+                )
+                return replace(b, dt=period_s)
 
-        return self._memo(("sensor", m, period_s), make)
+            return self._memo(("sensor", n, period_s), make)
+
+        if not alpha:
+            return whole(m)
+        near, far = whole(m), whole(m + 1)
+        return near.with_matrices(
+            block_diag(near.A, far.A),
+            np.vstack([near.B, far.B]),
+            np.hstack([(1.0 - alpha) * near.C, alpha * far.C]),
+            (1.0 - alpha) * near.D + alpha * far.D,
+        )
 
     def compensator_block(self, comp: CompensatorParams, period_s: float) -> StateSpaceBlock:
         """The discrete compensator (backward-difference lead), ungated; affine
@@ -272,8 +291,7 @@ class SampledLoopLinearizer:
         Raises
         ------
         ParameterError
-            If ``params.sample_rate_hz`` is None or the delay is not a whole
-            number of samples.
+            If ``params.sample_rate_hz`` is None.
         """
         h = params.sample_period_s
         if h is None:

@@ -92,7 +92,7 @@ def register(sub) -> None:
     add_loop_option(
         p,
         "sample_rate_hz",
-        "; delays must be whole samples; with --model: the model's rig's rate",
+        "; a delay between two samples reads both, mixed; with --model: the model's rig's rate",
         "sampled-data model of a rig computer at this rate",
     )
     p.add_argument(
@@ -127,8 +127,8 @@ def register(sub) -> None:
         default=None,
         metavar="SECONDS",
         help="sensor delay of the operating point of the gain/phase/delay margins and "
-        "--export-linear [s], 0 to 1 (default 0.005, the paper's Table 1, in whole samples "
-        "when sampled; with --model: the rig's)",
+        "--export-linear [s], 0 to 1 (default 0.005, the paper's Table 1; with --model: the "
+        "rig's)",
     )
     p.add_argument(
         "--operating-table-hz",
@@ -237,7 +237,6 @@ def run(args: argparse.Namespace) -> int:
         write_report,
     )
     from hybridtable.sweeps.margins_grid import sweep_margins
-    from hybridtable.systems.sensor import delay_samples
 
     load_plugins(args)
     model = load_model_arg(args)
@@ -263,9 +262,6 @@ def run(args: argparse.Namespace) -> int:
         raise CommandError("--sensor-delay-s: delays must be finite and >= 0")
     if (tables <= 0).any():
         raise CommandError("--table-response-hz: frequencies must be > 0 (inf: ideal table)")
-    if base.sample_period_s is not None:
-        for T in delays:
-            delay_samples(float(T), base.sample_period_s)  # ParameterError if not whole
     check_outputs(args, files={"--json": args.json}, folders={"--report": args.report})
     check_outputs(args, files={"--export-linear": args.export_linear})
     op_delay, op_table, export_comp = _operating_point(args, base, model, comps)
@@ -407,27 +403,15 @@ def _operating_point(args: argparse.Namespace, base, model, comps) -> tuple[floa
     """The operating point's sensor delay (s) and table frequency (Hz), and the
     compensator of ``--export-linear``, checked."""
     from hybridtable.analysis.linear_export import EXPORT_SUFFIXES
-    from hybridtable.errors import CommandError, ParameterError
-    from hybridtable.systems.sensor import delay_samples
+    from hybridtable.errors import CommandError
 
     if not (math.isfinite(args.cor_limit) and args.cor_limit > 0):
         raise CommandError("--cor-limit must be a number > 0")
     delay, table = args.operating_delay_s, args.operating_table_hz
     if delay is None:
         delay = TABLE1_DEFAULTS["sensor_delay_s"] if model is None else model.nominal.sensor_delay_s
-        h = base.sample_period_s
-        if h is not None and model is None:
-            delay = round(delay / h) * h
     elif not (math.isfinite(delay) and delay >= 0):
         raise CommandError("--operating-delay-s must be finite and >= 0")
-    elif base.sample_period_s is not None:
-        try:
-            delay_samples(delay, base.sample_period_s)
-        except ParameterError:
-            raise CommandError(
-                f"--operating-delay-s must be a whole number of sample periods "
-                f"({base.sample_period_s:g} s)"
-            ) from None
     if table is None:
         table = (
             TABLE1_DEFAULTS["table_response_hz"]

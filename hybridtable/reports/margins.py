@@ -83,17 +83,10 @@ REPORT_FILES: tuple[str, ...] = (
 
 def table1_point(base: HybridLoopParams) -> HybridLoopParams:
     """The paper's Table 1 point (contact, table, delay, lead = delay) with
-    the sample rate of ``base``; a sampled point rounds the delay to whole
-    samples."""
+    the sample rate of ``base``."""
     from hybridtable.studies.paper import table1_params
 
-    p = table1_params(base.compensator)
-    if base.sample_rate_hz is not None:
-        h = 1.0 / base.sample_rate_hz
-        p = p.with_(
-            sample_rate_hz=base.sample_rate_hz, sensor_delay_s=round(p.sensor_delay_s / h) * h
-        )
-    return p
+    return table1_params(base.compensator).with_(sample_rate_hz=base.sample_rate_hz)
 
 
 @dataclass

@@ -90,23 +90,15 @@ def model_loop_params(model, params, physics=None, rig_computer: bool = True):
     return physics_loop_params(params, physics, model.spec().mass_ratio if rig_computer else 1.0)
 
 
-def _whole_ticks(delay_s: float, h: float) -> float:
-    ticks = round(delay_s / h)
-    return delay_s if abs(delay_s - ticks * h) <= 1e-6 * h else ticks * h
-
-
 def model_transform(model):
     """``params -> params`` with the model's physics as the linear models see
     it (:meth:`~hybridtable.diagnosis.model_file.RigModel.linear_params`,
-    the compensator kept); a sampled model gets the sensor delay in whole
-    ticks (an extra delay of a fraction of a tick is rounded)."""
+    the compensator kept). On a sampled rig an extra delay may put the sensor
+    delay between two ticks, which the sampled model reads as the two
+    neighbouring samples mixed, as the rig computer does."""
 
     def transform(p):
-        if p.sample_rate_hz is None:
-            return model.linear_params(p)[0]
-        q = model.linear_params(p.with_(sample_rate_hz=None))[0]
-        delay = _whole_ticks(q.sensor_delay_s, p.sample_period_s)
-        return q.with_(sensor_delay_s=delay, sample_rate_hz=p.sample_rate_hz)
+        return model.linear_params(p)[0]
 
     return transform
 

@@ -57,7 +57,6 @@ __all__, __getattr__, __dir__ = lazy_exports(
         "sensor": (
             "ForceSensorDelay",
             "SensorParams",
-            "delay_samples",
         ),
         "spacecraft": (
             "Spacecraft",

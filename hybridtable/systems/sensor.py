@@ -38,7 +38,6 @@ __all__ = [
     "SensorParams",
     "ForceSensorDelay",
     "continuous_delay_period",
-    "delay_samples",
     "sample_taps",
     "delayed_by_ticks",
     "pade_state_space",
@@ -81,21 +80,6 @@ def sample_taps(delay_s: float, sample_period_s: float) -> tuple[int, float]:
     m = math.floor(x + 1e-9)
     alpha = x - m
     return m, (0.0 if alpha < 1e-9 else alpha)
-
-
-def delay_samples(delay_s: float, sample_period_s: float) -> int:
-    """Number of samples ``M`` with ``M h = delay_s`` within 1e-6 of a tick;
-    raises if the delay is not a whole number of ticks (for the analyses that
-    model whole ticks only; the sampled loop reads a delay between ticks,
-    :func:`sample_taps`)."""
-    m = delay_s / sample_period_s
-    mi = int(round(m))
-    if abs(m - mi) > 1e-6:
-        raise ParameterError(
-            f"sensor_delay_s ({delay_s:.6g} s) must be a whole number of sample periods "
-            f"({sample_period_s:.6g} s, {1.0 / sample_period_s:.6g} Hz) here"
-        )
-    return mi
 
 
 def pade_state_space(

@@ -139,17 +139,43 @@ def test_critical_table_frequency_separates_stable_from_unstable(lin):
     assert critical_table_frequency(growth_of(lin.open_loop), p_late) == math.inf
 
 
-def test_sampled_critical_delay_is_whole_samples(lin):
+def test_sampled_critical_delay_is_where_the_growth_crosses_zero_within_a_tick(lin):
     S = SampledLoopLinearizer(lin)
     p = damped(paper_params(sample_rate_hz=1000.0, table_response_hz=math.inf), 0.1)
-    T = critical_sensor_delay(growth_of(S.open_loop), p)
-    n = round(T * 1000.0)
-    assert T == pytest.approx(n * 1e-3, abs=1e-12)
-    assert loop_margins(S.open_loop(p.with_(sensor_delay_s=T)), "fast").stable is False
-    assert loop_margins(S.open_loop(p.with_(sensor_delay_s=T - 1e-3)), "fast").stable is True
+    growth = growth_of(S.open_loop)
+    T = critical_sensor_delay(growth, p)
+    # Between two ticks the sensor reads both samples mixed: the growth rate is
+    # continuous in the delay, and the critical delay is its zero, not a tick.
+    assert abs(T * 1000.0 - round(T * 1000.0)) > 1e-3
+    assert growth(p.with_(sensor_delay_s=T - 1e-7)) < 0.0 < growth(p.with_(sensor_delay_s=T + 1e-7))
+    assert loop_margins(S.open_loop(p.with_(sensor_delay_s=T + 1e-6)), "fast").stable is False
+    assert loop_margins(S.open_loop(p.with_(sensor_delay_s=T - 1e-6)), "fast").stable is True
     # Sampling adds about half a period of delay to the continuous critical delay.
     Tc = critical_sensor_delay(exact_growth(lin), p)
     assert Tc - 2.5e-3 < T < Tc + 1e-3
+
+
+def test_a_delay_between_ticks_is_the_two_taps_mixed(lin):
+    """The sampled sensor at (M + alpha) h: (1 - alpha) z^-M + alpha z^-(M+1)."""
+    S = SampledLoopLinearizer(lin)
+    h = 1e-3
+    block = S.sensor_block(3.4e-3, h)
+    z = np.exp(1j * np.array([0.1, 0.7, 2.0]))
+    expected = 0.6 * z**-3 + 0.4 * z**-4
+    got = [
+        (block.C @ np.linalg.solve(zk * np.eye(block.A.shape[0]) - block.A, block.B) + block.D)[
+            0, 0
+        ]
+        for zk in z
+    ]
+    np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("comp", ["none", "SDMDC"])
+def test_sampled_model_cor_between_ticks_matches_sampled_simulation(lin, comp):
+    p = table1_params(comp, sample_rate_hz=1000.0, sensor_delay_s=0.0034)
+    predicted = loop_margins(SampledLoopLinearizer(lin).open_loop(p), "fast").predicted_cor
+    assert predicted == pytest.approx(simulate(p).metrics.cor, abs=5e-4)
 
 
 # -- against the nonlinear simulation ---------------------------------------------

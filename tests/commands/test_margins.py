@@ -100,7 +100,6 @@ def test_report_and_validation(tmp_path, capsys):
         ["--sensor-delay-s", "-0.001"],
         ["--table-response-hz", "0,25"],
         ["--compensator", "PID"],
-        ["--sample-rate-hz", "1000", "--sensor-delay-s", "0.0015"],
         ["--pade-order", "0"],
         ["--pade-order", "100"],
         ["--contact-frequency-hz", "1e300"],
@@ -140,3 +139,14 @@ def test_sampled_run(tmp_path):
     d = json.loads(out.read_text())
     assert d["model"]["kind"] == "sampled" and d["model"]["pade_order"] is None
     assert d["compensators"]["MDC"]["predicted_cor"][1][0] > 1.0
+
+
+def test_a_sampled_grid_takes_delays_between_ticks(tmp_path):
+    # 1.5 ms at 1 kHz: the sensor reads the samples 1 and 2 ticks old, mixed
+    # half and half, so its CoR lies between theirs (it used to be refused).
+    out = tmp_path / "s.json"
+    argv = ["margins", "--sample-rate-hz", "1000", "--sensor-delay-s", "0.001,0.0015,0.002"]
+    argv += ["--table-response-hz", "25", "--compensator", "none", "--operating-delay-s", "0.0045"]
+    assert main([*argv, "--json", str(out), "--no-progress"]) == 0
+    cor = [row[0] for row in json.loads(out.read_text())["compensators"]["none"]["predicted_cor"]]
+    assert cor[0] < cor[1] < cor[2]

@@ -116,7 +116,6 @@ def test_export_linear_loads_in_python_control(tmp_path, capsys, suffix):
         ["--export-linear", "loop.json", "--export-compensator", "SDC", "--compensator", "MDC"],
         ["--cor-limit", "0"],
         ["--operating-table-hz", "0"],
-        ["--sample-rate-hz", "1000", "--operating-delay-s", "0.0045", "--sensor-delay-s", "0"],
     ],
 )
 def test_bad_operating_options_are_one_line_exit_2(args, capsys, tmp_path, monkeypatch):

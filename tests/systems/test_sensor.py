@@ -9,7 +9,7 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import LogVectorOutput, Sine, ZeroOrderHold
 
 from hybridtable import ForceSensorDelay, ParameterError, SensorParams
-from hybridtable.systems.sensor import continuous_delay_period, delay_samples, pade_state_space
+from hybridtable.systems.sensor import continuous_delay_period, pade_state_space
 
 W = 2 * math.pi * 3.0  # test signal: sin(W t) starting at t = 0
 
@@ -90,11 +90,6 @@ def test_pade_sensor_delays_both_channels():
     lin = Linearize(sensor, ctx)
     dc = lin.D() - lin.C() @ np.linalg.solve(lin.A(), lin.B())
     np.testing.assert_allclose(dc, np.eye(2), atol=1e-9)
-
-
-def test_delay_must_be_whole_samples():
-    with pytest.raises(ParameterError, match="sensor_delay_s"):
-        delay_samples(2.5e-3, 1e-3)
 
 
 def test_negative_delay_names_the_field():
