@@ -314,9 +314,12 @@ def critical_sensor_delay(
     if max_delay_s is None:
         max_delay_s = 0.25 / params.contact_frequency_hz
     tol = _tolerance(params)
+    seen: dict[float, float] = {}  # the scan's delays, met again at the bracket's ends
 
     def sig(T: float) -> float:
-        return growth(params.with_(sensor_delay_s=T))
+        if T not in seen:
+            seen[T] = growth(params.with_(sensor_delay_s=T))
+        return seen[T]
 
     if sig(0.0) > -tol:
         return 0.0

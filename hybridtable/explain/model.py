@@ -8,9 +8,9 @@ one of the loop's parameters, :func:`hybridtable.loop.fast.simulate_fast` runs
 it (the Drake diagram's CoR to its integrator's error, in milliseconds); on a
 sampled rig computer a delay between two ticks (stated, or an extra delay being
 fitted) reads the two neighbouring samples mixed, as the sampled sensor of
-every engine does (``docs/run-format.md``). Any other change (a nonlinear contact law, a filter, a mode, a
-user's system) runs through the Drake diagram with the systems that carry it
-(about 0.1 s a row). A loop that diverges or never lets go gets
+every engine does (``docs/run-format.md``). Any other change (a nonlinear
+contact law, a filter, a mode, a user's system) runs through the Drake diagram
+with the systems that carry it (about 0.1 s a row). A loop that diverges or never lets go gets
 :data:`FAILED_LN_COR`, so a fit is pushed away from it.
 """
 
