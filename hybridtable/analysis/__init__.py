@@ -8,6 +8,8 @@
 - :mod:`hybridtable.analysis.sampled`: sampled-data model of a rig computer (ZOH, ``z^-M``);
 - :mod:`hybridtable.analysis.margins`: contact pole, predicted CoR, phase margin, effective
   delay, critical sensor delay and table frequency;
+- :mod:`hybridtable.analysis.critical`: the one search for the delay at which a figure of a
+  loop (1-D or 6-DoF) reaches its limit;
 - :mod:`hybridtable.analysis.robustness`: gain, phase and delay margins (python-control's
   ``stability_margins``), the delay a CoR limit allows;
 - :mod:`hybridtable.analysis.linear_export`: the linear loop as a file python-control loads;

@@ -33,6 +33,7 @@ import control
 import numpy as np
 from scipy.optimize import brentq
 
+from hybridtable.analysis.critical import critical_delay
 from hybridtable.analysis.linearize import LinearLoop
 from hybridtable.loop.params import HybridLoopParams
 
@@ -51,7 +52,6 @@ __all__ = [
     "crossover_phase_margin",
     "growth_of",
     "critical_sensor_delay",
-    "first_crossing_delay",
     "critical_table_frequency",
 ]
 
@@ -304,65 +304,21 @@ def critical_sensor_delay(
 
     Returns 0 when the loop is not asymptotically stable at zero delay (e.g.
     an undamped contact), ``inf`` when it stays stable up to ``max_delay_s``
-    (default: a quarter of the contact period). A sampled model is scanned
-    over whole samples and refined within the tick where it turns unstable
-    (between two ticks the sensor reads the neighbouring samples mixed).
-    The search scans ``scan_points`` delays, then refines the first sign
-    change of the growth rate with Brent's method; a stable window narrower
-    than the scan step can be missed.
+    (default: a quarter of the contact period). The search is
+    :func:`~hybridtable.analysis.critical.critical_delay` on the growth rate
+    (a sampled model: whole ticks scanned, the tick of the crossing refined);
+    "unstable" is a growth rate above -1e-9 of the contact's reference
+    frequency (round-off of a neutral pole counts as unstable).
     """
     if max_delay_s is None:
         max_delay_s = 0.25 / params.contact_frequency_hz
-    tol = _tolerance(params)
-    seen: dict[float, float] = {}  # the scan's delays, met again at the bracket's ends
-
-    def sig(T: float) -> float:
-        if T not in seen:
-            seen[T] = growth(params.with_(sensor_delay_s=T))
-        return seen[T]
-
-    if sig(0.0) > -tol:
-        return 0.0
-    bracket = first_crossing_delay(lambda T: sig(T) > -tol, params, max_delay_s, scan_points)
-    if bracket is None:
-        return math.inf
-    last_stable, first_unstable = bracket
-    if not sig(first_unstable) > 0.0:
-        return first_unstable  # neutral within the tolerance: no crossing to refine
-    return brentq(sig, last_stable, first_unstable, xtol=1e-12, rtol=1e-10)
-
-
-def first_crossing_delay(
-    crossed: Callable[[float], bool],
-    params: HybridLoopParams,
-    max_delay_s: float,
-    scan_points: int,
-) -> tuple[float, float] | None:
-    """The first sensor delay bracket ``(a, b)`` [s] with ``crossed(a)`` false and
-    ``crossed(b)`` true, scanning from 0 (not crossed there) to ``max_delay_s``,
-    or None. A sampled model (``params.sample_period_s``) is scanned over whole
-    samples, every ``max_delay / scan_points`` samples and then sample by sample,
-    so ``b - a`` is one sample; a continuous one over ``scan_points`` delays (the
-    caller refines the bracket). A window narrower than a scan step can be
-    missed."""
-    h = params.sample_period_s
-    if h is not None:
-        n_max = max(1, math.floor(max_delay_s / h + 1e-9))
-        step = max(1, n_max // (scan_points - 1))
-        prev = 0
-        for n in [*range(step, n_max + 1, step), n_max]:
-            if crossed(n * h):
-                for k in range(prev + 1, n + 1):
-                    if crossed(k * h):
-                        return (k - 1) * h, k * h
-            prev = n
-        return None
-    prev_t = 0.0
-    for t in np.linspace(0.0, max_delay_s, scan_points)[1:]:
-        if crossed(float(t)):
-            return prev_t, float(t)
-        prev_t = float(t)
-    return None
+    return critical_delay(
+        lambda T: growth(params.with_(sensor_delay_s=T)),
+        max_delay_s,
+        params.sample_period_s,
+        scan_points,
+        tolerance=_tolerance(params),
+    )
 
 
 def critical_table_frequency(

@@ -48,15 +48,14 @@ from dataclasses import asdict, dataclass
 
 import control
 import numpy as np
-from scipy.optimize import brentq
 
+from hybridtable.analysis.critical import critical_delay
 from hybridtable.analysis.linearize import LinearLoop
 from hybridtable.analysis.margins import (
     contact_pole,
     contact_reference_frequency,
     continuous_poles,
     cor_from_pole,
-    first_crossing_delay,
     ideal_crossover_frequency,
 )
 from hybridtable.analysis.sweep import SweepResult
@@ -219,23 +218,12 @@ def cor_limited_delay(
     """
     if max_delay_s is None:
         max_delay_s = 0.25 / params.contact_frequency_hz
-
-    seen: dict[float, float] = {}
-
-    def excess(T: float) -> float:
-        x = cor(params.with_(sensor_delay_s=T)) - cor_limit
-        seen[T] = x if math.isfinite(x) else math.inf
-        return seen[T]
-
-    if excess(0.0) > 0.0:
-        return 0.0
-    bracket = first_crossing_delay(lambda T: excess(T) > 0.0, params, max_delay_s, scan_points)
-    if bracket is None:
-        return math.inf
-    within, beyond = bracket
-    if not math.isfinite(seen[beyond]):
-        return within  # the last scanned delay within the limit
-    return brentq(excess, within, beyond, xtol=1e-12, rtol=1e-10)
+    return critical_delay(
+        lambda T: cor(params.with_(sensor_delay_s=T)) - cor_limit,
+        max_delay_s,
+        params.sample_period_s,
+        scan_points,
+    )
 
 
 def _first_excess(values: np.ndarray, limit: float) -> int | None:

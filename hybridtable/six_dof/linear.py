@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hybridtable.analysis.critical import critical_delay
 from hybridtable.six_dof.contact import DockingContact
 from hybridtable.six_dof.params import DockingLoopParams
 from hybridtable.six_dof.pose import skew
@@ -180,29 +181,20 @@ def critical_delay_s(
     params: DockingLoopParams, K: np.ndarray, C: np.ndarray, max_delay_s: float = 0.05
 ) -> float:
     """The shortest sensor delay (up to ``max_delay_s``) at which the
-    linearized loop has a growing mode: the first whole tick that grows, then
-    bisected within the tick before it to 1e-3 of a tick (the rig computer
-    reads a delay between ticks as the mix of its neighbours)."""
+    linearized loop is not asymptotically stable (a mode whose growth rate is
+    above -1e-6 /s: round-off of a neutral mode counts, as in the 1-D loop's
+    :func:`~hybridtable.analysis.margins.critical_sensor_delay`, so an
+    undamped contact's is 0). The 1-D loop's search
+    (:func:`~hybridtable.analysis.critical.critical_delay`) on this loop's
+    fastest mode: whole ticks scanned, the tick of the crossing refined (the
+    rig computer reads a delay between ticks as the mix of its neighbours)."""
     h = params.sample_period_s
 
-    def grows(ticks: float) -> bool:
-        _, s = _modes(tick_matrix(params, K, C, ticks), h)
-        return bool(s.size) and float(np.max(s.real)) > _NEUTRAL_PER_S
+    def growth(delay_s: float) -> float:
+        _, s = _modes(tick_matrix(params, K, C, delay_s / h), h)
+        return float(np.max(s.real)) if s.size else -math.inf
 
-    for ticks in range(0, int(round(max_delay_s / h)) + 1):
-        if grows(ticks):
-            break
-    else:
-        return math.inf
-    if ticks == 0:
-        return 0.0
-    low, high = ticks - 1.0, float(ticks)
-    while high - low > 1e-3:
-        mid = 0.5 * (low + high)
-        low, high = (low, mid) if grows(mid) else (mid, high)
-    if low == 0.0:  # every delay above zero grows: the critical delay is zero
-        return 0.0
-    return high * h
+    return critical_delay(growth, max_delay_s, h, tolerance=_NEUTRAL_PER_S)
 
 
 def contact_modes(params: DockingLoopParams, max_delay_s: float = 0.05) -> ContactModes:
