@@ -31,7 +31,7 @@ metrics = ["cor", "peak_force_n", "contact_duration_s", "energy_gain_j"]
 contact_frequency_hz = 2.0
 
 [monte_carlo]
-samples = 50
+samples = 15
 
 [monte_carlo.draw]
 contact_stiffness_n_per_m = {distribution = "log_uniform", low = 1e4, high = 1e6}
@@ -129,13 +129,13 @@ def test_the_scheduler_a_local_cluster_and_one_worker_write_the_same_file(
     assert main(["sweep", str(spec), "--out", str(local), "--workers", "2", "--no-progress"]) == 0
     assert main(["sweep", str(spec), "--out", str(single), "--workers", "1", "--no-progress"]) == 0
     a, b, c = (_without_timing(p) for p in (remote, local, single))
-    assert a.num_rows == 200
-    assert a.column("run").to_pylist() == list(range(200))
+    assert a.num_rows == 60
+    assert a.column("run").to_pylist() == list(range(60))
     assert repr(a.to_pylist()) == repr(b.to_pylist()) == repr(c.to_pylist())
     # the metadata too (the spec and its fingerprint), not only the rows
     assert pq.read_schema(remote).metadata == pq.read_schema(local).metadata
     status = a.column("status").to_pylist()
-    assert status.count("ok") == 200
+    assert status.count("ok") == 60
     cor = a.column("cor").to_pylist()
     comps = a.column("compensator").to_pylist()
     # physics: without compensation the delay always pumps energy in
@@ -156,7 +156,7 @@ def test_a_lost_worker_costs_only_its_runs(cluster, tmp_path):
 
     spec = tmp_path / "spec.toml"
     text = SPEC.replace('name = "cluster_check"', 'name = "lost_worker"\nengine = "diagram"')
-    spec.write_text(text.replace("samples = 50", "samples = 12"))
+    spec.write_text(text.replace("samples = 15", "samples = 12"))
     extra = _worker(cluster["file"], "doomed", tmp_path / "doomed.log")
     out = tmp_path / "lost.parquet"
     client = Client(cluster["address"], timeout="30s")
