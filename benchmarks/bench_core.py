@@ -124,6 +124,9 @@ def _child(checkout: Path, code: str, *args: str) -> dict:
     )
     if proc.returncode:
         raise SystemExit(f"{checkout}: {proc.stderr.strip().splitlines()[-1]}")
+    for line in proc.stderr.splitlines():
+        if line.startswith("floor not measured"):
+            print(f"{checkout}: {line}", file=sys.stderr)
     return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
@@ -167,6 +170,10 @@ def main(argv: list[str] | None = None) -> int:
                 )
     rows = []
     names = [k for k in sides["new"][0] if isinstance(sides["new"][0][k], dict)]
+    missing = [k for k in names if any(k not in s for s in sides["old"])]
+    for k in missing:  # a case the old checkout cannot build: said, not timed
+        print(f"{k}: not measured on {args.old} (the child said why on its stderr)")
+    names = [k for k in names if k not in missing]
     print(f"old: {args.old}   new: {ROOT}   ({args.reps} alternating pairs)")
     print(
         f"{'case':<28} {'old ms':>8} {'new ms':>8} {'old/new':>8} {'steps':>12} {'us/step new':>12}"

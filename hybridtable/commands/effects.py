@@ -241,5 +241,6 @@ def run(args: argparse.Namespace) -> int:
     if args.json != "-":
         print(format_effects(items))
     if args.json:
-        write_json(args.json, items, args)
+        # a document like every command's: what it was asked, then the list
+        write_json(args.json, {"registered": len(items), "effects": items}, args)
     return 0

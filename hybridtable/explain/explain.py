@@ -46,7 +46,7 @@ MODEL_ERROR_LN = 1.0e-3
 #: The most rows of distinct conditions a table may have (repeated rows of the
 #: same conditions cost one): each is simulated for every model and every step
 #: of its fit; the whole explanation takes 2 s to 3 s a row on a 2-core
-#: machine (Tables 1, 3 and 4: 12.8, 10.5 and 18.3 s, benchmarks/bench_explain.py).
+#: machine (Tables 1, 3 and 4: 13.8, 12.0 and 21.4 s on 2026-11-27, benchmarks/bench_explain.py).
 MAX_DISTINCT_ROWS = 200
 
 

@@ -47,7 +47,12 @@ def _json(capsys, *args: str) -> list[dict]:
     assert main(["effects", "--json", "-", *args]) == 0
     captured = capsys.readouterr()
     assert captured.err == ""
-    return json.loads(captured.out)  # nothing but the JSON on stdout
+    doc = json.loads(captured.out)  # nothing but the JSON on stdout
+    # A document like every command's: what it was asked, then the effects.
+    assert list(doc) == ["inputs", "registered", "effects"]
+    assert doc["inputs"]["command"] == "effects"
+    assert doc["registered"] == len(doc["effects"])
+    return doc["effects"]
 
 
 def _by_name(items: list[dict]) -> dict[str, dict]:
@@ -98,7 +103,7 @@ def test_json_is_a_list_of_effects_with_their_bounds_at_the_paper_point(capsys, 
     # --json FILE: the same list, and the console too.
     out = tmp_path / "effects.json"
     assert main(["effects", "--json", str(out)]) == 0
-    assert json.loads(out.read_text(encoding="utf-8")) == items
+    assert json.loads(out.read_text(encoding="utf-8"))["effects"] == items
     assert capsys.readouterr().out.startswith(f"{len(BUILTIN_EFFECTS)} effects registered")
 
 

@@ -102,7 +102,7 @@ def listed(tmp_path_factory) -> CliRun:
 
 def test_effects_lists_table_lag_once_for_both_front_ends(listed):
     assert listed.code == 0, listed.err
-    (item,) = [e for e in listed.doc if e["name"] == "table_lag"]
+    (item,) = [e for e in listed.doc["effects"] if e["name"] == "table_lag"]
     assert item["source"] == "plug-in"
     assert item["default_for"] == ["diagnose", "explain"]
     assert item["cor_engine"] == "fast engine"  # a change of the loop's parameters
@@ -115,7 +115,7 @@ def test_effects_lists_table_lag_once_for_both_front_ends(listed):
 
 def test_effects_runs_backlash_through_the_drake_diagram(listed):
     assert listed.code == 0, listed.err
-    (item,) = [e for e in listed.doc if e["name"] == "backlash"]
+    (item,) = [e for e in listed.doc["effects"] if e["name"] == "backlash"]
     assert item["source"] == "plug-in"
     assert item["cor_engine"] == "Drake diagram"  # a user's wrapped system
 
