@@ -61,8 +61,9 @@ def test_critical_delay_of_a_damped_contact_and_of_sdmdc():
 
 def test_a_loop_that_grows_at_any_delay_has_a_critical_delay_of_zero():
     """Ideal table, undamped contact, no compensator: any delay above zero
-    pumps energy (the 1-D loop's "critical delay zero"); the bisection within
-    the first tick must not report its resolution (h / 1024) instead."""
+    pumps energy (the 1-D loop's "critical delay zero"): the neutral loop at
+    zero delay counts as reached, as in the 1-D search, rather than the delay
+    within the first tick where its growth passes round-off (5e-8 s)."""
     from hybridtable.six_dof.contact import DockingContact
     from hybridtable.six_dof.linear import critical_delay_s
 
