@@ -4,7 +4,8 @@ Forward selection adds one effect at a time, so two effects whose influence on
 the CoR cancels (one dissipates, one adds energy) can each look too weak to
 enter alone, or the first effect chosen can be a look-alike that blocks the
 right one. When the end test fails after forward selection,
-:func:`pairs_and_swaps` fits
+:func:`pairs_and_swaps` fits the models the one search proposes
+(:mod:`~hybridtable.effects.search`, as ``explain``'s pairs and triples are):
 
 - every pair of the first round's candidates that do not change the same part,
   jointly, from the best point of a grid crossing each member's single fit, its
@@ -50,6 +51,7 @@ from hybridtable.diagnosis.fit import (
 )
 from hybridtable.diagnosis.settings import BIC_THRESHOLD, PAIR_POOL
 from hybridtable.effects.registry import get_effect
+from hybridtable.effects.search import propose, swaps
 from hybridtable.effects.workers import pool_map
 
 __all__ = ["PAIR_NFEV", "grid_values", "drop_one", "pairs_and_swaps"]
@@ -174,75 +176,61 @@ def pairs_and_swaps(
     ``(fit, held-out error, delta_bic against the nominal model)``, or None.
     Every proposal and the decision are appended to ``log``."""
     usable = [c for c in first_round if c.fit is not None and not c.fit.failed]
-    pool = usable[:PAIR_POOL]
-    current_set = frozenset(selected)
-    proposals: dict[frozenset, tuple] = {}
+    pool = [c.effect for c in usable[:PAIR_POOL]]
     residuals = residual_probe(ev.data, nominal.evaluations)
+    # A pair can hide both its effects only if one of them moves the other's
+    # signature in time (a lag, a delay, a mode: effects with data-driven
+    # starts); other pairs come from the best candidates.
+    timing = {c.effect for c in usable if get_effect(c.effect).starts is not None}
+    seen = {frozenset(selected)}
 
     def conflict_free(names: Sequence[str]) -> bool:
         effects = [get_effect(n) for n in names]
         return not any(a.conflicts_with(b) for a, b in combinations(effects, 2))
 
-    if max_effects >= 2:
+    def worth_a_pair(names: Sequence[str]) -> bool:
+        hides = set(names) & timing or set(names) <= set(pool)
+        return bool(hides) and frozenset(names) not in seen and conflict_free(names)
+
+    worst = sorted(range(len(ev.data)), key=lambda i: -sum(nominal.evaluations[i].rss().values()))
+    worst = worst[:SCREENING_RUNS]
+    screened: list[int] = []
+
+    def screen(pairs):
         grids = {c.effect: grid_values(c, ev.scale, residuals) for c in usable}
-        by_misfit = sorted(
-            range(len(ev.data)), key=lambda i: -sum(nominal.evaluations[i].rss().values())
-        )
-        worst = by_misfit[:SCREENING_RUNS]
-        # A pair can hide both its effects only if one of them moves the
-        # other's signature in time (a lag, a delay, a mode: effects with
-        # data-driven starts); other pairs come from the best candidates.
-        timing = {c.effect for c in usable if get_effect(c.effect).starts is not None}
-        best = {c.effect for c in pool}
-        screens = []
-        for a, b in combinations(usable, 2):
-            names = [a.effect, b.effect]
-            if frozenset(names) == current_set or not conflict_free(names):
-                continue
-            if not (set(names) & timing or set(names) <= best):
-                continue
-            starts = [
-                {a.effect: va, b.effect: vb} for va in grids[a.effect] for vb in grids[b.effect]
-            ]
-            screens.append((names, starts, worst))
-        label = f"screen {len(screens)} pair(s)"
+        jobs = [
+            ([a, b], [{a: x, b: y} for x in grids[a] for y in grids[b]], worst) for a, b in pairs
+        ]
+        screened.append(len(jobs))
         before = ev.simulations
-        screened = pool_map(_screen_job, screens, workers, progress, label, shared=ev)
-        ev.simulations = before + sum(s for _, s in screened)  # once, in or out of process
-        ranked = sorted(
-            (
-                (cost, job[0], values)
-                for ((cost, values), _), job in zip(screened, screens, strict=True)
-                if values is not None
-            ),
-            key=lambda r: r[0],
+        out = pool_map(
+            _screen_job, jobs, workers, progress, f"screen {len(jobs)} pair(s)", shared=ev
         )
+        ev.simulations = before + sum(s for _, s in out)  # once, in or out of process
+        return [best for best, _ in out]
+
+    proposals = []
+    if max_effects >= 2:
+        names = [c.effect for c in usable]
+        pairs = propose(names, 2, screen, SCREENED_PAIRS, allowed=worth_a_pair, seen=seen)
         log.append(
             {
                 "screening_runs": [ev.data[k].run_id for k in worst],
-                "pairs_screened": len(screens),
-                "best": [{"effects": n, "rss": c} for c, n, _ in ranked[:SCREENED_PAIRS]],
+                "pairs_screened": sum(screened),
+                "best": [{"effects": list(p.names), "rss": p.screened} for p in pairs],
             }
         )
-        for _, names, values in ranked[:SCREENED_PAIRS]:
-            proposals[frozenset(names)] = (names, values, (), PAIR_NFEV)
-    for s in selected:
-        for c in pool:
-            if c.effect in selected:
-                continue
-            names = [n for n in selected if n != s] + [c.effect]
-            key = frozenset(names)
-            if key in proposals or not conflict_free(names):
-                continue
-            start = {n: current.values[n] for n in names if n in current.values}
-            start[c.effect] = c.parameters
-            proposals[key] = (names, start, (), PAIR_NFEV)
+        proposals += [(list(p.names), p.start, (), PAIR_NFEV) for p in pairs]
+    fitted = {c.effect: c.parameters for c in usable}
+    for names in swaps(selected, pool, conflict_free, seen):
+        start = {n: current.values[n] for n in names if n in current.values}
+        start[names[-1]] = fitted[names[-1]]
+        proposals.append((list(names), start, (), PAIR_NFEV))
     if not proposals:
         return None
-    jobs = list(proposals.values())
-    label = f"fit {len(jobs)} pair(s)/swap(s)"
+    label = f"fit {len(proposals)} pair(s)/swap(s)"
     before = ev.simulations
-    out = pool_map(_fit_job, jobs, workers, progress, label, shared=ev)
+    out = pool_map(_fit_job, proposals, workers, progress, label, shared=ev)
     ev.simulations = before + sum(s for _, s in out)  # once, in or out of process
     current_bic = delta_bic(nominal, current)
     scored = sorted(

@@ -12,10 +12,13 @@ may be missing, declared once.
   squares in each parameter's coordinate, standard errors);
 - :mod:`~hybridtable.effects.selection`: the one rule for choosing among fitted
   models (BIC, look-alikes, the separating run);
+- :mod:`~hybridtable.effects.search`: the one search for models of several
+  effects (the combinations a screen ranks best, those of the best single
+  effects, swaps);
 - :mod:`~hybridtable.effects.workers`: the forked worker pool of the fits.
 
 ``diagnose`` (recorded runs) and ``explain`` (a CoR table) are front ends over
-these: each keeps its data, its noise model, its search and its words.
+these: each keeps its data, its noise model, its screen and its words.
 """
 
 from hybridtable._lazy import lazy_exports

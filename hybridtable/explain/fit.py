@@ -8,10 +8,11 @@ fewer parameters than the table has rows (so that its fit can be tested);
 by BIC (``chi2 + p ln n``).
 
 Which models are fitted: every single effect (from a grid of starts over its
-range); pairs and triples are screened by the loop linearized at the nominal
-point (bounded linear least squares), and the best of each size, together with
-the combinations of the best single effects, are fitted on the loop itself,
-started from their single effects' fits.
+range); pairs and triples are proposed by the one search
+(:func:`~hybridtable.effects.search.propose`), screened by the loop linearized
+at the nominal point (bounded linear least squares): the best of each size,
+together with the combinations of the best single effects, are fitted on the
+loop itself, started from their single effects' fits.
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ from hybridtable.effects.fitting import (
     fit_values,
     standard_errors,
 )
+from hybridtable.effects.search import propose
 from hybridtable.effects.selection import bic
 from hybridtable.effects.workers import pool_map
 from hybridtable.explain.model import JACOBIAN_STEP, Case, CorModel, EffectAt
@@ -219,28 +221,6 @@ def _axis(p, a: float, b: float, points: int) -> np.ndarray:
     return np.linspace(a, b, points)
 
 
-def _screen(
-    effects: Sequence[EffectAt],
-    size: int,
-    jac: np.ndarray,
-    index: dict[str, list[int]],
-    y0: np.ndarray,
-    y: np.ndarray,
-    sigma: np.ndarray,
-    lo: np.ndarray,
-    hi: np.ndarray,
-) -> list[tuple[float, tuple[EffectAt, ...]]]:
-    out = []
-    for combo in itertools.combinations(effects, size):
-        cols = [j for e in combo for j in index[e.name]]
-        a = jac[:, cols] / sigma[:, None]
-        b = (y - y0) / sigma
-        sol = lsq_linear(a, b, bounds=(lo[cols], hi[cols]))
-        out.append((float(np.sum((a @ sol.x - b) ** 2)), combo))
-    out.sort(key=lambda t: t[0])
-    return out
-
-
 def fit_models(
     effects: Sequence[EffectAt],
     cases: Sequence[Case],
@@ -282,28 +262,31 @@ def fit_models(
     jac = everything.jacobian(cases, zero)
     y0 = everything.predict(cases, zero)
     lo, hi = everything.bounds()
+
+    def screen(combos):
+        """Each combination's chi2 on the loop linearized at the stated point."""
+        out = []
+        for combo in combos:
+            cols = [j for name in combo for j in index[name]]
+            a, b = jac[:, cols] / sigma[:, None], (y - y0) / sigma
+            sol = lsq_linear(a, b, bounds=(lo[cols], hi[cols]))
+            out.append((float(np.sum((a @ sol.x - b) ** 2)), None))
+        return out
+
+    def start(combo):
+        return {n: dict(single[n].values) for n in combo if n in single}
+
     best_single = [f.effects[0] for f in rank_fits(list(single.values()))[:3]]
-    work = []
-    seen: set[tuple[str, ...]] = set()
+    by_name = {e.name: e for e in effects}
+    work, seen = [], set()
     for size in range(2, max_effects + 1):
-        screened = _screen(effects, size, jac, index, y0, y, sigma, lo, hi)
-        chosen = [combo for _, combo in screened[:keep]]
-        chosen += [
-            tuple(e for e in effects if e.name in names)
-            for names in itertools.combinations(best_single, size)
-        ]
-        for combo in chosen:
-            names = tuple(e.name for e in combo)
-            if names in seen:
-                continue
-            seen.add(names)
-            if sum(len(e.parameters) for e in combo) >= n:
-                too_many.append(names)
-                continue
-            start = {
-                k: x for e in combo if e.name in single for k, x in single[e.name].values.items()
-            }
-            work.append((names, (start,)))
+        for p in propose(
+            list(by_name), size, screen, keep, start=start, best=best_single, seen=seen
+        ):
+            if sum(len(by_name[k].parameters) for k in p.names) >= n:
+                too_many.append(p.names)
+            else:
+                work.append((p.names, (CorModel.flat(p.start),)))
     fits += _run(work, workers, note, shared)
     return rank_fits(fits), sorted(set(too_many))
 
