@@ -96,12 +96,16 @@ FIELDS: dict[str, tuple[str, ...]] = {
 }
 
 
-def believed(params: Any, belief: str) -> float:
+def believed(params: Any, belief: str, truth: float | None = None) -> float:
     """What the compensator believes for ``belief`` (a key of :data:`BELIEFS`)
     in any parameter set with both fields (the 1-D and 6-DoF loops', a CoR
-    table's conditions): the stated value, or the true one it stands for."""
+    table's conditions): the stated value, or the true one it stands for
+    (``truth``, where a search varies it without a new parameter set; default:
+    the set's own)."""
     value = getattr(params, belief)
-    return getattr(params, BELIEFS[belief]) if value is None else value
+    if value is not None:
+        return value
+    return getattr(params, BELIEFS[belief]) if truth is None else truth
 
 
 def _plausible(config: Any, prefix: tuple[str, ...], names: tuple[str, ...]) -> None:

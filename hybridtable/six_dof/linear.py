@@ -11,7 +11,8 @@ modes in contact, ``s = ln(lambda) / h``: a mode with ``Re s > 0`` grows, i.e.
 the loop pumps energy into it. Eigenvalues at 1 are the free directions the
 frictionless contact does not hold (lateral translation, spin about the
 axis), left out. The critical delay is the shortest sensor delay whose loop
-has a growing mode (with the lead kept at the scenario's value).
+has a growing mode (the SDC's lead following the delay unless the scenario
+states one, as in the 1-D loop's margins).
 
 The Stewart table is linearized as the table model at its legs' reference
 response (``table_response_hz``: that model's on the Stewart table).
@@ -25,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hybridtable.analysis.critical import critical_delay
+from hybridtable.loop.params import believed
 from hybridtable.six_dof.contact import DockingContact
 from hybridtable.six_dof.params import DockingLoopParams
 from hybridtable.six_dof.pose import skew
@@ -94,9 +96,10 @@ def tick_matrix(
 ) -> np.ndarray:
     """``A`` of the linearized loop over one tick (see the module docstring),
     with the contact's ``K``, ``C`` (6x6) and a delay of ``delay_ticks`` ticks
-    (default: the scenario's). A delay between ticks reads the two
-    neighbouring samples mixed, as the sensor does
-    (:func:`~hybridtable.systems.sensor.sample_taps`)."""
+    (default: the scenario's), which the SDC's lead follows unless the
+    scenario states one (:func:`~hybridtable.loop.params.believed`, as in the
+    1-D loop). A delay between ticks reads the two neighbouring samples mixed,
+    as the sensor does (:func:`~hybridtable.systems.sensor.sample_taps`)."""
     h = params.sample_period_s
     M, alpha = params.delay_taps if delay_ticks is None else sample_taps(float(delay_ticks), 1.0)
     L = M + (1 if alpha else 0)  # samples the delay line holds
@@ -111,7 +114,8 @@ def tick_matrix(
         else table_tick_matrices(params.table_response_hz, params.table_damping_ratio, h)
     )
     kind = params.compensator
-    lead = params.effective_lead_time_s if kind in ("SDC", "SDMDC") else 0.0
+    delay_s = None if delay_ticks is None else float(delay_ticks) * h
+    lead = believed(params, "lead_time_s", delay_s) if kind in ("SDC", "SDMDC") else 0.0
     mdc = kind in ("MDC", "SDMDC")
     n_table = 0 if tick is None else 12
     sizes = {"body": 12, "table": n_table, "delay": 6 * L, "prev": 6}

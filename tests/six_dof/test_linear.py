@@ -70,3 +70,22 @@ def test_a_loop_that_grows_at_any_delay_has_a_critical_delay_of_zero():
     p = docking_params(table_response_hz=math.inf)
     K, C = DockingContact(p.contact).stiffness(p.nominal_pose())
     assert critical_delay_s(p, K, C) == 0.0
+
+
+def test_the_lead_follows_the_searched_delay_unless_the_scenario_states_it():
+    """What the compensator believes unless told, as in the 1-D margins: with
+    no lead stated, each delay searched is the rig's own delay, its lead
+    told it; a stated lead stays at its value. SDC on a 25 Hz table: told
+    its delay, the lead never covers the table's lag (critical delay 0: the
+    loop told a 1 ms delay grows); held at 5 ms, it overcovers it at short
+    delays, and the loop stays stable until the delay nears the lead."""
+    p = docking_params(
+        dissipation=1.0, table_response_hz=25.0, sensor_delay_s=0.005, compensator="SDC"
+    )
+    assert contact_modes(p).critical_delay_s == 0.0
+    assert not contact_modes(p.with_(sensor_delay_s=0.001)).stable
+    held = p.with_(lead_time_s=0.005)
+    critical = contact_modes(held).critical_delay_s
+    assert 0.001 < critical < 0.005
+    assert contact_modes(held.with_(sensor_delay_s=0.97 * critical)).stable
+    assert not contact_modes(held.with_(sensor_delay_s=1.03 * critical)).stable
