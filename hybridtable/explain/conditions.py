@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, fields
+from functools import lru_cache
 
 from hybridtable._validation import check_nonnegative, check_positive, check_positive_or_inf
 from hybridtable.laws.contact import mass_for_contact_frequency_kg
@@ -95,24 +96,30 @@ class Conditions:
         return 2.0 * self.table_damping_ratio / (2.0 * math.pi * self.table_response_hz)
 
     def loop_params(self, compensator: str) -> HybridLoopParams:
-        """The hybrid loop the conditions state, for ``compensator``."""
-        return HybridLoopParams(
-            spacecraft_mass_kg=self.spacecraft_mass_kg,
-            contact_stiffness_n_per_m=self.contact_stiffness_n_per_m,
-            sensor_delay_s=self.sensor_delay_s,
-            table_response_hz=self.table_response_hz,
-            table_damping_ratio=self.table_damping_ratio,
-            compensator=compensator,
-            lead_time_s=self.lead_s,
-            initial_velocity_m_per_s=self.initial_velocity_m_per_s,
-            sample_rate_hz=self.sample_rate_hz,
-        )
+        """The hybrid loop the conditions state, for ``compensator`` (built once
+        per conditions and compensator: a fit asks for it at every evaluation)."""
+        return _loop_params(self, compensator)
 
     def to_dict(self) -> dict[str, float | None]:
         """The fields, SI units (``lead_time_s`` resolved)."""
         out = asdict(self)
         out["lead_time_s"] = self.lead_s
         return out
+
+
+@lru_cache(maxsize=4096)
+def _loop_params(conditions: Conditions, compensator: str) -> HybridLoopParams:
+    return HybridLoopParams(
+        spacecraft_mass_kg=conditions.spacecraft_mass_kg,
+        contact_stiffness_n_per_m=conditions.contact_stiffness_n_per_m,
+        sensor_delay_s=conditions.sensor_delay_s,
+        table_response_hz=conditions.table_response_hz,
+        table_damping_ratio=conditions.table_damping_ratio,
+        compensator=compensator,
+        lead_time_s=conditions.lead_s,
+        initial_velocity_m_per_s=conditions.initial_velocity_m_per_s,
+        sample_rate_hz=conditions.sample_rate_hz,
+    )
 
 
 #: The condition fields a CoR table (or a flag) may state.

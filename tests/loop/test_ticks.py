@@ -53,17 +53,24 @@ def test_compiled_ticks_equal_the_python_ticks_bit_for_bit(name, monkeypatch):
     assert python.cor == compiled.cor  # no tolerance: the same operations in the same order
 
 
-def test_the_long_run_outgrows_the_first_records(monkeypatch):
+def test_a_run_that_outgrows_its_records_keeps_them(monkeypatch):
+    """Records grown many times (from room for 256 ticks) are the records of a
+    run with room enough, compiled or not."""
     params = CASES["long"]
     h, n = fast._computer_period(params)
-    records = []
-    for compiled in (False, True):
+
+    def records(compiled: bool) -> list[np.ndarray]:
         monkeypatch.setattr(ticks, "COMPILE_AFTER_RUNS", 0 if compiled else 10**12)
         rule = fast.separation_rule(params, h, kind=fast._StopRule, period_s=h)
-        records.append([np.asarray(x) for x in fast._run_continuous(params, h, n, rule)])
-    assert len(records[0][0]) > 4096  # past the first records' room
-    for a, b in zip(*records, strict=True):
-        np.testing.assert_array_equal(a, b)
+        return [np.asarray(x) for x in fast._run_continuous(params, h, n, rule)]
+
+    roomy = records(True)
+    monkeypatch.setattr(fast, "RECORD_ROOM", 256)
+    grown = [records(False), records(True)]
+    assert len(roomy[0]) > 8 * 256  # grown by half again at least six times
+    for run in grown:
+        for a, b in zip(run, roomy, strict=True):
+            np.testing.assert_array_equal(a, b)
 
 
 def test_a_diverging_loop_stops_alike_in_both(monkeypatch):
