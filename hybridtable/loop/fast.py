@@ -352,7 +352,7 @@ def _run_continuous(params: HybridLoopParams, h: float, n: int, rule: _StopRule)
         )
         checked = False
         if why == 1:  # half as much room again, the records kept
-            more = len(vs) // 2
+            more = max(len(vs) // 2, 1)
             F, vs, fas, fcs = (_grown(x, more, compiled) for x in (F, vs, fas, fcs))
         elif why == 2:  # the mode switches inside tick k: located on the exact trajectory
             state, mode = loop.interval(state, mode, gate)
