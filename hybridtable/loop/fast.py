@@ -30,7 +30,13 @@ diagram does there). The CoR is the same up to the diagram integrator's error
 (``v_in`` and ``v_out`` are read where no force acts); the peak forces may
 differ by the force's change within a tick, the contact duration by a tick.
 The stop rule of :func:`~hybridtable.loop.simulation.run_loop` is evaluated at
-the first tick at or after each of its check times.
+the first tick at or after each of its check times. :func:`record_fast` gives
+a sampled loop's rows for a record's length (``simulate_rig``'s closed loop).
+
+Why one module: the continuous and the sampled runner are one engine; they
+share the compensator's law and gains (``_law``), the computer's period and
+the stop rule checked at ticks, which split apart would be private names
+imported across modules.
 """
 
 from __future__ import annotations
@@ -53,8 +59,10 @@ from hybridtable.loop.budget import check_budget
 from hybridtable.loop.metrics import ContactMetrics, contact_metrics
 from hybridtable.loop.params import HybridLoopParams
 from hybridtable.loop.simulation import (
+    SimulationResult,
     default_t_max_s,
     expected_duration_s,
+    result_from_rows,
     separation_rule,
 )
 from hybridtable.loop.ticks import (
@@ -72,7 +80,7 @@ from hybridtable.loop.ticks import (
 )
 from hybridtable.systems.sensor import continuous_delay_period, sample_taps
 
-__all__ = ["fast_unsupported", "prepare_fast", "simulate_fast"]
+__all__ = ["fast_unsupported", "prepare_fast", "record_fast", "simulate_fast"]
 
 
 def fast_unsupported(params: HybridLoopParams) -> str | None:
@@ -371,10 +379,19 @@ def _grown(x, m: int, compiled: bool):
     return np.concatenate([x, np.zeros(m)]) if compiled else x + [0.0] * m
 
 
-def _run_sampled(params: HybridLoopParams, h: float, taps: tuple[int, float], rule: _StopRule):
+def _run_sampled(
+    params: HybridLoopParams,
+    h: float,
+    taps: tuple[int, float],
+    rule: _StopRule,
+    ticks: int | None = None,
+):
     """Row log ``(v, f_act, f_comp)`` of a sampled loop (row k: what tick k read and
     computed, and the spacecraft state after its update); the reading is the
-    sampled sensor's (:meth:`~hybridtable.systems.sensor.ForceSensorDelay.readings`)."""
+    sampled sensor's (:meth:`~hybridtable.systems.sensor.ForceSensorDelay.readings`).
+    With ``ticks``: exactly that many rows, whatever the stop rule says (it still
+    judges divergence and the budget), each ``(p_des, v_des, p_act, v_act, f_act,
+    f_mea, f_comp)``."""
     n_delay, alpha = taps
     law, kc, cc = _law(params)
     k_con, c_con = params.contact_stiffness_n_per_m, params.contact_damping_n_s_per_m
@@ -398,6 +415,7 @@ def _run_sampled(params: HybridLoopParams, h: float, taps: tuple[int, float], ru
     F = [0.0] * (n_delay + 1)  # F[j] = f_act(t_j) at index j + n_delay + 1
     prev = 0.0
     vs, fas, fcs = [], [], []
+    rows = [] if ticks is not None else None
     k, due = 0, rule.due
     while True:
         if ideal:
@@ -409,10 +427,12 @@ def _run_sampled(params: HybridLoopParams, h: float, taps: tuple[int, float], ru
         f_mea = F[k + 1] if not alpha else (1 - alpha) * F[k + 1] + alpha * F[k]
         f_comp = compensator(f_mea, prev, p, v, pa, va)
         if k * h >= due:
-            if rule.check_tick(k, f_act, f_mea, f_comp):
+            if rule.check_tick(k, f_act, f_mea, f_comp) and rows is None:
                 return vs, fas, fcs
             due = rule.due
         prev = f_mea
+        if rows is not None:
+            rows.append((pa, va, f_act, f_mea, f_comp))
         p, v = a00 * p + a01 * v + b0 * f_comp, a10 * p + a11 * v + b1 * f_comp
         if not ideal:
             pa, va = e00 * pa + e01 * va + e02 * p, e10 * pa + e11 * va + e12 * p
@@ -420,6 +440,10 @@ def _run_sampled(params: HybridLoopParams, h: float, taps: tuple[int, float], ru
         fas.append(f_act)
         fcs.append(f_comp)
         k += 1
+        if rows is not None:
+            rows[-1] = (p, v, *rows[-1])
+            if k == ticks:
+                return rows
 
 
 def prepare_fast(runs: Iterable[HybridLoopParams]) -> int:
@@ -464,3 +488,50 @@ def simulate_fast(params: HybridLoopParams) -> ContactMetrics:
         return contact_metrics(t, vs, fas, fcs, params.spacecraft_mass_kg)
     except ValueError as err:
         raise SimulationError(f"{err} within the {t[-1]:.3g} s simulated") from None
+
+
+#: The rows of :func:`record_fast`, in the order :func:`_run_sampled` gives them.
+_RECORD_ROWS = (
+    "p_des_m",
+    "v_des_m_per_s",
+    "p_act_m",
+    "v_act_m_per_s",
+    "f_act_n",
+    "f_mea_n",
+    "f_comp_n",
+)
+
+
+def record_fast(params: HybridLoopParams, ticks: int) -> SimulationResult:
+    """The first ``ticks`` rows of a sampled loop's run, by the exact discrete update.
+
+    What :func:`~hybridtable.loop.simulation.run_loop` records on the diagram of
+    ``params`` with ``t_max_s = (ticks + 1/2) h`` and ``stop_at_separation=False``
+    (a recorded run's length), row ``k`` as
+    :func:`~hybridtable.loop.simulation.collect_result` gives it: what tick ``k``
+    read and computed, the spacecraft state after its update. The table is exact
+    at the ticks, where the diagram integrates it between them (the rows differ by
+    the integrator's error). ``steps`` counts the ticks.
+
+    Raises
+    ------
+    ParameterError
+        If :func:`fast_unsupported` names a reason, or the rig computer is continuous.
+    DivergenceError
+        As :func:`simulate_fast`.
+    SimulationError
+        If no contact happens, or the record is over the simulation budget.
+    """
+    why = fast_unsupported(params)
+    if why is None and params.sample_rate_hz is None:
+        why = "a continuous rig computer (a record has the ticks of a sampled one)"
+    if why is not None:
+        raise ParameterError(f"the fast path cannot record these parameters: {why}")
+    h, taps = _computer_period(params)
+    t_max = (ticks + 0.5) * h
+    check_budget(params, t_max, h, integrated=False)
+    rule = separation_rule(params, h, t_max, False, kind=_StopRule, period_s=h)
+    rows = np.array(_run_sampled(params, h, taps, rule, ticks), dtype=float).reshape(-1, 7)
+    rule.verdict()
+    rows = dict(zip(_RECORD_ROWS, rows.T, strict=True))
+    return result_from_rows(params, h * np.arange(ticks), rows, ticks)

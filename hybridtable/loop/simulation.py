@@ -25,12 +25,18 @@ __all__ = [
     "simulate",
     "run_loop",
     "collect_result",
+    "result_from_rows",
+    "FIXED_STEP_INTEGRATORS",
     "default_t_max_s",
     "expected_duration_s",
     "settle_window_s",
     "check_interval_s",
     "undamped_peak_force_n",
 ]
+
+#: Drake integrators stepped at a fixed step (the computer's period), not to an
+#: accuracy: the others aim at the exact solution.
+FIXED_STEP_INTEGRATORS: tuple[str, ...] = ("runge_kutta2", "explicit_euler", "semi_explicit_euler")
 
 _F_ACT = LOG_ROWS.index("f_act_n")
 
@@ -160,7 +166,7 @@ def run_loop(
     ResetIntegratorFromFlags(simulator, integrator, loop.computer_period_s)
     integ = simulator.get_mutable_integrator()
     integ.set_maximum_step_size(loop.computer_period_s)
-    if integrator in ("runge_kutta2", "explicit_euler", "semi_explicit_euler"):
+    if integrator in FIXED_STEP_INTEGRATORS:
         integ.set_fixed_step_mode(True)
     else:
         integ.set_target_accuracy(accuracy)
@@ -257,6 +263,20 @@ def collect_result(
             f"{rows['f_act_n'][-1]:.4g} N, compensated {rows['f_comp_n'][-1]:.4g} N): "
             "simulate past the end of the contact"
         )
+    return result_from_rows(params, t, rows, steps)
+
+
+def result_from_rows(
+    params: HybridLoopParams, t, rows: dict[str, np.ndarray], steps: int = 0
+) -> SimulationResult:
+    """A :class:`SimulationResult` of a run's rows (:data:`LOG_ROWS` by name, the
+    table's acceleration not needed) at times ``t``, with its contact metrics.
+
+    Raises
+    ------
+    SimulationError
+        If the rows hold no contact.
+    """
     try:
         metrics = contact_metrics(
             t, rows["v_des_m_per_s"], rows["f_act_n"], rows["f_comp_n"], params.spacecraft_mass_kg

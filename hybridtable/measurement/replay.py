@@ -40,6 +40,7 @@ from hybridtable.errors import SimulationError
 from hybridtable.laws.compiled import LawSystem
 from hybridtable.loop.budget import check_budget
 from hybridtable.loop.params import HybridLoopParams
+from hybridtable.loop.simulation import FIXED_STEP_INTEGRATORS
 from hybridtable.measurement.rig import (
     RigPhysics,
     add_physical_part,
@@ -160,7 +161,7 @@ def replay_command(
     ResetIntegratorFromFlags(simulator, integrator, h)
     integ = simulator.get_mutable_integrator()
     integ.set_maximum_step_size(h)  # (unused when the replay is discrete)
-    if integrator in ("runge_kutta2", "explicit_euler", "semi_explicit_euler"):
+    if integrator in FIXED_STEP_INTEGRATORS:
         integ.set_fixed_step_mode(True)
     else:
         integ.set_target_accuracy(accuracy)

@@ -16,6 +16,7 @@ from hybridtable.measurement.rig import RigPhysics, rig_params, simulate_rig
 from hybridtable.measurement.run_format import RunInfo
 from hybridtable.measurement.run_reader import read_run
 from hybridtable.systems.contact import ContactParams, UnilateralSpringContact
+from hybridtable.systems.noise import MeasurementNoiseParams
 from hybridtable.systems.resonant_table import ResonantTable, StructuralModeParams
 from hybridtable.systems.table import SecondOrderTable, TableParams, table_step_response
 from tests.generators.rigsim import NOMINAL, damped_spring, simulate_record, write_run
@@ -84,6 +85,28 @@ def test_closed_loop_reproduces_an_independent_simulation(tmp_path):
     np.testing.assert_allclose(model.v_des_m_per_s, run.v_des_m_per_s, rtol=0, atol=1e-8)
     np.testing.assert_allclose(model.f_comp_n, run.f_comp_n, rtol=0, atol=1e-3)
     np.testing.assert_allclose(model.p_des_m, run.p_des_m, rtol=0, atol=1e-10)
+
+
+def test_closed_loop_runs_on_the_fast_engine_where_it_can(tmp_path):
+    """The nominal systems (parameter changes only) run on the exact discrete
+    engine, one step a tick; a system factory, measurement noise or a fixed-step
+    integrator on the diagram, whose rows agree within its integrator's error."""
+    run, _ = _noiseless_run(tmp_path, OTHER_RIG)
+    fast = simulate_rig(run, RigPhysics(changes={"contact_damping_n_s_per_m": 50.0}))
+    assert fast.steps == run.n
+    factory = RigPhysics(
+        table=lambda p: SecondOrderTable(p.plant.table),
+        changes={"contact_damping_n_s_per_m": 50.0},
+    )
+    diagram = simulate_rig(run, factory)
+    assert diagram.steps > 2 * run.n  # the table integrated between the ticks
+    for name, x in fast.signals().items():
+        y = getattr(diagram, name)
+        assert np.max(np.abs(x - y)) <= 1e-6 * np.max(np.abs(y)), name
+    fixed = simulate_rig(run, integrator="runge_kutta2")
+    assert fixed.steps != run.n
+    noisy = simulate_rig(run, noise=MeasurementNoiseParams(force_std_n=1.0, seed=3))
+    assert noisy.steps != run.n
 
 
 def test_physics_variants_swap_in(tmp_path):
