@@ -49,9 +49,10 @@ test-browser: $(BROWSER_STAMP)
 	HYBRIDTABLE_REQUIRE_BROWSER=1 MPLBACKEND=Agg $(VENV)/bin/python -m pytest -q -m browser
 
 # Every sh and python block of README.md and docs/*.md, run as written in a
-# copy of the repository with nothing beside it (tests/test_docs.py).
+# copy of the repository with nothing beside it (tests/test_docs.py); one
+# document per pytest worker, each in its own copy.
 test-docs: $(STAMP)
-	MPLBACKEND=Agg $(VENV)/bin/python -m pytest -q -m docs tests/test_docs.py
+	MPLBACKEND=Agg $(VENV)/bin/python -m pytest -q -n $(WORKERS) --dist load -m docs tests/test_docs.py
 
 # The hostile corpus of the newer surfaces (tests/fuzz/surfaces.py: plug-ins,
 # sweep specs and --resume, model files, 6-DoF scenarios, CoR tables, outputs),
