@@ -23,7 +23,16 @@ from pydrake.systems.framework import LeafSystem
 from hybridtable.effects.effect import Effect, EffectParameter, Signature
 from hybridtable.systems.blocks import ChainedOutput
 
-__all__ = ["Backlash", "BacklashTable", "EFFECT"]
+__all__ = ["Backlash", "BacklashTable", "EFFECT", "device_motion"]
+
+
+def device_motion(y, x, v, a, width_m) -> tuple[float, float, float]:
+    """The law: the device's motion for the drive's ``[x, v, a]``, the device
+    last at ``y`` (NaN: on the forward face) and a play of ``width_m``."""
+    y = x if math.isnan(y) else min(max(y, x), x + width_m)  # the faces push
+    y = max(x, min(y, 0.0))  # the contact pushes it back: to the surface, or the face
+    moving = y == x or y == x + width_m  # a face drives it
+    return (y, v, a) if moving else (y, 0.0, 0.0)
 
 
 class Backlash(LeafSystem):
@@ -41,10 +50,7 @@ class Backlash(LeafSystem):
     def _device(self, context) -> tuple[float, float, float]:
         x, v, a = self.get_input_port().Eval(context)
         y = context.get_discrete_state_vector().GetAtIndex(0)
-        y = x if math.isnan(y) else min(max(y, x), x + self.width_m)  # the faces push
-        y = max(x, min(y, 0.0))  # the contact pushes it back: to the surface, or the face
-        moving = y == x or y == x + self.width_m  # a face drives it
-        return (y, v, a) if moving else (y, 0.0, 0.0)
+        return device_motion(y, x, v, a, self.width_m)
 
     def _update(self, context, state) -> None:
         state.get_mutable_vector().SetAtIndex(0, self._device(context)[0])
@@ -55,7 +61,8 @@ class Backlash(LeafSystem):
 
 class BacklashTable(ChainedOutput):
     """A table's ``motion`` through :class:`Backlash`, with the table's
-    ``sampled(h)`` (the replay's exact stepping) and ``set_initial_state``."""
+    ``sampled(h)`` (the replay's exact stepping), ``set_initial_state`` and,
+    sampled, ``respond`` (the replay without a simulator)."""
 
     def __init__(self, table, width_m: float, period_s: float) -> None:
         super().__init__(table, Backlash(width_m, period_s), "motion")
@@ -69,6 +76,17 @@ class BacklashTable(ChainedOutput):
         super().set_initial_state(context, position_m, velocity_m_per_s)  # the drive
         # Approaching (v > 0): the play is taken up, the forward face pushes.
         self.GetMutableSubsystemContext(self.stage, context).SetDiscreteState([position_m])
+
+    def respond(self, commands, position_m: float, velocity_m_per_s: float) -> np.ndarray:
+        """The motion at the ticks (N, 3) of the sampled form (what its Drake
+        diagram computes, without a simulator: the replay uses it): the inner
+        table's ``respond`` through the play, its state updated at each tick."""
+        drive = self.inner.respond(commands, position_m, velocity_m_per_s)
+        out, y = [], position_m  # the state set_initial_state gives
+        for x, v, a in drive.tolist():
+            out.append(device_motion(y, x, v, a, self.stage.width_m))
+            y = out[-1][0]
+        return np.array(out).reshape(len(drive), 3)
 
 
 def _late_offset(scale, residuals) -> list[dict[str, float]]:

@@ -192,28 +192,36 @@ def replay_command(
     )
 
 
+def _states_its_law(system, method: str, library: tuple[type, ...]) -> bool:
+    """Whether ``system``'s law at the ticks (``method``) stands for its Drake
+    system: one of the library's own systems, by exact type, or a class that
+    states ``method`` in its own body (a user's, e.g. the backlash example's
+    ``respond``). A subclass that only inherits it may compute something else
+    in Drake, and replays on the diagram."""
+    return type(system) in library or method in type(system).__dict__
+
+
 def _law_replay(
     params: HybridLoopParams, physics: RigPhysics, p: np.ndarray, v: np.ndarray
 ) -> ReplayResult | None:
     """The replay without a simulator, where every part of the physics states
-    its law at the ticks: a table with an exact sampled form
-    (:meth:`~hybridtable.systems.table.SampledTable.respond`), a contact with a
-    ``force_law`` and a sensor with ``readings``. The same systems' own
-    coefficients and law functions, evaluated tick by tick as the discrete
-    Drake diagram does; None where a part (a user's wrapped system, a
-    continuous sensor) has no such form, and the diagram replays."""
+    its law at the ticks (:func:`_states_its_law`): a table with an exact
+    sampled form (:meth:`~hybridtable.systems.table.SampledTable.respond`), a
+    contact with a ``force_law`` and a sensor with ``readings``. The same
+    systems' own coefficients and law functions, evaluated tick by tick as the
+    discrete Drake diagram does; None where a part (a user's wrapped system
+    without its law, a continuous sensor) has no such form, and the diagram
+    replays."""
     h = params.sample_period_s
     table = physics.make_table(params)
     sampled = getattr(table, "sampled", None)
     table = sampled(h) if sampled is not None else None
     contact = physics.make_contact(params)
     sensor = physics.make_sensor(params)
-    # The library's own systems only, by exact type: a user's subclass may
-    # change what its Drake system computes, and is replayed on the diagram.
     if not (
-        type(table) is SampledTable
-        and (type(contact) is ContactLaw or type(contact) is LawSystem)
-        and type(sensor) in (ForceSensorDelay, MeasurementChain)
+        _states_its_law(table, "respond", (SampledTable,))
+        and _states_its_law(contact, "force_law", (ContactLaw, LawSystem))
+        and _states_its_law(sensor, "readings", (ForceSensorDelay, MeasurementChain))
     ):
         return None
     law = getattr(contact, "force_law", None)

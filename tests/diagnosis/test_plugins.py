@@ -151,6 +151,34 @@ def test_the_replay_steps_the_wrapped_table_exactly_and_reproduces_the_closed_lo
     assert (run.p_act_m - replay(run).p_act_m)[-1] == pytest.approx(TRUE_B, rel=1e-6)
 
 
+def test_the_stated_law_replays_without_a_simulator_bit_for_bit(monkeypatch):
+    """BacklashTable states ``respond`` (its sampled form's motion at the ticks):
+    the replay evaluates it instead of simulating, to the diagram's last bit; a
+    subclass that only inherits it replays on the diagram."""
+    from hybridtable.measurement import replay as replay_module
+
+    run, _ = record_run(INFO, _physics(TRUE_B))
+    params = rig_params(INFO)
+    laws = replay_module._law_replay(params, _physics(TRUE_B), run.p_des_m, run.v_des_m_per_s)
+    assert laws is not None and laws.steps == 0
+    with monkeypatch.context() as m:
+        m.setattr(replay_module, "_law_replay", lambda *args: None)
+        diagram = replay(run, _physics(TRUE_B))
+    assert diagram.steps > 0
+    for c in ("p_act_m", "v_act_m_per_s", "f_act_n", "f_mea_n"):
+        np.testing.assert_array_equal(getattr(laws, c), getattr(diagram, c))
+    assert np.max(run.p_act_m - replay(run).p_act_m) == pytest.approx(TRUE_B, rel=1e-6)
+
+    table = _example().BacklashTable
+
+    class Inherits(table):  # states nothing itself
+        def sampled(self, period_s):
+            return Inherits(self.inner.sampled(period_s), self.stage.width_m, period_s)
+
+    inherits = ModelSpec().wrap("table", lambda p, t: Inherits(t, TRUE_B, 1e-3)).physics()
+    assert replay_module._law_replay(params, inherits, run.p_des_m, run.v_des_m_per_s) is None
+
+
 # -- diagnose finds it -----------------------------------------------------------
 def _check_found(runs) -> None:
     """Listed, a default candidate, fitted, and named by diagnose with it.
