@@ -442,7 +442,8 @@ def _run_sampled(
         k += 1
         if rows is not None:
             rows[-1] = (p, v, *rows[-1])
-            if k == ticks:
+            if k == ticks:  # the diagram's last check, at the record's end
+                rule.check_tick(k, f_act, f_mea, f_comp)
                 return rows
 
 
@@ -522,6 +523,8 @@ def record_fast(params: HybridLoopParams, ticks: int) -> SimulationResult:
     SimulationError
         If no contact happens, or the record is over the simulation budget.
     """
+    if ticks < 1:
+        raise ParameterError(f"record_fast: ticks must be at least 1, got {ticks}")
     why = fast_unsupported(params)
     if why is None and params.sample_rate_hz is None:
         why = "a continuous rig computer (a record has the ticks of a sampled one)"

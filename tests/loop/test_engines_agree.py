@@ -88,7 +88,12 @@ from hybridtable.errors import ParameterError, SimulationError
 from hybridtable.loop.builder import build_hybrid_loop
 from hybridtable.loop.fast import record_fast, simulate_fast
 from hybridtable.loop.params import HybridLoopParams
-from hybridtable.loop.simulation import expected_duration_s, run_loop, simulate
+from hybridtable.loop.simulation import (
+    check_interval_s,
+    expected_duration_s,
+    run_loop,
+    simulate,
+)
 from hybridtable.studies.paper import paper_params, table1_params
 from hybridtable.systems.sensor import continuous_delay_period
 
@@ -325,8 +330,28 @@ def test_records_agree_row_by_row(params):
 def test_record_refuses_a_continuous_computer_and_reports_no_contact():
     with pytest.raises(ParameterError, match="continuous rig computer"):
         record_fast(_t1("SDMDC"), 100)
+    with pytest.raises(ParameterError, match="at least 1"):
+        record_fast(_t1("SDMDC", sample_rate_hz=1000.0), 0)
     with pytest.raises(SimulationError, match="no contact"):
         record_fast(_t1("SDMDC", sample_rate_hz=1000.0), 10)  # 10 ticks of the approach
+
+
+def test_a_record_that_ends_just_after_the_touch_has_a_contact():
+    """The stop rule looks every ten ticks or more; a touch after its last look
+    still counts, as the diagram's last look at the record's end sees it (no
+    sensor delay: the model feels the touch at once)."""
+    params = _t1("SDMDC", sample_rate_hz=1000.0, sensor_delay_s=0.0)
+    h = params.sample_period_s
+    touch = int(np.argmax(record_fast(params, 200).f_act_n > 0.0))
+    ticks = touch + 2
+    chunk = check_interval_s(params, h)  # the rule looks at chunk, 2 chunk, ...
+    assert chunk < touch * h and ticks * h < 2.0 * chunk  # no look between touch and end
+    fast = record_fast(params, ticks)
+    diagram = run_loop(
+        build_hybrid_loop(params), t_max_s=(ticks + 0.5) * h, stop_at_separation=False
+    )
+    assert fast.f_act_n[-1] > 0.0 and diagram.f_act_n[-1] > 0.0
+    assert fast.metrics.v_in_m_per_s == diagram.metrics.v_in_m_per_s
 
 
 def _table() -> None:
