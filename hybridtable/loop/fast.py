@@ -56,6 +56,7 @@ from hybridtable.laws.separation import SeparationRule
 from hybridtable.laws.spacecraft import computer_step
 from hybridtable.laws.table import second_order_matrices, second_order_tick
 from hybridtable.loop.budget import check_budget
+from hybridtable.loop.builder import LOG_ROWS
 from hybridtable.loop.metrics import ContactMetrics, contact_metrics
 from hybridtable.loop.params import HybridLoopParams
 from hybridtable.loop.simulation import (
@@ -414,8 +415,7 @@ def _run_sampled(
         e02, e12 = gamma.tolist()
     F = [0.0] * (n_delay + 1)  # F[j] = f_act(t_j) at index j + n_delay + 1
     prev = 0.0
-    vs, fas, fcs = [], [], []
-    rows = [] if ticks is not None else None
+    vs, fas, fcs, rows = [], [], [], []
     k, due = 0, rule.due
     while True:
         if ideal:
@@ -427,24 +427,23 @@ def _run_sampled(
         f_mea = F[k + 1] if not alpha else (1 - alpha) * F[k + 1] + alpha * F[k]
         f_comp = compensator(f_mea, prev, p, v, pa, va)
         if k * h >= due:
-            if rule.check_tick(k, f_act, f_mea, f_comp) and rows is None:
+            if rule.check_tick(k, f_act, f_mea, f_comp) and ticks is None:
                 return vs, fas, fcs
             due = rule.due
         prev = f_mea
-        if rows is not None:
-            rows.append((pa, va, f_act, f_mea, f_comp))
         p, v = a00 * p + a01 * v + b0 * f_comp, a10 * p + a11 * v + b1 * f_comp
+        if ticks is None:
+            vs.append(v)
+            fas.append(f_act)
+            fcs.append(f_comp)
+        else:  # the table as tick k read it, before its update
+            rows.append((p, v, pa, va, f_act, f_mea, f_comp))
         if not ideal:
             pa, va = e00 * pa + e01 * va + e02 * p, e10 * pa + e11 * va + e12 * p
-        vs.append(v)
-        fas.append(f_act)
-        fcs.append(f_comp)
         k += 1
-        if rows is not None:
-            rows[-1] = (p, v, *rows[-1])
-            if k == ticks:  # the diagram's last check, at the record's end
-                rule.check_tick(k, f_act, f_mea, f_comp)
-                return rows
+        if k == ticks:  # the diagram's last check, at the record's end
+            rule.check_tick(k, f_act, f_mea, f_comp)
+            return rows
 
 
 def prepare_fast(runs: Iterable[HybridLoopParams]) -> int:
@@ -491,16 +490,9 @@ def simulate_fast(params: HybridLoopParams) -> ContactMetrics:
         raise SimulationError(f"{err} within the {t[-1]:.3g} s simulated") from None
 
 
-#: The rows of :func:`record_fast`, in the order :func:`_run_sampled` gives them.
-_RECORD_ROWS = (
-    "p_des_m",
-    "v_des_m_per_s",
-    "p_act_m",
-    "v_act_m_per_s",
-    "f_act_n",
-    "f_mea_n",
-    "f_comp_n",
-)
+#: The rows of :func:`record_fast`, in the order :func:`_run_sampled` gives them:
+#: the loop's log without the table's acceleration.
+_RECORD_ROWS = tuple(name for name in LOG_ROWS if name != "a_act_m_per_s2")
 
 
 def record_fast(params: HybridLoopParams, ticks: int) -> SimulationResult:
@@ -534,7 +526,8 @@ def record_fast(params: HybridLoopParams, ticks: int) -> SimulationResult:
     t_max = (ticks + 0.5) * h
     check_budget(params, t_max, h, integrated=False)
     rule = separation_rule(params, h, t_max, False, kind=_StopRule, period_s=h)
-    rows = np.array(_run_sampled(params, h, taps, rule, ticks), dtype=float).reshape(-1, 7)
+    rows = np.array(_run_sampled(params, h, taps, rule, ticks), dtype=float)
+    rows = rows.reshape(ticks, len(_RECORD_ROWS))
     rule.verdict()
     rows = dict(zip(_RECORD_ROWS, rows.T, strict=True))
     return result_from_rows(params, h * np.arange(ticks), rows, ticks)

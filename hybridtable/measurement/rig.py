@@ -369,11 +369,11 @@ def simulate_rig(
     MeasurementError
         If the run's parameters do not make a model.
     """
-    h = run.sample_period_s
     fast = _fast_record(run, physics or RigPhysics(), integrator, noise)
     if fast is not None:
         return fast
     loop = build_rig_loop(run, physics, noise)
+    h = run.sample_period_s
     # Logs at ticks 0 .. n (the last one gives the state after tick n - 1).
     result = run_loop(
         loop,
