@@ -263,7 +263,7 @@ def python_function(law: Callable[..., Any], arguments: Sequence[str]) -> Callab
 def python_lambda(arguments: Sequence[str], source: str) -> Callable[..., Any]:
     """``lambda arguments: source``, compiled with nothing in reach but the
     numbers' functions and constants of :data:`_NAMESPACE` (generated code:
-    :func:`python_function`, a table's unrolled step)."""
+    :func:`python_function`)."""
     return eval(f"lambda {', '.join(arguments)}: {source}", dict(_NAMESPACE))  # noqa: S307
 
 

@@ -232,6 +232,10 @@ def _law_replay(
     motion = table.respond(np.column_stack([p, v]), ic["p_act_m"], ic["v_act_m_per_s"])
     if getattr(contact, "force_law_elementwise", False):
         f_act = np.asarray(law(motion[:, 0], motion[:, 1], motion[:, 2]), dtype=float)
+    elif getattr(contact, "force_law_unilateral", False):  # 0 p apart: the law in contact only
+        f_act = 0.0 * motion[:, 0]
+        touching = motion[:, 0] > 0.0
+        f_act[touching] = [law(*row) for row in motion[touching].tolist()]
     else:
         f_act = np.array([law(*row) for row in motion.tolist()], dtype=float)
     f_mea = sensor.readings(f_act)

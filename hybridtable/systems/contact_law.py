@@ -177,6 +177,9 @@ def ContactLaw_(T):
             self.params = params
             #: ``force_law(p, v, a) -> f``: the law this system evaluates.
             self.force_law = lambda p, v, a: contact_law_force(params, p, v, a)[0]
+            #: The law is ``0 * p`` wherever ``not p > 0`` (apart): a replay
+            #: evaluates it only in contact.
+            self.force_law_unilateral = True
             self._motion = self.DeclareVectorInputPort("motion", 3)
             self.DeclareVectorOutputPort("force", 1, self._calc_force)
             self.DeclareVectorOutputPort("force_rate", 1, self._calc_force_rate)

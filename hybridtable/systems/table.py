@@ -18,7 +18,6 @@ from pydrake.systems.primitives import LinearSystem, MatrixGain
 
 from hybridtable._components import Block, Component
 from hybridtable._validation import check_nonnegative, check_positive_or_inf
-from hybridtable.laws.compiled import python_lambda
 from hybridtable.laws.table import held_tick, second_order_matrices
 
 __all__ = [
@@ -173,18 +172,68 @@ def _ordered_dot(row: np.ndarray, X: np.ndarray) -> np.ndarray:
     return total
 
 
-def _affine_step(A: np.ndarray, B: np.ndarray):
-    """``(x, u) -> A x + B u`` for a small system, unrolled: each row's products
-    summed in index order, ``A x`` and ``B u`` added last (as Eigen does)."""
-    n, m = B.shape
-    xs = [f"x{j}" for j in range(n)]
-    us = [f"u{j}" for j in range(m)]
+def _held_states(A, B, x0, U, X) -> None:
+    """``X[k] = x[k]`` for ``x[k+1] = A x[k] + B U[k]`` from ``x0``: each row's
+    products summed in index order, ``A x`` and ``B u`` added last (as Eigen
+    does). Written once for both runners: plain Python on lists, and the same
+    function compiled by numba on arrays (no ``fastmath``: the same operations
+    in the same order, so the two agree bit for bit)."""
+    n = len(A)
+    m = len(B[0])
+    x = [x0[i] for i in range(n)]
+    y = [0.0] * n
+    for k in range(len(U)):
+        u = U[k]
+        for i in range(n):
+            X[k][i] = x[i]
+        for i in range(n):
+            a = A[i]
+            b = B[i]
+            s = a[0] * x[0]
+            for j in range(1, n):
+                s = s + a[j] * x[j]
+            t = b[0] * u[0]
+            for j in range(1, m):
+                t = t + b[j] * u[j]
+            y[i] = s + t
+        for i in range(n):
+            x[i] = y[i]
 
-    def row(coeffs, names):
-        return " + ".join(f"{float(c)!r} * {v}" for c, v in zip(coeffs, names, strict=True))
 
-    body = ", ".join(f"({row(A[i], xs)}) + ({row(B[i], us)})" for i in range(n))
-    return python_lambda(xs + us, f"({body},)")
+#: Responses a process computes in Python before it compiles :func:`_held_states`
+#: (compiling costs about a second, once per machine: numba keeps the machine
+#: code; a replay of a few thousand ticks takes ~15 ms in Python, ~0.2 ms
+#: compiled: ``diagnose`` makes hundreds, ``compare`` a few).
+COMPILE_AFTER_RESPONSES = 40
+
+_responses = 0
+_compiled_states = None
+
+
+def _states_at_ticks(A: np.ndarray, B: np.ndarray, x0: np.ndarray, U: np.ndarray) -> np.ndarray:
+    """The states ``x[k]`` (N, n) of ``x[k+1] = A x[k] + B U[k]`` from ``x0``
+    (:func:`_held_states`: Python for a process's first
+    :data:`COMPILE_AFTER_RESPONSES` calls, then compiled by numba if importable)."""
+    global _responses, _compiled_states
+    _responses += 1
+    if _compiled_states is None and _responses > COMPILE_AFTER_RESPONSES:
+        try:
+            import numba
+        except ImportError:  # pragma: no cover - numba is a dependency
+            _compiled_states = False
+        else:
+            try:  # the machine code kept beside the module, or in the user's cache
+                _compiled_states = numba.njit(cache=True)(_held_states)
+            except RuntimeError:  # nowhere to keep it: compiled anew in each process
+                _compiled_states = numba.njit(_held_states)
+    N, n = len(U), A.shape[0]
+    if _compiled_states:
+        X = np.empty((N, n))
+        _compiled_states(A, B, np.asarray(x0, dtype=float), U, X)
+        return X
+    X = [[0.0] * n for _ in range(N)]
+    _held_states(A.tolist(), B.tolist(), list(x0), U.tolist(), X)
+    return np.array(X, dtype=float).reshape(N, n)
 
 
 class SampledTable(Diagram):
@@ -243,14 +292,8 @@ class SampledTable(Diagram):
         Drake system computes, without a simulator)."""
         lin = self._linear
         A, B, C, D = (np.asarray(m, dtype=float) for m in (lin.A(), lin.B(), lin.C(), lin.D()))
-        u = np.asarray(commands, dtype=float)
-        step = _affine_step(A, B)
-        x = tuple(self.initial_state(position_m, velocity_m_per_s).tolist())
-        states = []
-        for uk in u.tolist():
-            states.append(x)
-            x = step(*x, *uk)
-        X = np.array(states).reshape(len(u), A.shape[0])
+        u = np.ascontiguousarray(commands, dtype=float)
+        X = _states_at_ticks(A, B, self.initial_state(position_m, velocity_m_per_s), u)
         # Outputs, vectorized over the ticks with the same sums in the same order.
         return np.column_stack(
             [_ordered_dot(c, X) + _ordered_dot(d, u) for c, d in zip(C, D, strict=True)]

@@ -138,3 +138,26 @@ def test_contact_law_parameters_are_validated():
         ContactLawParams(K, damping_n_s_per_m=-1.0)
     with pytest.raises(ParameterError, match="exponent"):
         ContactLawParams(K, exponent=0.0)
+
+
+def test_the_law_is_zero_apart_as_the_replay_assumes():
+    """``force_law_unilateral``: the replay evaluates the law only where ``p > 0``
+    and takes ``0 * p`` elsewhere; that is the law's own value apart, signed
+    zeros and NaN included, for every term of the law."""
+    law = ContactLaw(
+        ContactLawParams(
+            8e4,
+            exponent=1.5,
+            damping_n_s_per_m=200.0,
+            hunt_crossley_s_per_m=0.5,
+            friction_force_n=30.0,
+            series_compliance_m_per_n=1e-6,
+        )
+    )
+    assert law.force_law_unilateral
+    p = np.array([-1e-3, -0.0, 0.0, 1e-12, 2e-3, np.nan])
+    for v in (-0.3, 0.0, 0.4):
+        each = np.array([law.force_law(x, v, 1.0) for x in p])
+        apart = 0.0 * p
+        assert np.array_equal(each[~(p > 0.0)], apart[~(p > 0.0)], equal_nan=True)
+        assert np.array_equal(np.signbit(each[~(p > 0.0)]), np.signbit(apart[~(p > 0.0)]))
