@@ -23,6 +23,7 @@ from pydrake.systems.framework import BasicVector, DiagramBuilder, LeafSystem
 
 from hybridtable.six_dof.params import DockingContactParams
 from hybridtable.six_dof.pose import rotation_exp
+from hybridtable.stewart.geometry import cross
 
 __all__ = [
     "register_docking_devices",
@@ -161,7 +162,7 @@ class DockingContact:
                 f = -f
             c = info.contact_point()
             force += f
-            moment += np.cross(c - p, f)
+            moment += cross(c - p, f)
             if points is not None:
                 points.append((np.array(c), np.array(f)))
         return np.concatenate([moment, force])

@@ -20,6 +20,7 @@ from pydrake.systems.framework import BasicVector, LeafSystem
 
 from hybridtable.six_dof.params import RigidBodyParams
 from hybridtable.six_dof.pose import rotation_exp, rotation_log
+from hybridtable.stewart.geometry import cross
 
 __all__ = ["RigidSpacecraft", "BODY_STATE_SIZE", "port_state", "kinetic_energy_j"]
 
@@ -33,7 +34,7 @@ def port_state(body: RigidBodyParams, x: np.ndarray) -> np.ndarray:
     R = x[6:15].reshape(3, 3)
     omega = R @ x[15:18]
     arm = R @ body.port_position_m
-    return np.concatenate([p + arm, rotation_log(R), v + np.cross(omega, arm), omega])
+    return np.concatenate([p + arm, rotation_log(R), v + cross(omega, arm), omega])
 
 
 def kinetic_energy_j(body: RigidBodyParams, x: np.ndarray) -> float:
@@ -109,11 +110,11 @@ class RigidSpacecraft(LeafSystem):
         R = x[6:15].reshape(3, 3)
         wb = x[15:18]
         f = w[3:6]
-        tau = w[0:3] + np.cross(R @ self._arm, f)  # about the centre of mass
+        tau = w[0:3] + cross(R @ self._arm, f)  # about the centre of mass
         v_new = v + (h / self._m) * f
         p_new = p + h * v_new
         Iw = self._I @ wb
-        wb_new = wb + h * (self._I_inv @ (R.T @ tau - np.cross(wb, Iw)))
+        wb_new = wb + h * (self._I_inv @ (R.T @ tau - cross(wb, Iw)))
         R_new = R @ rotation_exp(h * wb_new)
         # Keep R a rotation against round-off (polar projection).
         u, _, vt = np.linalg.svd(R_new)

@@ -67,6 +67,7 @@ from hybridtable.stewart.backend import export_plate_pose
 from hybridtable.stewart.ft_sensor import DeviceSensorBase
 from hybridtable.stewart.geometry import (
     StewartGeometry,
+    cross,
     rotation_from_rpy,
     rpy_from_rotation,
 )
@@ -88,13 +89,6 @@ __all__ = [
 #: Largest condition number of the leg Jacobian a commanded pose may have [1]:
 #: beyond it the pose is refused as (near) a singularity of the platform.
 MAX_CONDITION_NUMBER = 1e6
-
-
-def _cross(a, b) -> np.ndarray:
-    """a x b for 3-vectors (scalar arithmetic: np.cross is slow on small arrays)."""
-    return np.array(
-        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-    )
 
 
 def _cross_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -148,7 +142,7 @@ class PoseKinematics:
     def plate_twist_of_port(self, R: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """``[v; omega]`` of the plate origin from the port's ``qd = [v_P; omega]``."""
         omega = np.asarray(qd[3:6], dtype=float)
-        return np.concatenate([qd[:3] - _cross(omega, R @ self.port_in_plate_m), omega])
+        return np.concatenate([qd[:3] - cross(omega, R @ self.port_in_plate_m), omega])
 
     def port_state(
         self, position_m: np.ndarray, R: np.ndarray, v: np.ndarray, w: np.ndarray
@@ -156,7 +150,7 @@ class PoseKinematics:
         """The port's ``[q; qd]`` (12, W) of the plate's pose and twist (world)."""
         arm = R @ self.port_in_plate_m
         return np.concatenate(
-            [position_m + arm - self.world_origin_m, rotation_log(R), v + _cross(w, arm), w]
+            [position_m + arm - self.world_origin_m, rotation_log(R), v + cross(w, arm), w]
         )
 
     # -- kinematics -----------------------------------------------------

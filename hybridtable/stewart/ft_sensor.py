@@ -44,19 +44,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 from pydrake.systems.framework import LeafSystem
 
-from hybridtable.stewart.geometry import rotation_from_quaternion
+from hybridtable.stewart.geometry import cross, rotation_from_quaternion
 
 if TYPE_CHECKING:
     from hybridtable.stewart.plant import StewartPlant
 
 __all__ = ["DevicePayload", "DeviceSensorBase", "device_payload", "payload_compensated_wrench"]
-
-
-def _cross(a, b) -> np.ndarray:
-    """a x b for 3-vectors (scalar arithmetic: np.cross is slow on small arrays)."""
-    return np.array(
-        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-    )
 
 
 @dataclass(frozen=True)
@@ -137,15 +130,15 @@ def payload_compensated_wrench(
     f_sensor = R @ sensor_force_n
     t_sensor = R @ sensor_torque_n_m  # about D's origin
     r = R @ payload.com_m
-    a_com = origin_acceleration_m_per_s2 + _cross(dw, r) + _cross(w, _cross(w, r))
+    a_com = origin_acceleration_m_per_s2 + cross(dw, r) + cross(w, cross(w, r))
     # Newton: m a_com = f_sensor + f_contact + m g.
     f = payload.mass_kg * (a_com - payload.gravity_m_per_s2) - f_sensor
     # Euler about the centre of mass: I dw + w x I w = t_sensor,com + t_contact,com.
     I_w = R @ payload.inertia_kg_m2 @ R.T
-    t_com = I_w @ dw + _cross(w, I_w @ w) - (t_sensor - _cross(r, f_sensor))
+    t_com = I_w @ dw + cross(w, I_w @ w) - (t_sensor - cross(r, f_sensor))
     # About the point.
     arm = r if moment_point_m is None else r - R @ moment_point_m
-    return np.concatenate([t_com + _cross(arm, f), f])
+    return np.concatenate([t_com + cross(arm, f), f])
 
 
 class DeviceSensorBase(LeafSystem):

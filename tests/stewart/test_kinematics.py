@@ -12,7 +12,12 @@ from pydrake.systems.primitives import ConstantVectorSource
 
 from hybridtable.errors import ParameterError, WorkspaceError
 from hybridtable.stewart.backend import StewartTable
-from hybridtable.stewart.geometry import StewartGeometry, rotation_from_rpy, rpy_from_rotation
+from hybridtable.stewart.geometry import (
+    StewartGeometry,
+    cross,
+    rotation_from_rpy,
+    rpy_from_rotation,
+)
 from hybridtable.stewart.params import StewartParams
 from hybridtable.stewart.plant import add_stewart_plant
 
@@ -159,3 +164,16 @@ def test_servo_holds_the_platform_still_against_gravity():
     # below a micrometre (without it: m g / K ~ 40 um).
     assert abs(p + 0.01) < 1e-6
     assert abs(v) < 1e-5
+
+
+def test_the_scalar_cross_product_is_numpy_s_bit_for_bit():
+    """``cross`` (the 6-DoF contact's moments, the F/T device's kinematics) is
+    ``np.cross`` of two 3-vectors, the same bits: the same products and
+    differences in the same order; and anticommutative, orthogonal to both."""
+    rng = np.random.default_rng(3)
+    for _ in range(2000):
+        a, b = rng.normal(size=3) * 10.0 ** rng.integers(-6, 6), rng.normal(size=3)
+        c = cross(a, b)
+        assert np.array_equal(c, np.cross(a, b))
+        assert np.array_equal(cross(b, a), -c)
+        assert abs(c @ a) <= 1e-12 * np.linalg.norm(a) ** 2 * np.linalg.norm(b)
