@@ -57,6 +57,7 @@ from hybridtable.errors import SimulationError
 
 __all__ = [
     "CompiledLaw",
+    "compiled_available",
     "compiled_system",
     "python_function",
     "python_lambda",
@@ -258,6 +259,16 @@ def python_function(law: Callable[..., Any], arguments: Sequence[str]) -> Callab
         node = value if isinstance(value, Expression | Formula) else Expression(value)
         source = _python_source(node, names)
     return python_lambda([names[v.get_id()] for v in variables], source)
+
+
+def compiled_available() -> bool:
+    """Whether numba is importable here: the plain functions of the fast engine's
+    tick loop and of a sampled table's response run compiled, else as Python."""
+    try:
+        import numba  # noqa: F401
+    except ImportError:
+        return False
+    return True
 
 
 def python_lambda(arguments: Sequence[str], source: str) -> Callable[..., Any]:

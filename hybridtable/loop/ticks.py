@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 
 from hybridtable.laws.compensation import CompensationLaw, backward_difference, compensate
-from hybridtable.laws.compiled import python_function
+from hybridtable.laws.compiled import compiled_available, python_function
 from hybridtable.laws.contact import spring_contact_force
 
 __all__ = [
@@ -51,7 +51,6 @@ __all__ = [
     "bound",
     "compensator_function",
     "compile_loops",
-    "compiled_available",
     "contact_function",
     "corrects_function",
     "gate_function",
@@ -65,15 +64,6 @@ __all__ = [
 COMPILE_AFTER_RUNS = 40
 
 _runs = 0
-
-
-def compiled_available() -> bool:
-    """Whether numba is importable here (without it the loop stays Python)."""
-    try:
-        import numba  # noqa: F401
-    except ImportError:
-        return False
-    return True
 
 
 #: A mode of the continuous loop between switches, as bits of an int: the force

@@ -7,11 +7,12 @@ import pytest
 
 import hybridtable.loop.ticks as ticks
 from hybridtable.errors import DivergenceError
+from hybridtable.laws.compiled import compiled_available
 from hybridtable.loop import fast
 from hybridtable.loop.fast import simulate_fast
 from hybridtable.studies.paper import paper_params, table1_params
 
-pytestmark = pytest.mark.skipif(not ticks.compiled_available(), reason="numba is not installed")
+pytestmark = pytest.mark.skipif(not compiled_available(), reason="numba is not installed")
 
 #: Held loops (the force law cannot switch inside a tick): the paper's four
 #: compensators, a dead band, a clamp, a slow table, a long run that outgrows
