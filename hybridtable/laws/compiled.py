@@ -59,6 +59,7 @@ __all__ = [
     "CompiledLaw",
     "compiled_available",
     "compiled_system",
+    "njit_cached",
     "python_function",
     "python_lambda",
     "LawSystem",
@@ -269,6 +270,17 @@ def compiled_available() -> bool:
     except ImportError:
         return False
     return True
+
+
+def njit_cached(function: Callable[..., Any]) -> Callable[..., Any]:
+    """``function`` compiled by numba, its machine code kept beside the module or
+    in the user's cache (compiled anew in each process where neither is writable)."""
+    import numba
+
+    try:
+        return numba.njit(cache=True)(function)
+    except RuntimeError:
+        return numba.njit(function)
 
 
 def python_lambda(arguments: Sequence[str], source: str) -> Callable[..., Any]:

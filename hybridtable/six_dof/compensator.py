@@ -14,9 +14,9 @@ compensated wrench is zero (the 1-D gate on the measured force). The law is
 the 1-D one, :func:`hybridtable.laws.compensation.compensate`, on arrays
 (``G = -K``, ``D = -C``). ``K`` and
 ``C`` come from a stiffness model: the contact linearized at the table's pose
-at every tick of the contact (Drake's contact,
-:meth:`~hybridtable.six_dof.contact.DockingContact.stiffness`), or a given
-matrix.
+at every tick of the contact (Drake's contact, in closed form from one
+evaluation: :meth:`~hybridtable.six_dof.contact.DockingContact.stiffness`), or
+a given matrix.
 """
 
 from __future__ import annotations
@@ -95,7 +95,7 @@ class WrenchCompensator(LeafSystem):
     def _calc(self, context, output) -> None:
         w = np.array(self._w.Eval(context))
         level = np.linalg.norm(w[3:])
-        if not self.law.gate_open(level):  # before K: linearizing the contact is costly
+        if not self.law.gate_open(level):  # before K: it costs a contact evaluation
             output.SetFromVector(np.zeros(6))
             return
         previous = context.get_discrete_state(0).value()

@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-__all__ = ["skew", "rotation_exp", "rotation_log", "pose_coordinates"]
+__all__ = ["skew", "rotation_exp", "rotation_jacobian", "rotation_log", "pose_coordinates"]
 
 
 def skew(w: np.ndarray) -> np.ndarray:
@@ -27,6 +27,18 @@ def rotation_exp(theta: np.ndarray) -> np.ndarray:
     if t < 1e-9:
         return np.eye(3) + K + 0.5 * (K @ K)
     return np.eye(3) + (math.sin(t) / t) * K + ((1.0 - math.cos(t)) / (t * t)) * (K @ K)
+
+
+def rotation_jacobian(theta: np.ndarray) -> np.ndarray:
+    """The left Jacobian ``J`` of ``exp`` at ``theta``: ``exp([theta + d]x) =
+    exp([J d]x) exp([theta]x)`` to first order, so a point ``b = R a`` of the
+    body moves by ``d b = -[b]x J d``."""
+    t2 = float(theta[0] ** 2 + theta[1] ** 2 + theta[2] ** 2)
+    K = skew(theta)
+    if t2 < 1e-12:
+        return np.eye(3) + 0.5 * K + (1.0 / 6.0) * (K @ K)
+    t = math.sqrt(t2)
+    return np.eye(3) + ((1.0 - math.cos(t)) / t2) * K + ((t - math.sin(t)) / (t2 * t)) * (K @ K)
 
 
 def rotation_log(R: np.ndarray) -> np.ndarray:

@@ -18,7 +18,7 @@ from pydrake.systems.primitives import LinearSystem, MatrixGain
 
 from hybridtable._components import Block, Component
 from hybridtable._validation import check_nonnegative, check_positive_or_inf
-from hybridtable.laws.compiled import compiled_available
+from hybridtable.laws.compiled import compiled_available, njit_cached
 from hybridtable.laws.table import held_tick, second_order_matrices
 
 __all__ = [
@@ -211,17 +211,6 @@ _responses = 0
 _compiled_states = None
 
 
-def _compile(function):
-    """``function`` compiled by numba, its machine code kept beside the module or
-    in the user's cache (compiled anew in each process where neither is writable)."""
-    import numba
-
-    try:
-        return numba.njit(cache=True)(function)
-    except RuntimeError:
-        return numba.njit(function)
-
-
 def _states_at_ticks(A: np.ndarray, B: np.ndarray, x0: np.ndarray, U: np.ndarray) -> np.ndarray:
     """The states ``x[k]`` (N, n) of ``x[k+1] = A x[k] + B U[k]`` from ``x0``
     (:func:`_held_states`: Python for a process's first
@@ -229,7 +218,7 @@ def _states_at_ticks(A: np.ndarray, B: np.ndarray, x0: np.ndarray, U: np.ndarray
     global _responses, _compiled_states
     _responses += 1
     if _compiled_states is None and _responses > COMPILE_AFTER_RESPONSES:
-        _compiled_states = compiled_available() and _compile(_held_states)
+        _compiled_states = compiled_available() and njit_cached(_held_states)
     N, n = len(U), A.shape[0]
     if _compiled_states:
         X = np.empty((N, n))
