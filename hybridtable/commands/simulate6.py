@@ -25,7 +25,8 @@ def register(sub) -> None:
     p.add_argument(
         "--compensator",
         metavar="NAME",
-        help="replace the scenario's compensator: none, SDC, MDC, SDMDC or a registered "
+        help="replace the scenario's compensator: none, SDC, MDC, SDMDC, sdmdc-online (the "
+        "contact's stiffness identified online) or a registered "
         "wrench compensator (default: the scenario's, else none)",
     )
     p.add_argument("--json", metavar="FILE", help="write the results as JSON (- for stdout)")

@@ -60,6 +60,7 @@ from hybridtable.errors import ParameterError
 __all__ = [
     "IdentifierParams",
     "RecursiveContactIdentifier",
+    "information_step",
     "rls_step",
     "estimate",
     "covariance",
@@ -157,9 +158,47 @@ def in_contact(force, deflection, params: IdentifierParams) -> bool:
     return bool(force > params.force_threshold_n and deflection > 0.0)
 
 
+def information_step(Y, y, phi, target, lam, prior_information, prior_theta, weight):
+    """One step of recursive least squares with stabilized forgetting, in
+    information form, for any number of parameters and outputs:
+
+        Y <- lam Y + (1 - lam) diag(Y0) + weight phi phi'
+        y <- lam y + (1 - lam) diag(Y0) theta0 + weight phi target'
+
+    ``Y`` (n x n) and ``y`` (n x m) as nested lists, ``phi`` (n) the regressor,
+    ``target`` (m) the sample, ``prior_information`` the diagonal of ``Y0``
+    (n), ``prior_theta`` ``theta0`` (n x m). Returns the new ``(Y, y)``
+    (nested lists). Element by element, so it runs on any scalar type
+    (float, AutoDiffXd); the 1-D identifier (:func:`rls_step`, two
+    parameters, one output) and the 6-DoF wrench identifier
+    (:mod:`hybridtable.six_dof.identification`, 13 parameters, six outputs)
+    are this step."""
+    g = 1.0 - lam
+    n = len(phi)
+    wphi = [weight * phi[i] for i in range(n)]
+    Y_new = [
+        [
+            lam * Y[i][j] + g * prior_information[i] + wphi[i] * phi[j]
+            if i == j
+            else lam * Y[i][j] + wphi[i] * phi[j]
+            for j in range(n)
+        ]
+        for i in range(n)
+    ]
+    y_new = [
+        [
+            lam * y[i][r] + g * prior_information[i] * prior_theta[i][r] + wphi[i] * target[r]
+            for r in range(len(target))
+        ]
+        for i in range(n)
+    ]
+    return Y_new, y_new
+
+
 def rls_step(state, force, deflection, deflection_rate, lam: float, params: IdentifierParams):
     """One identifier step: the new information state
-    ``[Y_kk, Y_kc, Y_cc, y_k, y_c]`` as a list.
+    ``[Y_kk, Y_kc, Y_cc, y_k, y_c]`` as a list (:func:`information_step` with
+    ``phi = [delta, delta_dot]`` and the force as the one output).
 
     Works for any scalar type (float, AutoDiffXd) element-wise; returns
     ``state`` unchanged when the sample is outside contact
@@ -170,20 +209,22 @@ def rls_step(state, force, deflection, deflection_rate, lam: float, params: Iden
         return [ykk, ykc, ycc, yk, yc]
     x, xd = deflection, deflection_rate
     w = 1.0 / params.force_noise_std_n**2
-    i_k, i_c = params.prior_information()
     k0, c0 = params.prior_stiffness_n_per_m, params.prior_damping_n_s_per_m
     if not params.estimates_damping:
         # Known damping: fit k to the force minus the damping force.
         force = force - c0 * xd
         xd = 0.0 * xd
-    g = 1.0 - lam
-    return [
-        lam * ykk + g * i_k + w * x * x,
-        lam * ykc + w * x * xd,
-        lam * ycc + g * i_c + w * xd * xd,
-        lam * yk + g * i_k * k0 + w * x * force,
-        lam * yc + g * i_c * c0 + w * xd * force,
-    ]
+    Y, y = information_step(
+        [[ykk, ykc], [ykc, ycc]],
+        [[yk], [yc]],
+        [x, xd],
+        [force],
+        lam,
+        params.prior_information(),
+        [[k0], [c0]],
+        w,
+    )
+    return [Y[0][0], Y[0][1], Y[1][1], y[0][0], y[1][0]]
 
 
 def estimate(state, params: IdentifierParams):

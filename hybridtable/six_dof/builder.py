@@ -18,7 +18,7 @@ Drake's contact of the devices) or the Stewart platform
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 from pydrake.systems.framework import Diagram, DiagramBuilder, System
@@ -125,10 +125,7 @@ def initial_port_state(
 def _stiffness_model(params: DockingLoopParams):
     if params.stiffness_model == "given":
         return constant_stiffness(np.array(params.compensator_stiffness_matrix))
-    # The rig computer's own contact model, without friction: Drake's
-    # regularized friction is steep near zero slip (mu f / 1e-4 m/s), which a
-    # "damping" matrix would turn into lateral forces of tens of kN.
-    model = DockingContact(replace(params.contact, friction_coefficient=0.0))
+    model = DockingContact(params.believed_contact)
     if params.stiffness_model == "nominal":
         return constant_stiffness(*model.stiffness(params.nominal_pose()))
     return model.stiffness

@@ -64,6 +64,10 @@ class WrenchCompensator(LeafSystem):
     stiffness : StiffnessModel or None
         The MDC's stiffness (None: no MDC term).
     force_deadband_n : float
+    stiffness_scale_input : bool
+        Multiply ``stiffness``'s ``K`` and ``C`` by the input ``stiffness_scale``
+        (1: an online estimate of the contact's stiffness over the model's,
+        :mod:`~hybridtable.six_dof.identification`).
     """
 
     def __init__(
@@ -72,10 +76,14 @@ class WrenchCompensator(LeafSystem):
         lead_time_s: float = 0.0,
         stiffness: StiffnessModel | None = None,
         force_deadband_n: float = 0.0,
+        stiffness_scale_input: bool = False,
     ) -> None:
         LeafSystem.__init__(self)
         self._h = float(period_s)
         self._stiffness = stiffness
+        self._scale = None
+        if stiffness_scale_input:
+            self._scale = self.DeclareVectorInputPort("stiffness_scale", 1)
         #: The 1-D law on the wrench, gated by the measured force's norm.
         self.law = CompensationLaw(
             lead_time_s=float(lead_time_s),
@@ -100,12 +108,15 @@ class WrenchCompensator(LeafSystem):
             return
         previous = context.get_discrete_state(0).value()
         rate = backward_difference(w, previous, self._h)
-        if self._stiffness is None:
+        if not self.law.motion_correction:
             output.SetFromVector(compensate(self.law, w, rate, gate_force=level))
             return
         x_act = self._table.Eval(context)
         x_des = self._cmd.Eval(context)
         K, C = self._stiffness(x_act[:6], x_act[6:])
+        if self._scale is not None:
+            scale = self._scale.Eval(context)[0]
+            K, C = scale * K, scale * C
         # G = dw/dq = -K: the law predicts the wrench at the commanded pose.
         out = compensate(
             self.law,

@@ -1,6 +1,6 @@
 """The docking devices' compliant contact, computed by Drake's point contact.
 
-The active device is a ring of spherical pads (:class:`~hybridtable.six_dof.params.DockingContactParams`),
+The active device is a ring of spherical pads (:class:`DockingContactParams`),
 the passive one a flat plate whose face is the plane ``z = 0`` of the target
 frame W. :func:`register_docking_devices` adds both to any MultibodyPlant (the
 Stewart plant uses it too); :class:`DockingContact` holds a small plant of the
@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import functools
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from pydrake.geometry import AddContactMaterial, Box, ProximityProperties, Sphere
@@ -24,17 +25,80 @@ from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, CoulombFriction
 from pydrake.multibody.tree import RigidBody, SpatialInertia
 from pydrake.systems.framework import BasicVector, DiagramBuilder, LeafSystem
 
+from hybridtable._validation import check_nonnegative, check_positive
+from hybridtable.errors import ParameterError
 from hybridtable.laws.compiled import compiled_available, njit_cached
-from hybridtable.six_dof.params import DockingContactParams
+from hybridtable.limits import check_plausible
 from hybridtable.six_dof.pose import rotation_exp, rotation_jacobian
 from hybridtable.stewart.geometry import cross
 
 __all__ = [
+    "DockingContactParams",
     "register_docking_devices",
     "DockingContact",
     "DockingContactSystem",
     "STICTION_TOLERANCE_M_PER_S",
 ]
+
+
+@dataclass(frozen=True)
+class DockingContactParams:
+    """The docking devices and their compliant contact (Drake point contact).
+
+    The active device (on the table) is a ring of ``pad_count`` spherical
+    pads of radius ``pad_radius_m`` on a circle of ``ring_radius_m``, their
+    tops in the port's face plane; the passive device is a flat plate.
+
+    Parameters
+    ----------
+    contact_stiffness_n_per_m : float
+        Total normal stiffness k of the contact with every pad touching, > 0
+        (each pad ``k / pad_count``).
+    contact_dissipation_s_per_m : float
+        Hunt–Crossley dissipation d of each pad, ``f = k_i x (1 + d dx/dt)``, >= 0.
+    friction_coefficient : float
+        Coulomb friction mu of the pads on the plate, >= 0 (Drake's
+        regularized friction).
+    pad_count : int
+        Number of pads, >= 3.
+    ring_radius_m, pad_radius_m : float
+        Ring and pad radii, > 0, ``pad_radius_m < ring_radius_m``.
+    """
+
+    contact_stiffness_n_per_m: float
+    contact_dissipation_s_per_m: float = 0.0
+    friction_coefficient: float = 0.0
+    pad_count: int = 8
+    ring_radius_m: float = 0.3
+    pad_radius_m: float = 0.01
+
+    def __post_init__(self) -> None:
+        s = object.__setattr__
+        k = check_positive("contact_stiffness_n_per_m", self.contact_stiffness_n_per_m)
+        s(self, "contact_stiffness_n_per_m", check_plausible("contact_stiffness_n_per_m", k))
+        for name in ("contact_dissipation_s_per_m", "friction_coefficient"):
+            s(self, name, check_nonnegative(name, getattr(self, name)))
+        if isinstance(self.pad_count, bool) or int(self.pad_count) != self.pad_count:
+            raise ParameterError(f"pad_count must be a whole number (got {self.pad_count!r})")
+        if not 3 <= int(self.pad_count) <= 64:
+            raise ParameterError(f"pad_count must be in [3, 64] (got {self.pad_count!r})")
+        s(self, "pad_count", int(self.pad_count))
+        for name in ("ring_radius_m", "pad_radius_m"):
+            s(self, name, check_positive(name, getattr(self, name)))
+        if self.pad_radius_m >= self.ring_radius_m:
+            raise ParameterError(
+                f"pad_radius_m {self.pad_radius_m:g} must be < ring_radius_m {self.ring_radius_m:g}"
+            )
+
+    @property
+    def pad_centres_m(self) -> np.ndarray:
+        """Pad centres in the port frame, (pad_count, 3) (m)."""
+        a = 2.0 * np.pi * np.arange(self.pad_count) / self.pad_count
+        r = self.ring_radius_m
+        return np.column_stack(
+            [r * np.cos(a), r * np.sin(a), np.full(self.pad_count, -self.pad_radius_m)]
+        )
+
 
 #: Drake's stiction tolerance of a continuous plant (m/s), stated on the plant:
 #: below it the friction coefficient rises as a smooth step from 0.

@@ -95,7 +95,9 @@ def tick_matrix(
     params: DockingLoopParams, K: np.ndarray, C: np.ndarray, delay_ticks: float | None = None
 ) -> np.ndarray:
     """``A`` of the linearized loop over one tick (see the module docstring),
-    with the contact's ``K``, ``C`` (6x6) and a delay of ``delay_ticks`` ticks
+    with the contact's ``K``, ``C`` (6x6; the MDC's are them times the stiffness
+    the compensator believes over the contact's, ``sdmdc-online``'s the
+    contact's: where its estimate converges) and a delay of ``delay_ticks`` ticks
     (default: the scenario's), which the SDC's lead follows unless the
     scenario states one (:func:`~hybridtable.loop.params.believed`, as in the
     1-D loop). A delay between ticks reads the two neighbouring samples mixed,
@@ -114,6 +116,13 @@ def tick_matrix(
         else table_tick_matrices(params.table_response_hz, params.table_damping_ratio, h)
     )
     kind = params.compensator
+    # The MDC's K and C are the contact's scaled by the stiffness the
+    # compensator believes; sdmdc-online's converge to the contact's.
+    belief = (
+        params.believed_contact.contact_stiffness_n_per_m / params.contact.contact_stiffness_n_per_m
+    )
+    if kind == "sdmdc-online":
+        kind, belief = "SDMDC", 1.0
     delay_s = None if delay_ticks is None else float(delay_ticks) * h
     lead = believed(params, "lead_time_s", delay_s) if kind in ("SDC", "SDMDC") else 0.0
     mdc = kind in ("MDC", "SDMDC")
@@ -158,7 +167,11 @@ def tick_matrix(
         prev = x[start["prev"] : start["prev"] + 6]
         w = w_mea + (lead / h) * (w_mea - prev)
         if mdc:
-            w = w - K @ (command[:6] - table[:6]) - C @ (command[6:] - table[6:])
+            w = (
+                w
+                - belief * (K @ (command[:6] - table[:6]))
+                - belief * (C @ (command[6:] - table[6:]))
+            )
         out[start["prev"] : start["prev"] + 6] = w_mea
         f, tau = w[3:], w[:3] + np.cross(r, w[3:])
         v = b[6:9] + h * f / m

@@ -16,7 +16,7 @@ in and the tree that builds them by those names are one concept, as in
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field, is_dataclass
+from dataclasses import asdict, dataclass, field, is_dataclass, replace
 from typing import ClassVar
 
 import numpy as np
@@ -32,6 +32,7 @@ from hybridtable._validation import (
 from hybridtable.errors import ParameterError
 from hybridtable.limits import LIMITS, check_plausible
 from hybridtable.loop.params import believed
+from hybridtable.six_dof.contact import DockingContactParams
 from hybridtable.systems.sensor import SensorParams, sample_taps
 from hybridtable.systems.table import TableParams
 
@@ -160,65 +161,6 @@ class RigidBodyParams:
     def port_position_m(self) -> np.ndarray:
         """The port's origin in the body frame, ``[x_off, y_off, port_distance]`` (m)."""
         return np.array([*self.lateral_offset_m, self.port_distance_m])
-
-
-@dataclass(frozen=True)
-class DockingContactParams:
-    """The docking devices and their compliant contact (Drake point contact).
-
-    The active device (on the table) is a ring of ``pad_count`` spherical
-    pads of radius ``pad_radius_m`` on a circle of ``ring_radius_m``, their
-    tops in the port's face plane; the passive device is a flat plate.
-
-    Parameters
-    ----------
-    contact_stiffness_n_per_m : float
-        Total normal stiffness k of the contact with every pad touching, > 0
-        (each pad ``k / pad_count``).
-    contact_dissipation_s_per_m : float
-        Hunt–Crossley dissipation d of each pad, ``f = k_i x (1 + d dx/dt)``, >= 0.
-    friction_coefficient : float
-        Coulomb friction mu of the pads on the plate, >= 0 (Drake's
-        regularized friction).
-    pad_count : int
-        Number of pads, >= 3.
-    ring_radius_m, pad_radius_m : float
-        Ring and pad radii, > 0, ``pad_radius_m < ring_radius_m``.
-    """
-
-    contact_stiffness_n_per_m: float
-    contact_dissipation_s_per_m: float = 0.0
-    friction_coefficient: float = 0.0
-    pad_count: int = 8
-    ring_radius_m: float = 0.3
-    pad_radius_m: float = 0.01
-
-    def __post_init__(self) -> None:
-        s = object.__setattr__
-        k = check_positive("contact_stiffness_n_per_m", self.contact_stiffness_n_per_m)
-        s(self, "contact_stiffness_n_per_m", check_plausible("contact_stiffness_n_per_m", k))
-        for name in ("contact_dissipation_s_per_m", "friction_coefficient"):
-            s(self, name, check_nonnegative(name, getattr(self, name)))
-        if isinstance(self.pad_count, bool) or int(self.pad_count) != self.pad_count:
-            raise ParameterError(f"pad_count must be a whole number (got {self.pad_count!r})")
-        if not 3 <= int(self.pad_count) <= 64:
-            raise ParameterError(f"pad_count must be in [3, 64] (got {self.pad_count!r})")
-        s(self, "pad_count", int(self.pad_count))
-        for name in ("ring_radius_m", "pad_radius_m"):
-            s(self, name, check_positive(name, getattr(self, name)))
-        if self.pad_radius_m >= self.ring_radius_m:
-            raise ParameterError(
-                f"pad_radius_m {self.pad_radius_m:g} must be < ring_radius_m {self.ring_radius_m:g}"
-            )
-
-    @property
-    def pad_centres_m(self) -> np.ndarray:
-        """Pad centres in the port frame, (pad_count, 3) (m)."""
-        a = 2.0 * np.pi * np.arange(self.pad_count) / self.pad_count
-        r = self.ring_radius_m
-        return np.column_stack(
-            [r * np.cos(a), r * np.sin(a), np.full(self.pad_count, -self.pad_radius_m)]
-        )
 
 
 #: The largest roll or pitch misalignment of an approach (rad).
@@ -354,6 +296,11 @@ class WrenchCompensatorConfig:
         the wrench: ``-dw/dq`` (N/m, N, N m/m, N m/rad).
     force_deadband_n : float
         The compensator acts while the measured force's norm exceeds it.
+    stiffness_n_per_m : float or None
+        The contact stiffness (all pads together) of the compensator's contact
+        model (``compensator_stiffness_n_per_m``, as in 1-D): its linearized
+        and nominal ``K``, and ``sdmdc-online``'s prior; None: the contact's
+        (:func:`~hybridtable.loop.params.believed`).
     """
 
     name: str = "none"
@@ -361,6 +308,7 @@ class WrenchCompensatorConfig:
     stiffness_model: str = "linearized"
     stiffness_matrix: tuple | None = None
     force_deadband_n: float = 0.0
+    stiffness_n_per_m: float | None = None
 
     def __post_init__(self) -> None:
         from hybridtable.six_dof.registry import wrench_compensator_names
@@ -379,6 +327,9 @@ class WrenchCompensatorConfig:
         if self.stiffness_model == "given" and self.stiffness_matrix is None:
             raise ParameterError('stiffness_model "given" needs compensator_stiffness_matrix')
         s(self, "force_deadband_n", check_nonnegative("force_deadband_n", self.force_deadband_n))
+        if self.stiffness_n_per_m is not None:
+            k = check_positive("compensator_stiffness_n_per_m", self.stiffness_n_per_m)
+            s(self, "stiffness_n_per_m", check_plausible("compensator_stiffness_n_per_m", k))
 
 
 @dataclass(frozen=True)
@@ -496,6 +447,7 @@ class DockingLoopParams(NestedParams):
         "stiffness_model": ("rig", "compensator", "stiffness_model"),
         "compensator_stiffness_matrix": ("rig", "compensator", "stiffness_matrix"),
         "force_deadband_n": ("rig", "compensator", "force_deadband_n"),
+        "compensator_stiffness_n_per_m": ("rig", "compensator", "stiffness_n_per_m"),
         "force_noise_n": ("rig", "noise", "force_std_n"),
         "moment_noise_n_m": ("rig", "noise", "moment_std_n_m"),
         "seed": ("rig", "noise", "seed"),
@@ -539,6 +491,16 @@ class DockingLoopParams(NestedParams):
     def effective_lead_time_s(self) -> float:
         """The SDC lead: ``lead_time_s`` or the sensor delay."""
         return believed(self, "lead_time_s")
+
+    @property
+    def believed_contact(self) -> DockingContactParams:
+        """The contact the compensator's model believes: the contact with the
+        believed stiffness (``compensator_stiffness_n_per_m``) and without
+        friction (Drake's regularized friction is steep near zero slip,
+        ``mu f / 1e-4 m/s``, which a damping matrix would turn into lateral
+        forces of tens of kN)."""
+        k = believed(self, "compensator_stiffness_n_per_m", self.contact.contact_stiffness_n_per_m)
+        return replace(self.contact, contact_stiffness_n_per_m=k, friction_coefficient=0.0)
 
     @property
     def contact_frequency_hz(self) -> float:

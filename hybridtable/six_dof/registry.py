@@ -6,7 +6,9 @@ stiffness model (:data:`~hybridtable.six_dof.compensator.StiffnessModel`) and
 returns a system with the ports of
 :class:`~hybridtable.six_dof.compensator.WrenchCompensator`
 (``measured_wrench``, ``table_state``, ``commanded_state`` ->
-``compensated_wrench``). The paper's four are built in; other packages add
+``compensated_wrench``). The paper's four are built in, and ``sdmdc-online``
+(SDMDC with the 6x6 stiffness identified online,
+:mod:`~hybridtable.six_dof.identification`); other packages add
 theirs through the entry-point group ``hybridtable.wrench_compensators``, a
 script through :func:`register_wrench_compensator`.
 """
@@ -21,6 +23,7 @@ from pydrake.systems.framework import System
 from hybridtable._lazy import register_entry_points
 from hybridtable._validation import check_choice
 from hybridtable.six_dof.compensator import StiffnessModel, WrenchCompensator
+from hybridtable.six_dof.identification import make_online_sdmdc
 
 __all__ = [
     "WrenchCompensatorFactory",
@@ -47,7 +50,8 @@ def _paper(params: Any, stiffness: StiffnessModel) -> System:
 
 
 _REGISTRY: dict[str, WrenchCompensatorFactory] = {
-    name: _paper for name in PAPER_WRENCH_COMPENSATORS
+    **{name: _paper for name in PAPER_WRENCH_COMPENSATORS},
+    "sdmdc-online": make_online_sdmdc,
 }
 _entry_points_loaded = False
 

@@ -19,7 +19,8 @@ Sections and keys (SI units; every key optional unless marked)::
                               the plant steps at the rig's tick)
     [table.stewart.geometry]  StewartGeometry fields
     [compensator]  name, lead_time_s, stiffness_model = "linearized" | "nominal" |
-                   "given", stiffness_matrix (6x6), force_deadband_n
+                   "given", stiffness_matrix (6x6), force_deadband_n,
+                   stiffness_n_per_m (the contact stiffness it believes)
 
 Any other key, a wrong type or a value out of range raises
 :class:`~hybridtable.errors.SpecError` in one line naming the file and the key.
@@ -80,6 +81,7 @@ SCENARIO_KEYS: dict[str, tuple[str, ...]] = {
         "stiffness_model",
         "stiffness_matrix",
         "force_deadband_n",
+        "stiffness_n_per_m",
     ),
 }
 
@@ -163,6 +165,7 @@ def _parse(raw: Mapping[str, Any]) -> DockingLoopParams:
     renames = {
         "name": "compensator",
         "stiffness_matrix": "compensator_stiffness_matrix",
+        "stiffness_n_per_m": "compensator_stiffness_n_per_m",
     }
     for key, value in cp.items():
         kwargs[renames.get(key, key)] = value
