@@ -2,8 +2,10 @@
 
 A device pose is ``q = [p; theta]`` (m, rad): the position of the docking
 port in the target frame W and the rotation vector ``theta`` of its
-orientation, ``R = exp([theta]x)`` (Rodrigues). The table and the MDC work in
-these coordinates; rotation-vector differences are taken component-wise.
+orientation, ``R = exp([theta]x)`` (Rodrigues: :func:`rotation_exp` and
+:func:`skew` are :mod:`hybridtable.stewart.geometry`'s, which the Stewart
+platform's kinematics use too). The table and the MDC work in these
+coordinates; rotation-vector differences are taken component-wise.
 """
 
 from __future__ import annotations
@@ -12,21 +14,9 @@ import math
 
 import numpy as np
 
+from hybridtable.stewart.geometry import rotation_exp, skew
+
 __all__ = ["skew", "rotation_exp", "rotation_jacobian", "rotation_log", "pose_coordinates"]
-
-
-def skew(w: np.ndarray) -> np.ndarray:
-    """The cross-product matrix ``[w]x`` of a 3-vector."""
-    return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
-
-
-def rotation_exp(theta: np.ndarray) -> np.ndarray:
-    """``exp([theta]x)``: the rotation by ``|theta|`` rad about ``theta``."""
-    t = math.sqrt(float(theta[0] ** 2 + theta[1] ** 2 + theta[2] ** 2))
-    K = skew(theta)
-    if t < 1e-9:
-        return np.eye(3) + K + 0.5 * (K @ K)
-    return np.eye(3) + (math.sin(t) / t) * K + ((1.0 - math.cos(t)) / (t * t)) * (K @ K)
 
 
 def rotation_jacobian(theta: np.ndarray) -> np.ndarray:

@@ -28,6 +28,8 @@ from hybridtable.errors import ParameterError, WorkspaceError
 __all__ = [
     "WorkspaceError",
     "cross",
+    "skew",
+    "rotation_exp",
     "StewartGeometry",
     "rotation_from_rpy",
     "rpy_from_rotation",
@@ -89,13 +91,18 @@ def rotation_from_quaternion(q: np.ndarray) -> np.ndarray:
     )
 
 
-def _rotation_from_vector(w: np.ndarray) -> np.ndarray:
-    """exp([w]x) by Rodrigues' formula."""
-    theta = float(np.linalg.norm(w))
-    K = np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
-    if theta < 1e-12:
-        return np.eye(3) + K
-    return np.eye(3) + math.sin(theta) / theta * K + (1.0 - math.cos(theta)) / theta**2 * (K @ K)
+def skew(w: np.ndarray) -> np.ndarray:
+    """The cross-product matrix ``[w]x`` of a 3-vector."""
+    return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
+
+
+def rotation_exp(theta: np.ndarray) -> np.ndarray:
+    """``exp([theta]x)``: the rotation by ``|theta|`` rad about ``theta`` (Rodrigues)."""
+    t = math.sqrt(float(theta[0] ** 2 + theta[1] ** 2 + theta[2] ** 2))
+    K = skew(theta)
+    if t < 1e-9:
+        return np.eye(3) + K + 0.5 * (K @ K)
+    return np.eye(3) + (math.sin(t) / t) * K + ((1.0 - math.cos(t)) / (t * t)) * (K @ K)
 
 
 def _circle_points(radius: float, angles_deg: np.ndarray) -> np.ndarray:
@@ -357,7 +364,7 @@ class StewartGeometry:
                 break
             step = np.linalg.solve(J, -error)
             p = p + step[:3]
-            R = _rotation_from_vector(step[3:]) @ R
+            R = rotation_exp(step[3:]) @ R
         raise WorkspaceError(
             f"forward kinematics did not converge for leg lengths {np.round(target, 6)} m"
         )
