@@ -126,6 +126,9 @@ def run(args: argparse.Namespace) -> int:
         "simulated_s": sim_s,
         "wall_time_s": result.wall_time_s,
     }
+    identified = result.extra.get("identified_stiffness_n_per_m")
+    if identified is not None:
+        out["identified_stiffness_n_per_m"] = identified
     notes = [m.spin_note] if m.spin_note else []
     if m.spin_note:  # said beside the number too
         out["metrics"]["note"] = m.spin_note
@@ -144,6 +147,12 @@ def run(args: argparse.Namespace) -> int:
                 f"{m.energy_ratio:.4f}."
             )
         print(format_docking(params.compensator, m, reference, modes, result.wall_time_s, sim_s))
+        if identified is not None:
+            print(
+                f"identified contact stiffness {identified:.4g} N/m at the end (the compensator "
+                f"believed {params.believed_contact.contact_stiffness_n_per_m:.4g}, the "
+                f"contact's is {params.contact.contact_stiffness_n_per_m:.4g})"
+            )
         if m.spin_note:
             print(f"note: {m.spin_note}")
     if args.plot:

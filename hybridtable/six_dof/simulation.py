@@ -213,6 +213,12 @@ def simulate6(
     if separating:  # a record of a given duration is returned as it is
         rule.verdict()
     run = DockingRun(params, np.array(log.sample_times()), _split(log.data()))
+    if loop.compensator.HasOutputPort("stiffness_scale"):  # an online identifier's estimate
+        scale = loop.compensator.GetOutputPort("stiffness_scale")
+        k = params.believed_contact.contact_stiffness_n_per_m
+        run.extra["identified_stiffness_n_per_m"] = float(
+            scale.Eval(loop.compensator.GetMyContextFromRoot(context))[0] * k
+        )
     try:
         run.metrics = docking_metrics(
             run.time_s,

@@ -82,6 +82,10 @@ def test_json_to_stdout_is_only_json(capsys):
             ('stiffness_model = "linearized"', 'stiffness_model = "given"'),
             "needs compensator_stiffness_matrix",
         ),
+        (
+            ('stiffness_model = "linearized"', "stiffness_n_per_m = -1e5"),
+            "compensator_stiffness_n_per_m",
+        ),
     ],
 )
 def test_a_bad_scenario_gets_one_line_and_exit_2(tmp_path, capsys, change, words):
@@ -108,6 +112,22 @@ def test_a_given_stiffness_matrix_is_used(tmp_path, capsys):
     assert main(["simulate6", str(path), "--json", "-", "--no-reference"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["cor_normal"] == pytest.approx(1.05022, abs=1e-4)  # the 1-D MDC
+
+
+def test_sdmdc_online_finds_the_stiffness_the_scenario_gets_wrong(tmp_path, capsys):
+    """The compensator believes 1.5e5 N/m, the contact is 1e5: sdmdc-online
+    says what it identified, and the run matches the ideal rig."""
+    text = BASE.replace('name = "SDMDC"', 'name = "sdmdc-online"\nstiffness_n_per_m = 1.5e5')
+    path = _scenario(tmp_path, text)
+    out = tmp_path / "r.json"
+    assert main(["simulate6", str(path), "--json", str(out), "--no-progress"]) == 0
+    text_out = capsys.readouterr().out
+    doc = json.loads(out.read_text())
+    assert doc["compensator"] == "sdmdc-online"
+    assert doc["params"]["compensator_stiffness_n_per_m"] == 1.5e5
+    assert doc["identified_stiffness_n_per_m"] == pytest.approx(1e5, rel=1e-3)
+    assert "identified contact stiffness 1e+05 N/m" in text_out
+    assert doc["energy_ratio"] == pytest.approx(doc["reference"]["energy_ratio"], abs=0.01)
 
 
 def test_help_gives_the_plot_units(capsys):
