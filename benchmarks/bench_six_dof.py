@@ -7,7 +7,9 @@ back-end either the Stewart platform (MultibodyPlant at the 1 ms tick, full-pose
 inverse kinematics, leg servo, payload-compensated F/T sensor) or the table
 model (25 Hz, 0.8, Drake's contact of the devices), for: no compensation, and
 SDMDC with the 6x6 stiffness given (the docked pose's, a constant) or
-linearized at the table's pose at every tick of the contact.
+linearized at the table's pose at every tick of the contact, and (table
+model) sdmdc-online, whose identifier evaluates the contact model once more
+per tick of contact.
 
 Reported per case: the real-time factor (simulated time / wall time of the
 simulation, the diagram built beforehand, median of ``--repeat`` runs; and
@@ -52,6 +54,7 @@ CASES = (
     ("model none", "model", "none", "linearized"),
     ("model SDMDC given", "model", "SDMDC", "given"),
     ("model SDMDC linearized", "model", "SDMDC", "linearized"),
+    ("model sdmdc-online", "model", "sdmdc-online", "linearized"),
 )
 
 

@@ -146,8 +146,9 @@ def online_wrench_identifier_params(params, **overrides) -> IdentifierParams:
 def make_online_sdmdc(params, stiffness: StiffnessModel) -> Diagram:
     """The 6-DoF ``sdmdc-online`` (a wrench compensator registry factory):
     SDMDC on the wrench with ``K`` and ``C`` those of ``stiffness`` (the
-    compensator's contact model, linearized at the table's pose, or at the
-    nominal pose) times the identified stiffness over the model's.
+    compensator's contact model linearized at the table's pose, or at the
+    nominal pose; or the given matrix) times the identified stiffness over the
+    believed one.
 
     Ports: those of :class:`~hybridtable.six_dof.compensator.WrenchCompensator`,
     plus the output ``stiffness_scale`` (the estimate over the model's stiffness).

@@ -7,7 +7,7 @@ returns a system with the ports of
 :class:`~hybridtable.six_dof.compensator.WrenchCompensator`
 (``measured_wrench``, ``table_state``, ``commanded_state`` ->
 ``compensated_wrench``). The paper's four are built in, and ``sdmdc-online``
-(SDMDC with the 6x6 stiffness identified online,
+(SDMDC whose contact stiffness is identified online and scales the 6x6 K,
 :mod:`~hybridtable.six_dof.identification`); other packages add
 theirs through the entry-point group ``hybridtable.wrench_compensators``, a
 script through :func:`register_wrench_compensator`.

@@ -2213,6 +2213,16 @@ def _six_dof_cases() -> list[SurfaceCase]:
     key(cp, "name", "toaster", mention=("compensator", "toaster", "s.toml"))
     key(cp, "stiffness_model", "magic")
     key(cp, "lead_time_s", math.nan)
+    believes = "docs/six_dof.md: the stiffness the compensator believes, > 0 and plausible"
+    for value in (math.nan, 0.0, -1e5, 1e30, "stiff"):
+        key(cp, "stiffness_n_per_m", value, why=believes)
+    C(
+        "online-believing-twice-the-stiffness",
+        six_dof_scenario(lambda d: d[cp].update(name="sdmdc-online", stiffness_n_per_m=2e5)),
+        "ok",
+        (),
+        "docs/six_dof.md: sdmdc-online identifies the stiffness the compensator got wrong",
+    )
     C(
         "given-without-matrix",
         six_dof_scenario(_set("compensator/stiffness_model", "given")),
