@@ -63,7 +63,7 @@ from hybridtable.errors import DivergenceError, ParameterError, WorkspaceError
 from hybridtable.six_dof.contact import register_docking_devices
 from hybridtable.six_dof.params import DockingLoopParams
 from hybridtable.six_dof.pose import rotation_exp, rotation_log
-from hybridtable.stewart.backend import export_plate_pose
+from hybridtable.stewart.backend import connect_servo_and_device, export_plate_pose
 from hybridtable.stewart.ft_sensor import DeviceSensorBase
 from hybridtable.stewart.geometry import (
     StewartGeometry,
@@ -517,16 +517,7 @@ class StewartPoseBackend(Diagram):
         else:
             builder.Connect(ik.get_output_port(), servo.GetInputPort("leg_reference"))
             self._reference = None
-        builder.Connect(plant.get_state_output_port(), servo.GetInputPort("plant_state"))
-        builder.Connect(servo.GetOutputPort("leg_forces"), plant.get_actuation_input_port())
-        builder.Connect(plant.get_state_output_port(), sensor.GetInputPort("plant_state"))
-        builder.Connect(
-            plant.get_generalized_acceleration_output_port(),
-            sensor.GetInputPort("generalized_acceleration"),
-        )
-        builder.Connect(
-            plant.get_reaction_forces_output_port(), sensor.GetInputPort("reaction_forces")
-        )
+        connect_servo_and_device(builder, plant, servo, sensor)
         builder.Connect(sensor.GetOutputPort("step_wrench"), hold.get_input_port())
         builder.ExportInput(ik.get_input_port(), "commanded_state")
         builder.ExportOutput(sensor.GetOutputPort("port_state"), "table_state")

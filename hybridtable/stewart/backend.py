@@ -52,8 +52,26 @@ __all__ = [
     "build_stewart_loop",
     "stewart_params_for_loop",
     "export_plate_pose",
+    "connect_servo_and_device",
     "write_meshcat_html",
 ]
+
+
+def connect_servo_and_device(builder: DiagramBuilder, plant, servo, sensor) -> None:
+    """Wire a leg servo and an F/T device to the Stewart plant, as both
+    back-ends do (this one on the docking axis, the 6-DoF one on the pose):
+    the servo reads the plant's state (input ``plant_state``) and drives its
+    actuation (output ``leg_forces``); the device reads the state, the
+    generalized accelerations and the weld's reaction forces (inputs
+    ``plant_state``, ``generalized_acceleration``, ``reaction_forces``)."""
+    builder.Connect(plant.get_state_output_port(), servo.GetInputPort("plant_state"))
+    builder.Connect(servo.GetOutputPort("leg_forces"), plant.get_actuation_input_port())
+    builder.Connect(plant.get_state_output_port(), sensor.GetInputPort("plant_state"))
+    builder.Connect(
+        plant.get_generalized_acceleration_output_port(),
+        sensor.GetInputPort("generalized_acceleration"),
+    )
+    builder.Connect(plant.get_reaction_forces_output_port(), sensor.GetInputPort("reaction_forces"))
 
 
 class LegServo(LeafSystem):
@@ -266,16 +284,7 @@ class StewartTable(Diagram):
         motion = builder.AddNamedSystem("motion", Multiplexer([2, 1]))
         rate = builder.AddNamedSystem("force_rate", DiscreteDerivative(1, h))
         mux = builder.AddNamedSystem("sensed_force", Multiplexer([1, 1]))
-        builder.Connect(plant.get_state_output_port(), servo.GetInputPort("plant_state"))
-        builder.Connect(servo.GetOutputPort("leg_forces"), plant.get_actuation_input_port())
-        builder.Connect(plant.get_state_output_port(), sensor.GetInputPort("plant_state"))
-        builder.Connect(
-            plant.get_generalized_acceleration_output_port(),
-            sensor.GetInputPort("generalized_acceleration"),
-        )
-        builder.Connect(
-            plant.get_reaction_forces_output_port(), sensor.GetInputPort("reaction_forces")
-        )
+        connect_servo_and_device(builder, plant, servo, sensor)
         builder.Connect(sensor.GetOutputPort("step_readings"), hold.get_input_port())
         builder.Connect(hold.get_output_port(), split.get_input_port())
         builder.Connect(sensor.GetOutputPort("position_velocity"), motion.get_input_port(0))
