@@ -5,49 +5,29 @@ compensator, table response, contact) as a Drake systems diagram, its metrics,
 and the command-line tool ``hybridtable``.
 """
 
-from hybridtable.compensators.paper import COMPENSATORS, Compensator, CompensatorParams
-from hybridtable.errors import ParameterError, SimulationError
-from hybridtable.loop.builder import HybridLoop, add_hybrid_loop, build_hybrid_loop
-from hybridtable.loop.metrics import ContactMetrics, contact_metrics
-from hybridtable.loop.params import (
-    Approach,
-    CompensatorConfig,
-    HybridLoopParams,
-    Plant,
-    RigComputer,
-)
-from hybridtable.loop.simulation import SimulationResult, collect_result, run_loop, simulate
-from hybridtable.systems.contact import ContactParams, UnilateralSpringContact
-from hybridtable.systems.sensor import ForceSensorDelay, SensorParams
-from hybridtable.systems.spacecraft import Spacecraft, SpacecraftParams
-from hybridtable.systems.table import SecondOrderTable, TableParams
+from hybridtable._lazy import lazy_exports
 
-__all__ = [
-    "Approach",
-    "CompensatorConfig",
-    "Plant",
-    "RigComputer",
-    "COMPENSATORS",
-    "Compensator",
-    "CompensatorParams",
-    "ContactMetrics",
-    "ContactParams",
-    "ForceSensorDelay",
-    "HybridLoop",
-    "HybridLoopParams",
-    "ParameterError",
-    "SecondOrderTable",
-    "SensorParams",
-    "SimulationError",
-    "SimulationResult",
-    "Spacecraft",
-    "SpacecraftParams",
-    "TableParams",
-    "UnilateralSpringContact",
-    "add_hybrid_loop",
-    "build_hybrid_loop",
-    "collect_result",
-    "contact_metrics",
-    "run_loop",
-    "simulate",
-]
+# Each name is imported from its module when first used, so that importing one
+# module of the package (the command line, a plug-in, a worker) does not load
+# Drake and the whole loop.
+__all__, __getattr__, __dir__ = lazy_exports(
+    __name__,
+    {
+        "compensators.paper": ("COMPENSATORS", "Compensator", "CompensatorParams"),
+        "errors": ("ParameterError", "SimulationError"),
+        "loop.builder": ("HybridLoop", "add_hybrid_loop", "build_hybrid_loop"),
+        "loop.metrics": ("ContactMetrics", "contact_metrics"),
+        "loop.params": (
+            "Approach",
+            "CompensatorConfig",
+            "HybridLoopParams",
+            "Plant",
+            "RigComputer",
+        ),
+        "loop.simulation": ("SimulationResult", "collect_result", "run_loop", "simulate"),
+        "systems.contact": ("ContactParams", "UnilateralSpringContact"),
+        "systems.sensor": ("ForceSensorDelay", "SensorParams"),
+        "systems.spacecraft": ("Spacecraft", "SpacecraftParams"),
+        "systems.table": ("SecondOrderTable", "TableParams"),
+    },
+)

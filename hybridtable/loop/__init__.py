@@ -22,34 +22,15 @@
   discrete update per rig-computer tick (the campaigns' fast engine).
 """
 
-from hybridtable.loop.builder import LOGGED, HybridLoop, add_hybrid_loop, build_hybrid_loop
-from hybridtable.loop.fast import fast_unsupported, simulate_fast
-from hybridtable.loop.metrics import ContactMetrics, contact_metrics
-from hybridtable.loop.params import (
-    Approach,
-    CompensatorConfig,
-    HybridLoopParams,
-    Plant,
-    RigComputer,
-)
-from hybridtable.loop.simulation import SimulationResult, collect_result, run_loop, simulate
+from hybridtable._lazy import lazy_exports
 
-__all__ = [
-    "Approach",
-    "CompensatorConfig",
-    "Plant",
-    "RigComputer",
-    "LOGGED",
-    "ContactMetrics",
-    "HybridLoop",
-    "HybridLoopParams",
-    "SimulationResult",
-    "add_hybrid_loop",
-    "build_hybrid_loop",
-    "contact_metrics",
-    "fast_unsupported",
-    "run_loop",
-    "collect_result",
-    "simulate",
-    "simulate_fast",
-]
+__all__, __getattr__, __dir__ = lazy_exports(
+    __name__,
+    {
+        "builder": ("LOGGED", "HybridLoop", "add_hybrid_loop", "build_hybrid_loop"),
+        "fast": ("fast_unsupported", "simulate_fast"),
+        "metrics": ("ContactMetrics", "contact_metrics"),
+        "params": ("Approach", "CompensatorConfig", "HybridLoopParams", "Plant", "RigComputer"),
+        "simulation": ("SimulationResult", "collect_result", "run_loop", "simulate"),
+    },
+)
