@@ -147,3 +147,32 @@ def test_online_sdmdc_keeps_the_energy_with_the_stiffness_wrong(believed):
     online = simulate6(base.with_(compensator="sdmdc-online", compensator_stiffness_n_per_m=wrong))
     assert abs(fixed.metrics.energy_ratio - ideal.energy_ratio) > 0.03
     assert online.metrics.energy_ratio == pytest.approx(ideal.energy_ratio, abs=0.01)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [11, 12, 13])
+def test_online_sdmdc_lands_where_the_true_stiffness_does(seed):
+    """Drawn rigs (offset up to 30 mm, pitch up to 3 deg, inertia, delay 2-10
+    ms, table 15-50 Hz, damping, friction) and a belief between half and twice
+    the contact's: sdmdc-online's energy ratio is SDMDC's with the true
+    stiffness to 1e-3, and the identified stiffness the contact's to 1e-3."""
+    rng = np.random.default_rng(seed)
+    inertia = tuple(sorted(rng.uniform(1400.0, 2000.0, 3)))
+    base = docking_params(
+        rng.uniform(0.0, 0.03),
+        rng.uniform(0.0, 3.0),
+        inertia=inertia,
+        friction=float(rng.choice([0.0, 0.3])),
+        dissipation=float(rng.choice([0.0, 0.2, 0.5])),
+        sensor_delay_s=float(rng.choice([0.002, 0.005, 0.01])),
+        table_response_hz=float(rng.choice([15.0, 25.0, 50.0])),
+        table_damping_ratio=0.8,
+    )
+    k = base.contact.contact_stiffness_n_per_m
+    belief = float(np.exp(rng.uniform(np.log(0.5), np.log(2.0))))
+    true = simulate6(base.with_(compensator="SDMDC")).metrics.energy_ratio
+    run = simulate6(
+        base.with_(compensator="sdmdc-online", compensator_stiffness_n_per_m=belief * k)
+    )
+    assert run.metrics.energy_ratio == pytest.approx(true, abs=1e-3)
+    assert run.extra["identified_stiffness_n_per_m"] == pytest.approx(k, rel=1e-3)
