@@ -169,10 +169,11 @@ def information_step(Y, y, phi, target, lam, prior_information, prior_theta, wei
     ``target`` (m) the sample, ``prior_information`` the diagonal of ``Y0``
     (n), ``prior_theta`` ``theta0`` (n x m). Returns the new ``(Y, y)``
     (nested lists). Element by element, so it runs on any scalar type
-    (float, AutoDiffXd); the 1-D identifier (:func:`rls_step`, two
-    parameters, one output) and the 6-DoF wrench identifier
-    (:mod:`hybridtable.six_dof.identification`, 13 parameters, six outputs)
-    are this step."""
+    (float, AutoDiffXd). The 1-D identifier (:func:`rls_step`: two parameters,
+    one output) and the 6-DoF one
+    (:class:`~hybridtable.six_dof.identification.StiffnessIdentifier`: one
+    parameter, the tick's six wrench components as six samples, forgetting
+    applied with the first) are this step."""
     g = 1.0 - lam
     n = len(phi)
     wphi = [weight * phi[i] for i in range(n)]

@@ -60,7 +60,9 @@ def identify(
     state = context.get_discrete_state_vector()
     for q, qd, *other in samples:
         contact = other[0] if other else true
-        truth = truths.setdefault(contact, DockingContact(contact))
+        if contact not in truths:
+            truths[contact] = DockingContact(contact)
+        truth = truths[contact]
         ident.GetInputPort("measured_wrench").FixValue(context, truth.wrench(q, qd))
         ident.GetInputPort("aligned_table_state").FixValue(context, np.concatenate([q, qd]))
         update = ident.EvalUniquePeriodicDiscreteUpdate(context)
