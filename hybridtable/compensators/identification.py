@@ -59,6 +59,7 @@ from hybridtable.errors import ParameterError
 
 __all__ = [
     "IdentifierParams",
+    "identifier_settings",
     "RecursiveContactIdentifier",
     "information_step",
     "rls_step",
@@ -144,6 +145,31 @@ class IdentifierParams:
         return np.array(
             [i_k, 0.0, i_c, i_k * self.prior_stiffness_n_per_m, i_c * self.prior_damping_n_s_per_m]
         )
+
+
+def identifier_settings(
+    prior_stiffness_n_per_m: float,
+    force_deadband_n: float,
+    force_noise_n: float = 0.0,
+    /,
+    **overrides,
+) -> IdentifierParams:
+    """The online identifiers' settings for a rig (the 1-D ``sdmdc-online`` and
+    the 6-DoF one): the prior is the stiffness the compensator believes, its
+    standard deviation 100 % of it; the noise a third of the force deadband
+    or the sensor's force noise, whichever is larger (at least 1 mN); samples
+    above the deadband; a memory of 0.1 s. Keyword arguments override any field
+    of :class:`IdentifierParams` (e.g. the damping's prior and standard
+    deviation)."""
+    fields = {
+        "prior_stiffness_n_per_m": prior_stiffness_n_per_m,
+        "stiffness_std_n_per_m": prior_stiffness_n_per_m,
+        "force_noise_std_n": max(force_deadband_n / 3.0, force_noise_n, 1e-3),
+        "forgetting_time_s": 0.1,
+        "force_threshold_n": force_deadband_n,
+    }
+    fields.update(overrides)
+    return IdentifierParams(**fields)
 
 
 def forgetting_factor(forgetting_time_s: float, period_s: float) -> float:

@@ -20,7 +20,11 @@ from dataclasses import replace
 from pydrake.systems.framework import Diagram, DiagramBuilder, System
 
 from hybridtable.compensators._wiring import export_compensator_ports, sensor_like_delay
-from hybridtable.compensators.identification import ContactIdentifier, IdentifierParams
+from hybridtable.compensators.identification import (
+    ContactIdentifier,
+    IdentifierParams,
+    identifier_settings,
+)
 from hybridtable.compensators.paper import Compensator, CompensatorParams
 from hybridtable.errors import ParameterError
 
@@ -64,16 +68,11 @@ def online_identifier_params(params, **overrides) -> IdentifierParams:
             "sdmdc-online needs a prior stiffness > 0 (compensator_stiffness_n_per_m)"
         )
     fields = {
-        "prior_stiffness_n_per_m": k,
         "prior_damping_n_s_per_m": comp.damping_n_s_per_m,
-        "stiffness_std_n_per_m": k,
         "damping_std_n_s_per_m": math.sqrt(k * params.spacecraft_mass_kg),
-        "force_noise_std_n": max(params.force_deadband_n / 3.0, 1e-3),
-        "forgetting_time_s": 0.1,
-        "force_threshold_n": params.force_deadband_n,
+        **overrides,
     }
-    fields.update(overrides)
-    return IdentifierParams(**fields)
+    return identifier_settings(k, params.force_deadband_n, **fields)
 
 
 def make_online_sdmdc(

@@ -44,6 +44,7 @@ from pydrake.systems.framework import BasicVector, Diagram, DiagramBuilder, Leaf
 from hybridtable.compensators.identification import (
     IdentifierParams,
     forgetting_factor,
+    identifier_settings,
     information_step,
 )
 from hybridtable.six_dof.compensator import StiffnessModel, WrenchCompensator
@@ -126,21 +127,15 @@ class StiffnessIdentifier(LeafSystem):
 def online_wrench_identifier_params(params, **overrides) -> IdentifierParams:
     """Identifier settings for a 6-DoF loop (a
     :class:`~hybridtable.six_dof.params.DockingLoopParams`), by the 1-D
-    ``sdmdc-online``'s rules (:func:`~hybridtable.compensators.online.online_identifier_params`):
-    the prior is the stiffness the compensator believes, its standard deviation
-    100 % of it; the noise a third of the force deadband or the F/T sensor's
-    force noise, whichever is larger (at least 1 mN); samples above the
-    deadband; a memory of 0.1 s. Keyword arguments override any field."""
-    k = params.believed_contact.contact_stiffness_n_per_m
-    fields = {
-        "prior_stiffness_n_per_m": k,
-        "stiffness_std_n_per_m": k,
-        "force_noise_std_n": max(params.force_deadband_n / 3.0, params.force_noise_n, 1e-3),
-        "forgetting_time_s": 0.1,
-        "force_threshold_n": params.force_deadband_n,
-    }
-    fields.update(overrides)
-    return IdentifierParams(**fields)
+    ``sdmdc-online``'s rules (:func:`~hybridtable.compensators.identification.identifier_settings`)
+    with the believed stiffness, the force deadband and the F/T sensor's force
+    noise; the damping is not identified. Keyword arguments override any field."""
+    return identifier_settings(
+        params.believed_contact.contact_stiffness_n_per_m,
+        params.force_deadband_n,
+        params.force_noise_n,
+        **overrides,
+    )
 
 
 def make_online_sdmdc(params, stiffness: StiffnessModel) -> Diagram:
