@@ -42,6 +42,16 @@ class DockingMetrics:
         Largest norm of the force the compensator fed the model: above the
         contact's peak, the compensator itself pushes the model (a stiffness
         model that overshoots off axis).
+    lateral_drift_m : float
+        How far the port moved across the docking axis from the tick before
+        the model first felt a wrench to separation (m): the docking's slide
+        across the target.
+    captured : bool
+        The devices still touched at the end of the record: the contact held
+        the spacecraft instead of returning it (on a run to separation, only
+        once its port has come to rest against the target,
+        :func:`~hybridtable.six_dof.simulation.simulate6`); CoR and energy
+        ratio are then taken at the record's end.
     """
 
     cor_normal: float
@@ -55,6 +65,8 @@ class DockingMetrics:
     contact_duration_s: float
     lateral_velocity_m_per_s: float
     peak_compensated_force_n: float = 0.0
+    lateral_drift_m: float = 0.0
+    captured: bool = False
 
     def to_dict(self) -> dict[str, float]:
         return asdict(self)
@@ -83,9 +95,11 @@ def docking_metrics(
     rotational_energy_j: np.ndarray,
     contact_wrench: np.ndarray,
     compensated_wrench: np.ndarray,
+    port_position_m: np.ndarray | None = None,
 ) -> DockingMetrics:
     """Metrics of the first contact in a record (arrays over the ticks;
-    velocities (N, 3), wrenches (N, 6)).
+    velocities and positions (N, 3), wrenches (N, 6); without the port's
+    positions the lateral drift is NaN).
 
     Raises
     ------
@@ -109,6 +123,9 @@ def docking_metrics(
     e_in = float(kinetic_energy_j[i_in])
     e_out = float(kinetic_energy_j[-1])
     h = float(np.median(np.diff(t))) if t.size > 1 else 0.0
+    drift = math.nan
+    if port_position_m is not None:
+        drift = float(np.linalg.norm(port_position_m[i_out, :2] - port_position_m[i_in, :2]))
     return DockingMetrics(
         cor_normal=abs(v_out) / abs(v_in),
         v_in_m_per_s=v_in,
@@ -121,4 +138,6 @@ def docking_metrics(
         contact_duration_s=float(np.count_nonzero(force > 0) * h),
         lateral_velocity_m_per_s=float(np.linalg.norm(port_velocity_m_per_s[-1, :2])),
         peak_compensated_force_n=float(np.linalg.norm(compensated_wrench[:, 3:], axis=1).max()),
+        lateral_drift_m=drift,
+        captured=bool(force[-1] > 0.0),
     )

@@ -16,7 +16,7 @@ in and the tree that builds them by those names are one concept, as in
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field, is_dataclass, replace
+from dataclasses import asdict, dataclass, field, fields, is_dataclass, replace
 from typing import ClassVar
 
 import numpy as np
@@ -436,7 +436,15 @@ class DockingLoopParams(NestedParams):
     }
     FIELDS: ClassVar[dict[str, tuple[str, ...]]] = {
         "spacecraft": ("plant", "spacecraft"),
+        "spacecraft_mass_kg": ("plant", "spacecraft", "mass_kg"),
+        "inertia_kg_m2": ("plant", "spacecraft", "inertia_kg_m2"),
+        "port_distance_m": ("plant", "spacecraft", "port_distance_m"),
+        "lateral_offset_m": ("plant", "spacecraft", "lateral_offset_m"),
         "contact": ("plant", "contact"),
+        **{f.name: ("plant", "contact", f.name) for f in fields(DockingContactParams)},
+        "initial_velocity_m_per_s": ("approach", "initial_velocity_m_per_s"),
+        "initial_gap_m": ("approach", "initial_gap_m"),
+        "misalignment_rad": ("approach", "misalignment_rad"),
         "sample_rate_hz": ("rig", "sample_rate_hz"),
         "sensor_delay_s": ("rig", "sensor", "sensor_delay_s"),
         "table": ("plant", "table", "backend"),
@@ -462,7 +470,12 @@ class DockingLoopParams(NestedParams):
         approach, stewart) as a dict of its fields: the layout of
         ``simulate6 --json``'s ``params``."""
         out: dict = {}
+        configs = [path for path in self.FIELDS.values() if len(path) == 2 and path[0] == "plant"]
+        configs += [("plant", "table", "stewart"), ("approach",)]
         for name, value in self.quantities().items():
+            path = self.FIELDS[name]
+            if any(path[: len(c)] == c and path != c for c in configs):
+                continue  # inside a config given whole (spacecraft, contact, approach)
             out[name] = asdict(value) if is_dataclass(value) else value
             if name == "contact":
                 out["approach"] = asdict(self.approach)

@@ -17,7 +17,14 @@ from hybridtable.six_dof.metrics import DockingMetrics, docking_metrics
 from hybridtable.six_dof.params import DockingLoopParams
 from hybridtable.six_dof.pose import rotation_exp
 
-__all__ = ["MAX_TICKS", "DockingRun", "simulate6", "contact_potential_j", "expected_end_s"]
+__all__ = [
+    "MAX_TICKS",
+    "CAPTURE_SPEED_RATIO",
+    "DockingRun",
+    "simulate6",
+    "contact_potential_j",
+    "expected_end_s",
+]
 
 #: Simulated time between checks of the record (s).
 _CHUNK_S = 0.02
@@ -97,6 +104,20 @@ def expected_end_s(params: DockingLoopParams) -> float:
     return 2.0 * a.initial_gap_m / a.initial_velocity_m_per_s + 10.0 * half_period + 0.5
 
 
+#: A port still touching the target at the end of a run to separation is
+#: captured, not stuck in a loop that neither separates nor diverges, when its
+#: speed along the docking axis is below this fraction of the approach speed.
+CAPTURE_SPEED_RATIO = 0.05
+
+
+def _at_rest_in_contact(params: DockingLoopParams, data: np.ndarray) -> bool:
+    """The record ends with the devices touching and the port at rest along
+    the docking axis (:data:`CAPTURE_SPEED_RATIO`)."""
+    touching = float(np.linalg.norm(data[27:30, -1])) > 0.0
+    speed = abs(float(data[8, -1]))
+    return touching and speed <= CAPTURE_SPEED_RATIO * params.approach.initial_velocity_m_per_s
+
+
 def _split(data: np.ndarray) -> dict[str, np.ndarray]:
     out, row = {}, 0
     for name, size in LOG_LAYOUT.items():
@@ -134,8 +155,11 @@ def simulate6(
         If the contact force grows past 100 times the undamped peak
         ``k v0 / omega``, or a state stops being finite.
     SimulationError
-        If no contact happened or it has not ended by :func:`expected_end_s`,
-        or the run is over the step budget.
+        If no contact happened, or it has not ended by :func:`expected_end_s`
+        with the port still moving along the docking axis (a port at rest
+        against the target there is a capture, :attr:`DockingMetrics.captured
+        <hybridtable.six_dof.metrics.DockingMetrics.captured>`), or the run is
+        over the step budget.
     """
     import time
 
@@ -211,7 +235,11 @@ def simulate6(
         if ended:
             break
     if separating:  # a record of a given duration is returned as it is
-        rule.verdict()
+        try:
+            rule.verdict()
+        except SimulationError:
+            if not (rule.started and _at_rest_in_contact(params, log.data())):
+                raise
     run = DockingRun(params, np.array(log.sample_times()), _split(log.data()))
     if loop.compensator.HasOutputPort("stiffness_scale"):  # an online identifier's estimate
         scale = loop.compensator.GetOutputPort("stiffness_scale")
@@ -227,6 +255,7 @@ def simulate6(
             run.rotational_energy_j,
             run.log["contact_wrench"],
             run.log["compensated_wrench"],
+            run.log["commanded_state"][:, 0:3],
         )
     except ValueError as err:
         if params.duration_s is None:

@@ -129,7 +129,8 @@ TABLE_BACKENDS: tuple[str, ...] = ("second_order", "stewart")
 
 def input_of(name: str) -> Input | None:
     """The :class:`Input` called ``name``: one of :data:`INPUTS`, or
-    ``EFFECT.PARAMETER`` of a registered effect; None if there is none."""
+    ``EFFECT.PARAMETER`` of a registered effect; None if there is none
+    (a 6-DoF campaign's: :func:`~hybridtable.sweeps.plan.input_for`)."""
     if name in INPUTS:
         return INPUTS[name]
     effect_name, dot, parameter = name.partition(".")

@@ -22,7 +22,7 @@ import numpy as np
 from hybridtable.sweeps.distributions import Distribution
 from hybridtable.sweeps.metrics import DEFAULT_METRICS, MARGINS, METRICS, SIMULATION
 
-__all__ = ["SPEC_FORMAT", "ENGINES", "MAX_RUNS", "RunInputs", "SweepSpec"]
+__all__ = ["SPEC_FORMAT", "ENGINES", "MAX_RUNS", "RunInputs", "SweepSpec", "input_for"]
 
 #: The format name a spec may state (``format = "hybridtable-sweep/1"``).
 SPEC_FORMAT = "hybridtable-sweep/1"
@@ -34,6 +34,20 @@ ENGINES: tuple[str, ...] = ("auto", "diagram", "fast")
 
 #: The most runs one spec may hold.
 MAX_RUNS = 10_000_000
+
+
+def input_for(name: str, loop: str | None):
+    """The :class:`~.inputs.Input` called ``name`` in ``loop``: the 1-D loop's
+    (:func:`~.inputs.input_of`), the 6-DoF loop's
+    (:func:`~.docking.docking_inputs`), or for ``loop=None`` either, the 1-D
+    loop's first (a column's label). None if there is none."""
+    from hybridtable.sweeps.inputs import INPUTS, input_of
+
+    if loop == "six_dof" or (loop is None and name not in INPUTS and "." not in name):
+        from hybridtable.sweeps.docking import docking_inputs
+
+        return docking_inputs().get(name)
+    return input_of(name)
 
 
 @dataclass(frozen=True)
@@ -84,6 +98,11 @@ class SweepSpec:
         Where it was read from (for reports).
     pade_order : int
         Pade order of the continuous linear model (margin metrics).
+    scenario : dict or None
+        A 6-DoF scenario's TOML (``scenario = "FILE.toml"``): the campaign runs
+        the docking loop (:mod:`.docking`) with it as every run's base.
+    scenario_path : str or None
+        Where it was read from (for reports).
     source : str
         The spec file, for messages.
     """
@@ -101,7 +120,20 @@ class SweepSpec:
     model_path: str | None = None
     pade_order: int = 3
     description: str = ""
+    scenario: dict[str, Any] | None = None
+    scenario_path: str | None = None
     source: str = field(default="<spec>", compare=False)
+
+    @property
+    def loop(self) -> str:
+        """The loop the runs simulate (:data:`~.metrics.LOOPS`): ``six_dof``
+        with a scenario, else ``1d``."""
+        return "1d" if self.scenario is None else "six_dof"
+
+    def input(self, name: str):
+        """The :class:`~.inputs.Input` called ``name`` in this spec's loop
+        (None: the loop has none)."""
+        return input_for(name, self.loop)
 
     # -- the runs ----------------------------------------------------------
     @property
@@ -152,7 +184,7 @@ class SweepSpec:
     # -- identity ----------------------------------------------------------
     def to_json(self) -> dict[str, Any]:
         """The spec as JSON (what the Parquet file's metadata holds)."""
-        return {
+        out = {
             "format": SPEC_FORMAT,
             "name": self.name,
             "description": self.description,
@@ -169,13 +201,17 @@ class SweepSpec:
             "pade_order": self.pade_order,
             "n_runs": self.n_runs,
         }
+        if self.scenario is not None:  # a 1-D spec's JSON (and fingerprint) as before
+            out["scenario"] = self.scenario
+            out["scenario_path"] = self.scenario_path
+        return out
 
     def fingerprint(self) -> str:
         """SHA-256 of the canonical JSON of what decides the results (the
         runs, the metrics, the engine, the model), not of the file's text."""
         d = self.to_json()
-        for key in ("name", "description", "model_path"):
-            d.pop(key)
+        for key in ("name", "description", "model_path", "scenario_path"):
+            d.pop(key, None)
         text = json.dumps(d, sort_keys=True, allow_nan=True, separators=(",", ":"))
         return hashlib.sha256(text.encode()).hexdigest()
 

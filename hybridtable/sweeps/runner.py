@@ -39,6 +39,7 @@ ID_COLUMNS: tuple[str, ...] = ("run", "point", "sample", "seed")
 # Per-process caches: a worker builds these once per campaign.
 _MODELS: dict[str, Any] = {}
 _LINEAR: dict[tuple[int, bool], Any] = {}
+_SCENARIOS: dict[str, Any] = {}
 
 
 def empty_metrics(spec: SweepSpec) -> dict[str, Any]:
@@ -98,7 +99,7 @@ def row_problem(spec: SweepSpec, row: dict[str, Any]) -> str | None:
             if not isinstance(value, bool):
                 return f"an ok run with stable = {value!r}"
         elif not isinstance(value, int | float) or (
-            metric.source == SIMULATION and not math.isfinite(value)
+            metric.source == SIMULATION and metric.finite and not math.isfinite(value)
         ):
             return f"an ok run with {name} = {value!r}"
         elif name in ("cor", "energy_ratio") and not 0.0 <= value <= _MOST_COR[name]:
@@ -115,6 +116,20 @@ def _model(spec: SweepSpec):
 
         _MODELS[key] = model_from_json(spec.model, spec.model_path or "model")
     return _MODELS[key]
+
+
+def _docking(spec: SweepSpec, inputs: RunInputs) -> dict[str, Any]:
+    """The 6-DoF metrics of a run of a spec with a scenario."""
+    from hybridtable.sweeps.docking import docking_params, simulate_docking
+
+    key = spec.fingerprint()
+    if key not in _SCENARIOS:
+        from hybridtable.six_dof.scenario import parse_scenario
+
+        _SCENARIOS[key] = parse_scenario(spec.scenario, spec.scenario_path or "scenario")
+    holds = "contact_frequency_hz" in spec.scenario.get("spacecraft", {})
+    params = docking_params(_SCENARIOS[key], inputs.values, inputs.seed, holds)
+    return simulate_docking(params)
 
 
 def _engine(spec: SweepSpec, params, values: dict[str, Any]) -> str:
@@ -241,30 +256,41 @@ def _margins(spec: SweepSpec, params) -> dict[str, Any]:
     return out
 
 
+def _run_1d(spec: SweepSpec, inputs: RunInputs, row: dict[str, Any]) -> None:
+    """Fill ``row`` (its metrics and ``engine``) with a 1-D run."""
+    values = inputs.values
+    params = loop_params(values)
+    if spec.needs_simulation:
+        row["engine"] = _engine(spec, params, values)
+        m = _simulate(spec, params, values, inputs.seed, row["engine"])
+        found = m.to_dict()
+        found["energy_ratio"] = m.cor**2
+        for name in spec.metrics:
+            if METRICS[name].source == SIMULATION:
+                row[name] = float(found[name])
+    if spec.needs_margins:
+        found = _margins(spec, params)
+        for name in spec.metrics:
+            if METRICS[name].source == MARGINS:
+                row[name] = found[name]
+
+
 def run_one(spec: SweepSpec, index: int) -> dict[str, Any]:
     """The row of run ``index``: ids, swept inputs, ``compensator``, metrics,
     ``status``, ``message``, ``engine``, ``seconds``."""
     t0 = time.perf_counter()
     inputs = spec.run_inputs(index)
-    values = inputs.values
     row = blank_row(spec, inputs)
     status, message = "ok", ""
-    engine = "" if spec.needs_simulation else "linear"
+    row["engine"] = "" if spec.needs_simulation else "linear"
     try:
-        params = loop_params(values)
-        if spec.needs_simulation:
-            engine = _engine(spec, params, values)
-            m = _simulate(spec, params, values, inputs.seed, engine)
-            found = m.to_dict()
-            found["energy_ratio"] = m.cor**2
+        if spec.loop == "six_dof":
+            row["engine"] = "diagram"
+            found = _docking(spec, inputs)
             for name in spec.metrics:
-                if METRICS[name].source == SIMULATION:
-                    row[name] = float(found[name])
-        if spec.needs_margins:
-            found = _margins(spec, params)
-            for name in spec.metrics:
-                if METRICS[name].source == MARGINS:
-                    row[name] = found[name]
+                row[name] = found[name]
+        else:
+            _run_1d(spec, inputs, row)
     except DivergenceError as err:
         status, message = "diverged", str(err)
     except SimulationError as err:
@@ -277,7 +303,7 @@ def run_one(spec: SweepSpec, index: int) -> dict[str, Any]:
         row.update(empty_metrics(spec))
     row["status"] = status
     row["message"] = " ".join(message.split())[:500]
-    row["engine"] = engine
+    row["engine"] = row.pop("engine")  # the column's place, after the message
     row["seconds"] = time.perf_counter() - t0
     return row
 

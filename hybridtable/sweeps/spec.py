@@ -7,6 +7,7 @@ A spec is a TOML file (``docs/sweeps.md`` has the whole format)::
     engine = "auto"                  # auto | diagram | fast
     metrics = ["cor", "peak_force_n"]
     compensators = ["none", "SDC", "MDC", "SDMDC"]   # an innermost axis
+    scenario = "docking.toml"        # optional: a 6-DoF campaign on this scenario
 
     [base]                           # fixed inputs of every run
     contact_frequency_hz = 1.0
@@ -22,6 +23,10 @@ A spec is a TOML file (``docs/sweeps.md`` has the whole format)::
     samples = 100                    # draws, each run at every point and cell
     [monte_carlo.draw]
     initial_velocity_m_per_s = {distribution = "uniform", low = 0.05, high = 0.2}
+
+Without ``scenario`` the runs are of the 1-D loop (:mod:`.inputs`); with it, of
+the 6-DoF docking loop on that scenario (:mod:`.docking`: its inputs, and the
+6-DoF metrics of :mod:`.metrics`).
 
 The runs are every point x every sample x every grid cell (the last grid axis,
 then ``compensators``, varying fastest). Each Monte Carlo sample is drawn once
@@ -42,9 +47,9 @@ import numpy as np
 
 from hybridtable.errors import ParameterError, SpecError
 from hybridtable.sweeps.distributions import Distribution, parse_distribution
-from hybridtable.sweeps.inputs import CONFLICTS, INPUTS, NOISE_INPUTS, check_value, input_of
-from hybridtable.sweeps.metrics import DEFAULT_METRICS, METRICS
-from hybridtable.sweeps.plan import ENGINES, MAX_RUNS, SPEC_FORMAT, SweepSpec
+from hybridtable.sweeps.inputs import CONFLICTS, INPUTS, NOISE_INPUTS, check_value
+from hybridtable.sweeps.metrics import DEFAULT_DOCKING_METRICS, DEFAULT_METRICS, metrics_of
+from hybridtable.sweeps.plan import ENGINES, MAX_RUNS, SPEC_FORMAT, SweepSpec, input_for
 
 __all__ = ["load_spec", "parse_spec"]
 
@@ -65,6 +70,7 @@ _TOP_KEYS = (
     "grid",
     "points",
     "monte_carlo",
+    "scenario",
 )
 
 
@@ -134,16 +140,31 @@ def _parse(raw: Mapping[str, Any], source: str, folder: Path) -> SweepSpec:
     engine = raw.get("engine", "auto")
     if engine not in ENGINES:
         raise ParameterError(f"engine must be one of {', '.join(ENGINES)} (got {engine!r})")
-    metrics = _metrics(raw.get("metrics", list(DEFAULT_METRICS)))
+    scenario, scenario_path, docking_base = None, None, None
+    if "scenario" in raw:
+        from hybridtable.sweeps.docking import read_base_scenario
+
+        with _Key("scenario"):
+            scenario, scenario_path, docking_base = read_base_scenario(raw["scenario"], folder)
+    loop = "1d" if scenario is None else "six_dof"
+    if loop == "six_dof":
+        one_d = [k for k in ("model", "pade_order") if k in raw]
+        if engine == "fast" or one_d:
+            what = f"{one_d[0]} (the 1-D loop's)" if one_d else 'engine = "fast" (1-D only)'
+            raise ParameterError(f"a 6-DoF campaign (scenario) runs the docking loop: no {what}")
+    defaults = DEFAULT_METRICS if loop == "1d" else DEFAULT_DOCKING_METRICS
+    metrics = _metrics(raw.get("metrics", list(defaults)), loop)
     pade_order = raw.get("pade_order", 3)
     if isinstance(pade_order, bool) or not isinstance(pade_order, int) or not 1 <= pade_order <= 10:
         raise ParameterError(f"pade_order must be a whole number 1..10 (got {pade_order!r})")
 
     where: dict[str, str] = {}
+    check = _checker(loop, docking_base)
 
     def claim(name: str, key: str) -> None:
-        if input_of(name) is None:
-            close = [n for n in INPUTS if name.split("_")[0] in n][:3]
+        if input_for(name, loop) is None:
+            known = INPUTS if loop == "1d" else _docking_inputs()
+            close = [n for n in known if name.split("_")[0] in n][:3]
             hint = f"; did you mean {' or '.join(close)}?" if close else ""
             raise ParameterError(f"{key}: unknown parameter {name!r}{hint} (see docs/sweeps.md)")
         if name in where:
@@ -155,17 +176,18 @@ def _parse(raw: Mapping[str, Any], source: str, folder: Path) -> SweepSpec:
     for k, v in base_raw.items():
         claim(k, f"base.{k}")
         with _Key(f"base.{k}"):
-            base.append((k, check_value(k, v)))
+            base.append((k, check(k, v)))
 
     grid = []
     for k, v in _table(raw.get("grid", {}), "grid").items():
         claim(k, f"grid.{k}")
-        grid.append((k, _axis(k, v)))
+        grid.append((k, _axis(k, v, check, loop)))
     if "compensators" in raw:
         claim("compensator", "compensators")
-        grid.append(("compensator", _axis("compensator", raw["compensators"], "compensators")))
+        axis = _axis("compensator", raw["compensators"], check, loop, "compensators")
+        grid.append(("compensator", axis))
 
-    points = _points(raw.get("points"), claim)
+    points = _points(raw.get("points"), claim, check)
 
     samples, draws = 1, []
     if "monte_carlo" in raw:
@@ -185,22 +207,26 @@ def _parse(raw: Mapping[str, Any], source: str, folder: Path) -> SweepSpec:
             claim(k, key)
             with _Key(key):
                 dist = parse_distribution(v)
-                kind = input_of(k).kind
+                kind = input_for(k, loop).kind
                 if kind != "number" and dist.kind != "choice":
                     raise ParameterError(f"{k} is {kind}: only choice can draw it")
                 if kind == "number" and dist.kind == "choice":
                     dist = Distribution(
                         "choice",
-                        values=tuple(check_value(k, x) for x in dist.values),
+                        values=tuple(check(k, x) for x in dist.values),
                         weights=dist.weights,
                     )
                 else:
                     for x in dist.extremes():
-                        check_value(k, x)
+                        check(k, x)
                     _check_tails(k, dist)
             draws.append((k, dist))
 
-    for a, b in CONFLICTS:
+    if loop == "six_dof":
+        from hybridtable.sweeps.docking import CONFLICTS as conflicts
+    else:
+        conflicts = CONFLICTS
+    for a, b in conflicts:
         if a in where and b in where:
             raise ParameterError(
                 f"{b} (in {where[b]}) and {a} (in {where[a]}) set the same quantity: give one"
@@ -220,6 +246,8 @@ def _parse(raw: Mapping[str, Any], source: str, folder: Path) -> SweepSpec:
         model_path=model_path,
         pade_order=pade_order,
         description=description,
+        scenario=scenario,
+        scenario_path=scenario_path,
         source=source,
     )
     if spec.n_runs > MAX_RUNS:
@@ -228,6 +256,8 @@ def _parse(raw: Mapping[str, Any], source: str, folder: Path) -> SweepSpec:
             f"{spec.cells} = {spec.n_runs} runs, more than one spec may hold ({MAX_RUNS}); "
             "split the campaign"
         )
+    if loop == "six_dof":
+        return spec
     _check_effects(where)
     effects = any("." in n for n in where)
     diagram_only = [n for n in NOISE_INPUTS if n in where]
@@ -337,21 +367,23 @@ def _table(value: Any, key: str) -> Mapping[str, Any]:
     return value
 
 
-def _metrics(value: Any) -> tuple[str, ...]:
+def _metrics(value: Any, loop: str) -> tuple[str, ...]:
     if not isinstance(value, list) or not value:
         raise ParameterError(f"metrics: must be a non-empty list of names (got {value!r})")
+    known = metrics_of(loop)
     for m in value:
-        if m not in METRICS:
-            raise ParameterError(f"metrics: unknown metric {m!r} (one of {', '.join(METRICS)})")
+        if m not in known:
+            which = "a 6-DoF campaign's" if loop == "six_dof" else "a 1-D campaign's"
+            raise ParameterError(f"metrics: unknown metric {m!r} ({which} are {', '.join(known)})")
     if len(set(value)) != len(value):
         raise ParameterError("metrics: a metric is listed twice")
     return tuple(value)
 
 
-def _axis(name: str, value: Any, key: str | None = None) -> tuple[Any, ...]:
+def _axis(name: str, value: Any, check, loop: str, key: str | None = None) -> tuple[Any, ...]:
     key = key or f"grid.{name}"
     if isinstance(value, Mapping):
-        values = _range(name, value, key)
+        values = _range(name, value, key, loop)
     elif isinstance(value, list):
         values = value
     else:
@@ -364,11 +396,11 @@ def _axis(name: str, value: Any, key: str | None = None) -> tuple[Any, ...]:
     out = []
     for i, v in enumerate(values):
         with _Key(f"{key}[{i}]"):
-            out.append(check_value(name, v))
+            out.append(check(name, v))
     return tuple(out)
 
 
-def _range(name: str, value: Mapping[str, Any], key: str) -> list[float]:
+def _range(name: str, value: Mapping[str, Any], key: str, loop: str) -> list[float]:
     bad = [k for k in value if k not in ("start", "stop", "num", "scale")]
     if bad:
         raise ParameterError(f"{key}.{bad[0]}: unknown key (a range has start, stop, num, scale)")
@@ -387,7 +419,7 @@ def _range(name: str, value: Mapping[str, Any], key: str) -> list[float]:
         if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
             raise ParameterError(f"{key}.{k}: must be a finite number (got {v!r})")
         ends.append(float(v))
-    if input_of(name).kind != "number":
+    if input_for(name, loop).kind != "number":
         raise ParameterError(f"{key}: {name} is not a number; list its values")
     if scale == "log":
         if min(ends) <= 0.0:
@@ -396,7 +428,7 @@ def _range(name: str, value: Mapping[str, Any], key: str) -> list[float]:
     return [float(x) for x in np.linspace(ends[0], ends[1], num)]
 
 
-def _points(value: Any, claim) -> tuple[tuple[tuple[str, Any], ...], ...]:
+def _points(value: Any, claim, check) -> tuple[tuple[tuple[str, Any], ...], ...]:
     if value is None:
         return ((),)
     if not isinstance(value, list) or not value:
@@ -419,7 +451,7 @@ def _points(value: Any, claim) -> tuple[tuple[tuple[str, Any], ...], ...]:
         row = []
         for k in keys0:
             with _Key(f"points[{i}].{k}"):
-                row.append((k, check_value(k, p[k])))
+                row.append((k, check(k, p[k])))
         out.append(tuple(row))
     return tuple(out)
 
@@ -437,3 +469,22 @@ def _model(value: Any, folder: Path) -> tuple[dict[str, Any] | None, str | None]
         data = read_user_json(path, ParameterError)
         model_from_json(data, str(path))
     return data, str(path)
+
+
+def _docking_inputs():
+    from hybridtable.sweeps.docking import docking_inputs
+
+    return docking_inputs()
+
+
+def _checker(loop: str, docking_base):
+    """``check(name, value)`` of the spec's loop: the 1-D inputs' rules, or
+    the 6-DoF base scenario built with the value."""
+    if loop == "1d":
+        return check_value
+    from hybridtable.sweeps.docking import check_docking_value
+
+    def check(name: str, value: Any) -> Any:
+        return check_docking_value(docking_base, name, value)
+
+    return check

@@ -23,7 +23,6 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from hybridtable.errors import ParameterError
-from hybridtable.sweeps.inputs import input_of
 from hybridtable.sweeps.metrics import METRICS
 from hybridtable.sweeps.plan import SweepSpec
 from hybridtable.sweeps.runner import ID_COLUMNS
@@ -53,7 +52,7 @@ _TYPES = {"number": pa.float64(), "text": pa.string(), "bool": pa.bool_()}
 def results_schema(spec: SweepSpec) -> pa.Schema:
     """The Parquet schema of ``spec``'s results, with its metadata."""
     cols = [(name, pa.int64()) for name in ID_COLUMNS]
-    cols += [(name, _TYPES[input_of(name).kind]) for name in spec.swept if name != "compensator"]
+    cols += [(name, _TYPES[spec.input(name).kind]) for name in spec.swept if name != "compensator"]
     cols.append(("compensator", pa.string()))
     cols += [(m, _TYPES[METRICS[m].kind]) for m in spec.metrics]
     cols += [

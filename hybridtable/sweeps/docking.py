@@ -1,0 +1,300 @@
+"""A 6-DoF campaign: what it varies and how one of its runs goes.
+
+A spec that names a 6-DoF scenario (``scenario = "docking.toml"``, the file
+``hybridtable simulate6`` reads) runs the docking loop
+(:func:`~hybridtable.six_dof.simulation.simulate6`) at each of its runs: the
+scenario is every run's base, and the spec's ``[base]``, grid, points and
+draws change it by flat name. The inputs (:func:`docking_inputs`) are made
+from :class:`~hybridtable.six_dof.params.DockingLoopParams` itself: every
+quantity of its tree that is one number, word or flag, under its flat name
+(``initial_velocity_m_per_s``, ``friction_coefficient``, ``sensor_delay_s``,
+``compensator``...), and each component of its vectors
+(:data:`COMPONENTS`: ``lateral_offset_x_m``, ``misalignment_pitch_rad``,
+``inertia_z_kg_m2``...), plus two derived inputs as in 1-D:
+
+- ``contact_frequency_hz`` sets the spacecraft's mass from the run's contact
+  stiffness, ``m = k / (2 pi f)^2``; a scenario that gives
+  ``[spacecraft] contact_frequency_hz`` holds that frequency while a campaign
+  varies the stiffness (its mass follows, as the scenario says), one that
+  gives ``mass_kg`` holds the mass;
+- ``compensator_stiffness_ratio``: the stiffness the compensator believes over
+  the run's true one.
+
+The F/T noise's seed is the run's own seed. A run's values are checked by the
+configs that take them (one rule per quantity, wherever it is set), and the
+spec checks each value it gives against the base scenario before any run.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import cache
+from typing import Any, get_type_hints
+
+from hybridtable.errors import ParameterError
+from hybridtable.sweeps.inputs import Input
+
+__all__ = [
+    "COMPONENTS",
+    "DERIVED",
+    "CONFLICTS",
+    "docking_inputs",
+    "docking_params",
+    "check_docking_value",
+    "read_base_scenario",
+    "simulate_docking",
+]
+
+#: Vector quantities a campaign varies by component: name -> component names.
+#: ``inertia_kg_m2``'s are the principal moments on the body axes (a scenario
+#: with products of inertia cannot vary them one by one).
+COMPONENTS: dict[str, tuple[str, ...]] = {
+    "lateral_offset_m": ("x", "y"),
+    "misalignment_rad": ("roll", "pitch"),
+    "inertia_kg_m2": ("x", "y", "z"),
+}
+
+#: Quantities a campaign does not vary: whole configs, the 6x6 matrix, and
+#: the noise's seed (each run's own).
+_NOT_INPUTS = ("spacecraft", "contact", "stewart", "compensator_stiffness_matrix", "seed")
+
+#: Units by the ending of a quantity's name, longest first.
+_UNITS: tuple[tuple[str, str], ...] = (
+    ("_n_per_m", "N/m"),
+    ("_s_per_m", "s/m"),
+    ("_m_per_s", "m/s"),
+    ("_rad_per_s", "rad/s"),
+    ("_kg_m2", "kg m^2"),
+    ("_n_m", "N m"),
+    ("_kg", "kg"),
+    ("_hz", "Hz"),
+    ("_rad", "rad"),
+    ("_s", "s"),
+    ("_m", "m"),
+    ("_n", "N"),
+)
+
+#: The derived inputs (see the module docstring).
+DERIVED: dict[str, Input] = {
+    "contact_frequency_hz": Input(
+        "contact_frequency_hz", "number", "Hz", "on-axis contact frequency; sets the mass"
+    ),
+    "compensator_stiffness_ratio": Input(
+        "compensator_stiffness_ratio", "number", "1", "believed / true contact stiffness"
+    ),
+}
+
+#: Pairs of inputs that set the same quantity.
+CONFLICTS: tuple[tuple[str, str], ...] = (
+    ("spacecraft_mass_kg", "contact_frequency_hz"),
+    ("compensator_stiffness_n_per_m", "compensator_stiffness_ratio"),
+)
+
+
+def _unit(name: str) -> str:
+    for ending, unit in _UNITS:
+        if name.endswith(ending):
+            return unit
+    return "1" if name.endswith(("_ratio", "_coefficient", "_count")) else ""
+
+
+def _words(name: str, unit: str) -> str:
+    for ending, u in _UNITS:
+        if u == unit and name.endswith(ending):
+            return name[: -len(ending)].replace("_", " ")
+    return name.replace("_", " ")
+
+
+def _leaf_type(path: tuple[str, ...]) -> Any:
+    """The annotated type of the field at ``path`` in the params' tree."""
+    from hybridtable.six_dof.params import DockingLoopParams
+
+    kind: Any = DockingLoopParams
+    hints = {name: cls for name, cls in DockingLoopParams.PARTS.items()}
+    for key in path:
+        kind = hints[key]
+        hints = get_type_hints(kind) if hasattr(kind, "__dataclass_fields__") else {}
+    return kind
+
+
+@cache
+def docking_inputs() -> dict[str, Input]:
+    """Every input a 6-DoF spec may set, by name (see the module docstring)."""
+    from hybridtable.six_dof.params import DockingLoopParams
+
+    out: dict[str, Input] = {}
+    for name, path in DockingLoopParams.FIELDS.items():
+        if name in _NOT_INPUTS:
+            continue
+        unit = _unit(name)
+        if name in COMPONENTS:
+            stem = name[: -len(_unit_ending(name))]
+            for axis in COMPONENTS[name]:
+                component = f"{stem}_{axis}{_unit_ending(name)}"
+                words = f"{_words(name, unit)} ({axis})"
+                out[component] = Input(component, "number", unit, words)
+            continue
+        kind = _leaf_type(path)
+        text = str(kind)
+        if kind is bool or text == "bool":
+            out[name] = Input(name, "bool", "", _words(name, unit))
+        elif kind is str or text == "str":
+            out[name] = Input(name, "text", "", _words(name, unit))
+        else:
+            out[name] = Input(name, "number", unit or "1", _words(name, unit))
+    out.update(DERIVED)
+    return out
+
+
+def _unit_ending(name: str) -> str:
+    """The unit part of a quantity's name (``lateral_offset_m`` -> ``_m``)."""
+    for ending, _ in _UNITS:
+        if name.endswith(ending):
+            return ending
+    return ""
+
+
+def _component_of(name: str) -> tuple[str, int] | None:
+    for vector, axes in COMPONENTS.items():
+        ending = _unit_ending(vector)
+        stem = vector[: -len(ending)]
+        for i, axis in enumerate(axes):
+            if name == f"{stem}_{axis}{ending}":
+                return vector, i
+    return None
+
+
+def _choices(name: str) -> tuple[str, ...] | None:
+    if name == "compensator":
+        from hybridtable.six_dof.registry import wrench_compensator_names
+
+        return tuple(wrench_compensator_names())
+    if name == "table":
+        from hybridtable.six_dof.params import TABLE_BACKENDS
+
+        return TABLE_BACKENDS
+    if name == "stiffness_model":
+        from hybridtable.six_dof.params import STIFFNESS_MODELS
+
+        return STIFFNESS_MODELS
+    return None
+
+
+def docking_params(base, values: dict[str, Any], seed: int, holds_frequency: bool = False):
+    """The :class:`~hybridtable.six_dof.params.DockingLoopParams` of one run:
+    ``base`` (the scenario's) with the run's ``values`` (inputs by name) and
+    the noise seeded by ``seed``. ``holds_frequency``: the scenario gave the
+    contact frequency, which a varied stiffness keeps.
+
+    Raises
+    ------
+    ParameterError
+        Naming the input whose value makes no loop.
+    """
+    from hybridtable.laws.contact import mass_for_contact_frequency_kg
+
+    changes: dict[str, Any] = {}
+    vectors: dict[str, list[float]] = {}
+    for name, value in values.items():
+        if name in DERIVED:
+            continue
+        component = _component_of(name)
+        if component is None:
+            changes[name] = value
+            continue
+        vector, i = component
+        if vector not in vectors:
+            current = getattr(base, vector)
+            if vector == "inertia_kg_m2":
+                matrix = [list(row) for row in current]
+                if any(matrix[r][c] for r in range(3) for c in range(3) if r != c):
+                    raise ParameterError(
+                        f"{name}: the scenario's inertia_kg_m2 has products of inertia; "
+                        "give its principal moments on the body axes to vary them"
+                    )
+                current = [matrix[j][j] for j in range(3)]
+            vectors[vector] = [float(x) for x in current]
+        vectors[vector][i] = float(value)
+    changes.update({k: tuple(v) for k, v in vectors.items()})
+    if "seed" not in changes:
+        changes["seed"] = int(seed) % 2**63
+    stiffness = changes.get("contact_stiffness_n_per_m", base.contact.contact_stiffness_n_per_m)
+    frequency = values.get("contact_frequency_hz")
+    if frequency is None and holds_frequency and "spacecraft_mass_kg" not in changes:
+        frequency = base.contact_frequency_hz
+    if frequency is not None:
+        changes["spacecraft_mass_kg"] = mass_for_contact_frequency_kg(
+            float(stiffness), float(frequency)
+        )
+    ratio = values.get("compensator_stiffness_ratio")
+    if ratio is not None:
+        changes["compensator_stiffness_n_per_m"] = float(ratio) * float(stiffness)
+    return base.with_(**changes)
+
+
+def check_docking_value(base, name: str, value: Any) -> Any:
+    """``value`` of input ``name`` as a spec gives it, checked by building the
+    base scenario with it (a derived input with the quantity it sets).
+
+    Raises
+    ------
+    ParameterError
+        One line naming ``name``.
+    """
+    spec = docking_inputs().get(name)
+    if spec is None:
+        raise ParameterError(f"unknown parameter {name!r}")
+    if spec.kind == "bool":
+        if not isinstance(value, bool):
+            raise ParameterError(f"{name} must be true or false (got {value!r})")
+    elif spec.kind == "text":
+        choices = _choices(name)
+        if not isinstance(value, str) or (choices is not None and value not in choices):
+            words = ", ".join(choices) if choices else "a string"
+            raise ParameterError(f"{name} must be one of {words} (got {value!r})")
+    elif isinstance(value, bool) or not isinstance(value, int | float):
+        raise ParameterError(f"{name} must be a number (got {value!r})")
+    elif not math.isfinite(value) and name != "table_response_hz":
+        raise ParameterError(f"{name} must be a finite number (got {value!r})")
+    if name in DERIVED:
+        from hybridtable.limits import check_plausible
+
+        value = check_plausible(name, value)
+    try:
+        docking_params(base, {name: value}, 0)
+    except ParameterError as err:
+        text = str(err)
+        raise ParameterError(text if text.startswith(name) else f"{name}: {text}") from None
+    return float(value) if spec.kind == "number" and name != "pad_count" else value
+
+
+def simulate_docking(params) -> dict[str, Any]:
+    """The metrics of one 6-DoF run by name (every 6-DoF metric of
+    :data:`~hybridtable.sweeps.metrics.METRICS`)."""
+    from hybridtable.six_dof.simulation import simulate6
+
+    run = simulate6(params)
+    found: dict[str, Any] = run.metrics.to_dict()
+    found["identified_stiffness_n_per_m"] = run.extra.get("identified_stiffness_n_per_m", math.nan)
+    return found
+
+
+def read_base_scenario(value: Any, folder):
+    """A spec's ``scenario = "FILE.toml"`` (relative to the spec's ``folder``):
+    its TOML, its path and its :class:`~hybridtable.six_dof.params.DockingLoopParams`.
+
+    Raises
+    ------
+    ParameterError
+        Not a path; SpecError: the file's own error, naming it and the key.
+    """
+    from pathlib import Path
+
+    from hybridtable.loop.scenario import read_scenario
+    from hybridtable.six_dof.scenario import parse_scenario
+
+    if not isinstance(value, str) or not value:
+        raise ParameterError(f"must be the path of a 6-DoF scenario file (got {value!r})")
+    path = Path(value) if Path(value).is_absolute() else Path(folder) / value
+    raw = read_scenario(path)
+    return raw, str(path), parse_scenario(raw, str(path))
