@@ -118,7 +118,8 @@ def initial_port_state(
     c = params.contact
     lowest = float(np.max((c.pad_centres_m @ R0.T)[:, 2])) + c.pad_radius_m
     port = np.array([0.0, 0.0, -a.initial_gap_m - lowest])
-    body = spacecraft.initial_state(port, R0, np.array([0.0, 0.0, a.initial_velocity_m_per_s]))
+    v0 = np.array([0.0, 0.0, a.initial_velocity_m_per_s])
+    body = spacecraft.initial_state(port, R0, v0, np.array(a.angular_rate_rad_per_s))
     return port_state(params.spacecraft, body), body
 
 

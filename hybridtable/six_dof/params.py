@@ -165,6 +165,9 @@ class RigidBodyParams:
 
 #: The largest roll or pitch misalignment of an approach (rad).
 MAX_MISALIGNMENT_RAD = 0.5
+#: The largest angular rate of an approach (rad/s): a spacecraft tumbling
+#: faster than a turn in six seconds is no docking.
+MAX_ANGULAR_RATE_RAD_PER_S = 1.0
 
 
 @dataclass(frozen=True)
@@ -180,11 +183,16 @@ class ApproachParams:
     misalignment_rad : 2 numbers
         ``[roll, pitch]`` of the spacecraft's attitude from the docking axis
         (rad), each within +-0.5 rad.
+    angular_rate_rad_per_s : 3 numbers
+        The spacecraft's angular velocity at t = 0 in its body frame (rad/s),
+        of norm at most 1 rad/s; the port then moves at the centre of mass's
+        approach velocity plus ``omega x arm``.
     """
 
     initial_velocity_m_per_s: float = 0.1
     initial_gap_m: float = 0.001
     misalignment_rad: tuple[float, float] = (0.0, 0.0)
+    angular_rate_rad_per_s: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def __post_init__(self) -> None:
         s = object.__setattr__
@@ -199,6 +207,19 @@ class ApproachParams:
                 f"({math.degrees(MAX_MISALIGNMENT_RAD):.3g} deg) per axis (got {pair})"
             )
         s(self, "misalignment_rad", pair)
+        rate = self.angular_rate_rad_per_s
+        try:
+            w = tuple(check_finite("angular_rate_rad_per_s", float(x)) for x in rate)
+        except (TypeError, ValueError):
+            raise ParameterError(
+                f"angular_rate_rad_per_s must be 3 numbers (got {rate!r})"
+            ) from None
+        if len(w) != 3 or math.hypot(*w) > MAX_ANGULAR_RATE_RAD_PER_S:
+            raise ParameterError(
+                f"angular_rate_rad_per_s must be 3 numbers of norm <= "
+                f"{MAX_ANGULAR_RATE_RAD_PER_S:g} rad/s (got {rate!r})"
+            )
+        s(self, "angular_rate_rad_per_s", w)
 
 
 @dataclass(frozen=True)
@@ -445,6 +466,7 @@ class DockingLoopParams(NestedParams):
         "initial_velocity_m_per_s": ("approach", "initial_velocity_m_per_s"),
         "initial_gap_m": ("approach", "initial_gap_m"),
         "misalignment_rad": ("approach", "misalignment_rad"),
+        "angular_rate_rad_per_s": ("approach", "angular_rate_rad_per_s"),
         "sample_rate_hz": ("rig", "sample_rate_hz"),
         "sensor_delay_s": ("rig", "sensor", "sensor_delay_s"),
         "table": ("plant", "table", "backend"),

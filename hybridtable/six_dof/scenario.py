@@ -10,7 +10,8 @@ Sections and keys (SI units; every key optional unless marked)::
                    lateral_offset_m = [x, y]
     [contact]      contact_stiffness_n_per_m (required), contact_dissipation_s_per_m,
                    friction_coefficient, pad_count, ring_radius_m, pad_radius_m
-    [approach]     initial_velocity_m_per_s, initial_gap_m, misalignment_deg = [roll, pitch]
+    [approach]     initial_velocity_m_per_s, initial_gap_m, misalignment_deg = [roll, pitch],
+                   angular_rate_rad_per_s = [x, y, z] (body frame)
     [rig]          sample_rate_hz, sensor_delay_s, force_noise_n, moment_noise_n_m,
                    seed, duration_s
     [table]        backend = "model" | "stewart", response_hz (a number or "inf"),
@@ -65,7 +66,12 @@ SCENARIO_KEYS: dict[str, tuple[str, ...]] = {
         "lateral_offset_m",
     ),
     "contact": tuple(f.name for f in fields(DockingContactParams)),
-    "approach": ("initial_velocity_m_per_s", "initial_gap_m", "misalignment_deg"),
+    "approach": (
+        "initial_velocity_m_per_s",
+        "initial_gap_m",
+        "misalignment_deg",
+        "angular_rate_rad_per_s",
+    ),
     "rig": (
         "sample_rate_hz",
         "sensor_delay_s",

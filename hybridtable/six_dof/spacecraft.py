@@ -87,16 +87,23 @@ class RigidSpacecraft(LeafSystem):
         )
 
     def initial_state(
-        self, port_position_m: np.ndarray, rotation: np.ndarray, velocity_m_per_s: np.ndarray
+        self,
+        port_position_m: np.ndarray,
+        rotation: np.ndarray,
+        velocity_m_per_s: np.ndarray,
+        angular_velocity_rad_per_s: np.ndarray | None = None,
     ) -> np.ndarray:
         """The body state (18) with the port at ``port_position_m`` (W), the
         attitude ``rotation`` and the centre of mass moving at
-        ``velocity_m_per_s`` without rotating."""
+        ``velocity_m_per_s``, turning at ``angular_velocity_rad_per_s`` (body
+        frame; default not at all)."""
         R = np.asarray(rotation, dtype=float)
         x = np.zeros(BODY_STATE_SIZE)
         x[0:3] = np.asarray(port_position_m) - R @ self._arm
         x[3:6] = velocity_m_per_s
         x[6:15] = R.ravel()
+        if angular_velocity_rad_per_s is not None:
+            x[15:18] = angular_velocity_rad_per_s
         return x
 
     def _calc_port(self, context, output) -> None:

@@ -561,7 +561,10 @@ def _approach_poses(params: DockingLoopParams, count: int = 201) -> tuple[np.nda
     """Port poses (count, 6) along the approach, with the misalignment, from
     the initial pose to ``3 v0 / omega_contact`` past the plate's face, and
     the initial pose (6): the port's axis through the target's centre, the
-    first pad ``initial_gap_m`` from the plate (as the loop starts)."""
+    first pad ``initial_gap_m`` from the plate (as the loop starts). A body
+    turning at the approach's angular rate turns on at it (torque-free, the
+    rate taken constant over the approach: a bound for the check, not the
+    body's motion)."""
     a = params.approach
     c = params.contact
     R0 = rotation_from_rpy(np.array([*a.misalignment_rad, 0.0]))
@@ -569,10 +572,12 @@ def _approach_poses(params: DockingLoopParams, count: int = 201) -> tuple[np.nda
     z0 = -a.initial_gap_m - lowest
     omega = 2.0 * math.pi * params.contact_frequency_hz
     z1 = 3.0 * a.initial_velocity_m_per_s / omega
-    theta = rotation_log(R0)
     poses = np.zeros((count, 6))
     poses[:, 2] = np.linspace(z0, z1, count)
-    poses[:, 3:] = theta
+    rate = np.array(a.angular_rate_rad_per_s)
+    times = (poses[:, 2] - z0) / a.initial_velocity_m_per_s
+    for pose, t in zip(poses, times, strict=True):
+        pose[3:] = rotation_log(R0 @ rotation_exp(rate * t))
     return poses, poses[0].copy()
 
 

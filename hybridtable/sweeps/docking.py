@@ -10,7 +10,7 @@ quantity of its tree that is one number, word or flag, under its flat name
 (``initial_velocity_m_per_s``, ``friction_coefficient``, ``sensor_delay_s``,
 ``compensator``...), and each component of its vectors
 (:data:`COMPONENTS`: ``lateral_offset_x_m``, ``misalignment_pitch_rad``,
-``inertia_z_kg_m2``...), plus two derived inputs as in 1-D:
+``angular_rate_y_rad_per_s``, ``inertia_z_kg_m2``...), plus two derived inputs as in 1-D:
 
 - ``contact_frequency_hz`` sets the spacecraft's mass from the run's contact
   stiffness, ``m = k / (2 pi f)^2``; a scenario that gives
@@ -51,6 +51,7 @@ __all__ = [
 COMPONENTS: dict[str, tuple[str, ...]] = {
     "lateral_offset_m": ("x", "y"),
     "misalignment_rad": ("roll", "pitch"),
+    "angular_rate_rad_per_s": ("x", "y", "z"),
     "inertia_kg_m2": ("x", "y", "z"),
 }
 

@@ -129,6 +129,22 @@ def test_energy_is_conserved_without_delay(offset_m, pitch_deg):
         assert run.metrics.cor_normal < 0.99
 
 
+@pytest.mark.parametrize("rate", [(0.0, 0.02, 0.0), (0.03, 0.0, 0.04)])
+def test_a_turning_approach_keeps_its_energy_without_delay(rate):
+    """An approach turning at ``rate`` (body frame, rad/s): the body starts
+    with its rotational energy ``w.I.w / 2`` and the port moving at
+    ``v + R (w x arm)``; on the ideal rig the contact gives it all back."""
+    p = docking_params(0.01, 2.0, angular_rate_rad_per_s=rate)
+    run = simulate6(p)
+    body = run.log["body_state"][0]
+    w = np.array(rate)
+    assert run.rotational_energy_j[0] == pytest.approx(0.5 * w @ p.spacecraft.inertia @ w)
+    R = body[6:15].reshape(3, 3)
+    expected = body[3:6] + np.cross(R @ w, R @ p.spacecraft.port_position_m)
+    np.testing.assert_allclose(run.port_velocity_m_per_s[0], expected, atol=1e-12)
+    assert run.metrics.energy_ratio == pytest.approx(1.0, abs=1e-5)
+
+
 def test_impulses_balance():
     """The spacecraft's momentum changes by the compensated wrench's impulse:
     m dv = h sum f and dL = h sum (moment about the centre of mass), with an

@@ -49,6 +49,8 @@ def test_a_rotated_box_inertia_is_accepted():
         (lambda: DockingContactParams(1e5, pad_count=2.5), "pad_count"),
         (lambda: ApproachParams(-0.1), "initial_velocity_m_per_s"),
         (lambda: ApproachParams(0.1, 0.001, (0.0, 0.7)), "misalignment_rad"),
+        (lambda: ApproachParams(0.1, 0.001, (0.0, 0.0), (0.0, 1.2, 0.0)), "angular_rate"),
+        (lambda: ApproachParams(0.1, 0.001, (0.0, 0.0), (0.0, 0.1)), "angular_rate"),
         (lambda: RigidBodyParams(0.0), "mass_kg"),
         (lambda: docking_params(sensor_delay_s=-0.001), "sensor_delay_s"),
         (lambda: docking_params(compensator="PID"), "compensator"),

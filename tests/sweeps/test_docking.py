@@ -59,6 +59,7 @@ def test_every_single_quantity_of_the_scenario_is_an_input(base):
         ("lateral_offset_y_m", -0.05, lambda p: p.spacecraft.lateral_offset_m[1]),
         ("misalignment_roll_rad", 0.1, lambda p: p.approach.misalignment_rad[0]),
         ("inertia_z_kg_m2", 2000.0, lambda p: p.spacecraft.inertia[2, 2]),
+        ("angular_rate_y_rad_per_s", 0.02, lambda p: p.approach.angular_rate_rad_per_s[1]),
         ("sensor_delay_s", 0.012, lambda p: p.rig.sensor.sensor_delay_s),
         ("compensator", "SDC", lambda p: p.rig.compensator.name),
     ],
