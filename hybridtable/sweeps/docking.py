@@ -32,7 +32,7 @@ from functools import cache
 from typing import Any, get_type_hints
 
 from hybridtable.errors import ParameterError
-from hybridtable.sweeps.inputs import Input
+from hybridtable.sweeps.inputs import Input, check_kind
 
 __all__ = [
     "COMPONENTS",
@@ -245,17 +245,8 @@ def check_docking_value(base, name: str, value: Any) -> Any:
     spec = docking_inputs().get(name)
     if spec is None:
         raise ParameterError(f"unknown parameter {name!r}")
-    if spec.kind == "bool":
-        if not isinstance(value, bool):
-            raise ParameterError(f"{name} must be true or false (got {value!r})")
-    elif spec.kind == "text":
-        choices = _choices(name)
-        if not isinstance(value, str) or (choices is not None and value not in choices):
-            words = ", ".join(choices) if choices else "a string"
-            raise ParameterError(f"{name} must be one of {words} (got {value!r})")
-    elif isinstance(value, bool) or not isinstance(value, int | float):
-        raise ParameterError(f"{name} must be a number (got {value!r})")
-    elif not math.isfinite(value) and name != "table_response_hz":
+    check_kind(spec, value, _choices(name))
+    if spec.kind == "number" and not math.isfinite(value) and name != "table_response_hz":
         raise ParameterError(f"{name} must be a finite number (got {value!r})")
     if name in DERIVED:
         from hybridtable.limits import check_plausible

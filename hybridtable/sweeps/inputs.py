@@ -43,6 +43,7 @@ __all__ = [
     "TABLE_BACKENDS",
     "input_of",
     "effect_values",
+    "check_kind",
     "check_value",
     "loop_params",
     "noise_params",
@@ -170,6 +171,28 @@ CONFLICTS: tuple[tuple[str, str], ...] = (
 )
 
 
+def check_kind(spec: Input, value: Any, choices: tuple[str, ...] | None = None) -> None:
+    """Raise unless ``value`` is of the input's kind: a flag, one of
+    ``choices`` (text), or a number (not a flag).
+
+    Raises
+    ------
+    ParameterError
+        One line naming the input.
+    """
+    name = spec.name
+    if spec.kind == "bool":
+        if not isinstance(value, bool):
+            raise ParameterError(f"{name} must be true or false (got {value!r})")
+    elif spec.kind == "text":
+        if not isinstance(value, str):
+            raise ParameterError(f"{name} must be a string (got {value!r})")
+        if choices is not None and value not in choices:
+            raise ParameterError(f"{name} must be one of {', '.join(choices)} (got {value!r})")
+    elif isinstance(value, bool) or not isinstance(value, int | float):
+        raise ParameterError(f"{name} must be a number (got {value!r})")
+
+
 def check_value(name: str, value: Any) -> Any:
     """``value`` as the input ``name`` takes it, or raise.
 
@@ -185,19 +208,9 @@ def check_value(name: str, value: Any) -> Any:
     spec = input_of(name)
     if spec is None:
         raise ParameterError(f"unknown parameter {name!r}")
-    if spec.kind == "bool":
-        if not isinstance(value, bool):
-            raise ParameterError(f"{name} must be true or false (got {value!r})")
+    check_kind(spec, value, _choices(name) if spec.kind == "text" else None)
+    if spec.kind != "number":
         return value
-    if spec.kind == "text":
-        if not isinstance(value, str):
-            raise ParameterError(f"{name} must be a string (got {value!r})")
-        choices = _choices(name)
-        if value not in choices:
-            raise ParameterError(f"{name} must be one of {', '.join(choices)} (got {value!r})")
-        return value
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ParameterError(f"{name} must be a number (got {value!r})")
     if name in LIMITS:
         return check_plausible(name, value)
     value = float(value)

@@ -1,4 +1,5 @@
-"""The HTML reports of compare, diagnose, margins and compensators, opened in a
+"""The HTML reports of compare, diagnose, margins, compensators and a 6-DoF
+sweep (the docking envelope), opened in a
 real headless chromium: every figure loads, nothing but the page itself and its
 data: URIs is requested, and nothing overflows the page horizontally at 1280
 and 800 px (a wide table or code block scrolls inside its own box).
@@ -50,10 +51,17 @@ COMMANDS = {
         "--no-progress",
     ],
     "compensators": ["compensators", "--quick", "--no-progress"],
+    # a 6-DoF campaign's envelope (its --out is added in the fixture)
+    "sweep": [
+        "sweep",
+        str(Path(__file__).with_name("docking_envelope_small.toml")),
+        "--no-progress",
+    ],
 }
 
-#: Figures each report has at least (compare: 4 per run, diagnose: 3 per run + 1).
-MIN_FIGURES = {"compare": 12, "diagnose": 10, "margins": 4, "compensators": 3}
+#: Figures each report has at least (compare: 4 per run, diagnose: 3 per run + 1;
+#: the envelope: a map per metric but the flag, the CDF, two boundaries).
+MIN_FIGURES = {"compare": 12, "diagnose": 10, "margins": 4, "compensators": 3, "sweep": 8}
 
 _RUN_CLI = "import sys; from hybridtable.cli import main; sys.exit(main(sys.argv[1:]))"
 
@@ -104,12 +112,14 @@ def browser():
 
 @pytest.fixture(scope="module")
 def reports(browser, tmp_path_factory):
-    """Run the four commands at once with ``--report``; name -> report folder."""
+    """Run the commands at once with ``--report``; name -> report folder."""
     root = tmp_path_factory.mktemp("reports")
     env = dict(os.environ, MPLBACKEND="Agg")
     procs, t0 = {}, time.perf_counter()
     for name, argv in COMMANDS.items():
         folder = root / name
+        if name == "sweep":
+            argv = [*argv, "--out", str(root / "envelope.parquet")]
         log = (root / f"{name}.log").open("w")
         procs[name] = (
             folder,
@@ -125,7 +135,7 @@ def reports(browser, tmp_path_factory):
         rc = proc.wait(timeout=900)
         log.close()
         assert rc == 0, f"{name} exited with {rc}:\n{(root / f'{name}.log').read_text()[-3000:]}"
-    print(f"\nthe four commands with --report: {time.perf_counter() - t0:.1f} s (in parallel)")
+    print(f"\nthe commands with --report: {time.perf_counter() - t0:.1f} s (in parallel)")
     return {name: folder for name, (folder, _, _) in procs.items()}
 
 
