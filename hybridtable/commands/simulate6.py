@@ -97,16 +97,7 @@ def run(args: argparse.Namespace) -> int:
         close()
     reference = None
     if not args.no_reference:
-        ideal = params.with_(
-            sensor_delay_s=0.0,
-            table="model",
-            table_response_hz=math.inf,
-            compensator="none",
-            force_noise_n=0.0,
-            moment_noise_n_m=0.0,
-            stewart=None,
-        )
-        reference = simulate6(ideal).metrics
+        reference = simulate6(params.ideal_rig()).metrics
     modes = contact_modes(params)
     m = result.metrics
     sim_s = float(result.time_s[-1]) if len(result.time_s) else 0.0

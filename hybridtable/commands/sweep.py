@@ -88,7 +88,9 @@ def _json_document(args, spec, summary, result, figures) -> dict:
     doc_spec = note_unset(
         spec.to_json(),
         {
-            "model": "model null: no model file; the runs have the nominal physics",
+            "model": "model null: no model file; the runs have the nominal physics"
+            if spec.loop == "1d"
+            else "model null: a 6-DoF campaign runs its scenario's physics",
             "model_path": "model_path null: no model file",
         },
     )
@@ -168,7 +170,7 @@ def run(args: argparse.Namespace) -> int:
         on_start=started,
     )
     table = read_results(args.out, spec)
-    summary = summarize(table, spec.n_runs, spec.metrics)
+    summary = summarize(table, spec.n_runs, spec.metrics, spec.loop)
     figures: list[str] = []
     if args.report and table.num_rows:
         from hybridtable._files import staged_folder

@@ -5,6 +5,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from hybridtable.six_dof.metrics import ENERGY_MATCH_TOLERANCE
+
 __all__ = ["docking_verdict", "format_docking", "plot_wrench"]
 
 
@@ -13,7 +15,7 @@ def docking_verdict(compensator: str, metrics, reference) -> str:
     ideal rig's (no delay, ideal table) and the CoR along the normal."""
     er, er0 = metrics.energy_ratio, reference.energy_ratio
     excess = er - er0
-    if abs(excess) <= 0.02:
+    if abs(excess) <= ENERGY_MATCH_TOLERANCE:
         judgement = "matches the ideal rig"
     elif excess > 0:
         judgement = f"creates {100 * excess:.1f} % more energy than the ideal rig"

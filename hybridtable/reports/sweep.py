@@ -40,7 +40,7 @@ from hybridtable.reports.sweep_figures import (
     texts,
     worst_runs,
 )
-from hybridtable.reports.sweep_summary import verdict
+from hybridtable.reports.sweep_summary import energy_metric, verdict
 from hybridtable.sweeps.plan import input_for
 from hybridtable.sweeps.runner import STATUSES
 from hybridtable.sweeps.spec import SweepSpec
@@ -81,7 +81,8 @@ def _spec_lines(spec: SweepSpec, table: pa.Table) -> list[str]:
     lines += [f"- description: {_md(spec.description)}"] * bool(spec.description)
     lines += [f"- runs: {spec.n_runs} in the spec, {table.num_rows} in the file"]
     names = ", ".join(f"`{m}`" for m in spec.metrics)
-    lines += [f"- seed: {spec.seed}; engine: {spec.engine}; metrics: {names}"]
+    engine = spec.engine if spec.loop == "1d" else "the 6-DoF loop's Drake diagram"
+    lines += [f"- seed: {spec.seed}; engine: {engine}; metrics: {names}"]
     lines += [f"- model: {_md(spec.model_path)}"] * bool(spec.model_path)
     base = ", ".join(f"`{k}` = {_value(v)}{_unit(k)}" for k, v in spec.base)
     if spec.scenario_path:
@@ -160,6 +161,7 @@ def write_report(table: pa.Table, spec: SweepSpec, summary: dict, folder: Path) 
     folder = Path(folder)
     metric = next((m for m in MAPPABLE if m in spec.metrics), spec.metrics[0])
     d: dict[str, Any] = {"metric": metric, "metrics": spec.metrics, "v": numbers(table, metric)}
+    d["loop"] = spec.loop
     d.update(status=texts(table, "status"), comp=texts(table, "compensator"))
     d["comps"] = list(dict.fromkeys(d["comp"].tolist()))
     written: list[Path] = []
@@ -184,7 +186,8 @@ def write_report(table: pa.Table, spec: SweepSpec, summary: dict, folder: Path) 
         why = "no run has finite values of both" if table.num_rows else "no run is in the file"
         if plane_inputs(spec, table) is None:
             why = "the campaign varies fewer than two numeric inputs"
-        body += [f"No map over two parameters and no stability boundary: {why}.", ""]
+        boundary = "energy-honesty or capture boundary" if six else "stability boundary"
+        body += [f"No map over two parameters and no {boundary}: {why}.", ""]
     else:
         d.update(xname=plane[0], yname=plane[1], x=x, y=y, hidden=int(np.sum(~shown)))
         d.update(
@@ -192,7 +195,7 @@ def write_report(table: pa.Table, spec: SweepSpec, summary: dict, folder: Path) 
             log_y=log_axis(y),
             grid=on_grid(*cells(x, y, x * 0)[:3])[2] is not None,
         )
-        d["class"] = classify_runs(table, spec.metrics)
+        d["class"] = classify_runs(table, spec.metrics, spec.loop)
         title = "{} over {} and {}".format(*(axis_label(n, False) for n in (metric, *plane)))
         figure(files[0], title, plane_figure)
     if metric == "stable":
@@ -201,13 +204,22 @@ def write_report(table: pa.Table, spec: SweepSpec, summary: dict, folder: Path) 
         body += [f"No CDF: no run gave a value of {axis_label(metric)}.", ""]
     else:
         figure(files[1], f"CDF of {axis_label(metric, False)}", cdf_figure)
-    if plane is not None and np.isfinite(d["class"]).any():
+    judged = not six or energy_metric(spec.metrics, spec.loop) is not None
+    if plane is not None and np.isfinite(d["class"]).any() and judged:
         title = "Energy-honesty boundary" if six else "Stability boundary"
         figure(files[2], title, plane_figure, True, look=honest if six else None)
+    elif plane is not None and not judged:
+        body += [
+            "No energy-honesty boundary: the campaign measures neither energy_excess "
+            "nor energy_ratio.",
+            "",
+        ]
     elif plane is not None:
-        body += ["No stability boundary: no run finished or diverged.", ""]
+        boundary = "energy-honesty" if six else "stability"
+        body += [f"No {boundary} boundary: no run finished or diverged.", ""]
     if six and plane is not None:
-        envelope_figures(table, spec, metric, figure)
+        said = envelope_figures(table, spec, metric, figure)
+        body += [line for s in said for line in (s, "")]
 
     lines = [f"# Sweep {_md(spec.name)}", "", f"**{_md(verdict(spec.name, summary))}.**", ""]
     lines += _spec_lines(spec, table) + [""] + body + _tables(table, spec, summary, metric)

@@ -15,13 +15,14 @@ import pyarrow as pa
 
 from hybridtable.reports.colour_scale import colour_scale, crosses, ticks_both_sides
 from hybridtable.reports.figure_text import literal
-from hybridtable.reports.sweep_summary import COR_GAIN_TOLERANCE, ENERGY_GAIN_TOLERANCE
+from hybridtable.reports.sweep_summary import COR_GAIN_TOLERANCE
+from hybridtable.six_dof.metrics import ENERGY_MATCH_TOLERANCE
 from hybridtable.sweeps.metrics import METRICS
 from hybridtable.sweeps.plan import SweepSpec, input_for
 
 __all__ = ["STABLE_COR", "MAPPABLE", "axis_label", "plane_inputs", "classify_runs"]
 __all__ += ["stability_map", "worst_runs", "plane_figure", "cdf_figure", "envelope_figures"]
-__all__ += ["numbers", "texts", "log_axis", "on_grid", "cells"]
+__all__ += ["numbers", "texts", "log_axis", "on_grid", "cells", "rules_for"]
 
 #: A run whose CoR is at most this created no energy (the paper's four digits).
 STABLE_COR = 1.0 + COR_GAIN_TOLERANCE
@@ -35,6 +36,7 @@ MAPPABLE: dict[str, tuple[float | None, bool]] = {
     **dict.fromkeys(("energy_gain_j", "energy_created"), (0.0, True)),
     "stable": (0.5, False),
     "cor_normal": (1.0, True),
+    "energy_excess": (0.0, True),
     "captured": (0.5, False),
 }
 #: Every metric's level (None) and direction (higher is worse), those above apart.
@@ -45,13 +47,32 @@ _RULES = (
     ("cor", lambda v: v <= STABLE_COR, f"CoR <= {STABLE_COR:g} (the loop created no energy)"),
     ("predicted_cor", lambda v: v <= STABLE_COR, f"the predicted CoR <= {STABLE_COR:g}"),
     ("growth_rate_per_s", lambda v: v <= 0.0, "no pole of the loop grows (growth rate <= 0 1/s)"),
+)
+#: How a 6-DoF campaign's finished run is judged energy-honest: the first of
+#: these metrics the spec has.
+_DOCKING_RULES = (
+    (
+        "energy_excess",
+        lambda v: np.abs(v) <= ENERGY_MATCH_TOLERANCE,
+        f"the energy ratio within {ENERGY_MATCH_TOLERANCE:g} of the ideal rig's (no delay, an "
+        "ideal table): the rig returned the energy the contact alone would",
+    ),
     (
         "energy_ratio",
-        lambda v: v <= 1.0 + ENERGY_GAIN_TOLERANCE,
-        f"energy ratio <= {1.0 + ENERGY_GAIN_TOLERANCE:g} (the loop created at most "
-        f"{100 * ENERGY_GAIN_TOLERANCE:g} % of the approach's energy)",
+        lambda v: v <= 1.0 + ENERGY_MATCH_TOLERANCE,
+        f"energy ratio <= {1.0 + ENERGY_MATCH_TOLERANCE:g}, the loop created at most "
+        f"{100 * ENERGY_MATCH_TOLERANCE:g} % of the approach's energy (one-sided: measure "
+        "energy_excess to judge a loop that takes energy out)",
     ),
 )
+
+
+def rules_for(loop: str) -> tuple:
+    """The rules that judge a run of ``loop``: (metric, test, words), first
+    match wins."""
+    return _DOCKING_RULES if loop == "six_dof" else _RULES
+
+
 _WORDS = {"cor": "CoR", "predicted_cor": "predicted CoR", "growth_rate_per_s": "growth rate"}
 _WORDS["stable"] = "stable (1: yes, 0: no)"
 _WORDS["captured"] = "captured (1: yes, 0: no)"
@@ -117,13 +138,13 @@ def on_grid(px, py, values):
     return gx, gy, z
 
 
-def classify_runs(table: pa.Table, metrics: tuple[str, ...]) -> np.ndarray:
+def classify_runs(table: pa.Table, metrics: tuple[str, ...], loop: str = "1d") -> np.ndarray:
     """Per run 1.0 (stable), 0.0 (not stable, or diverged) or NaN (failed,
     invalid, error, no value). Stable: ``stable`` true when the spec measures
     that margin, else CoR <= :data:`STABLE_COR` (or the predicted CoR, the
     energy ratio, the growth rate), else: did not diverge."""
     status = texts(table, "status")
-    name, rule, _ = next((r for r in _RULES if r[0] in metrics), ("", None, ""))
+    name, rule, _ = next((r for r in rules_for(loop) if r[0] in metrics), ("", None, ""))
     v = numbers(table, name) if name else np.zeros(table.num_rows)
     out = np.where((status == "ok") & np.isfinite(v), rule(v) if rule else True, np.nan)
     out[status == "diverged"] = 0.0
@@ -277,7 +298,8 @@ def plane_figure(path, d, stability: bool = False) -> str:
     plt.close(fig)
     plane = f"over {axis_label(d['xname'])} and {axis_label(d['yname'])}, one panel per compensator"
     if stability:
-        rule = next((w for n, _, w in _RULES if n in d["metrics"]), "the run finished")
+        rules = rules_for(d.get("loop", "1d"))
+        rule = next((w for n, _, w in rules if n in d["metrics"]), "the run finished")
         rule = d.get("rule", rule)
         how = "of its runs" if d["grid"] else "of the nearest runs (up to 7, a classifier)"
         word, title = d.get("word", "stable"), d.get("title", "Stability")
@@ -340,15 +362,19 @@ def cdf_figure(path, d) -> str:
 # -- report.md -----------------------------------------------------------------
 
 
-def envelope_figures(table: pa.Table, spec: SweepSpec, drawn: str, figure) -> None:
+def envelope_figures(table: pa.Table, spec: SweepSpec, drawn: str, figure) -> list[str]:
     """A 6-DoF campaign's other maps: each numeric metric but ``drawn``, and
-    where the docking captures."""
+    where the docking captures; returns the report's sentences for what it
+    could not draw."""
+    said = []
     for name in spec.metrics:
         if name == drawn or METRICS[name].kind != "number":
             continue
         v = numbers(table, name)
         if not np.isfinite(v[texts(table, "status") == "ok"]).any():
-            continue  # e.g. the identified stiffness of a campaign without an identifier
+            # e.g. the identified stiffness of a campaign without an identifier
+            said.append(f"No map of {axis_label(name, False)}: no run gave a value.")
+            continue
         plane = (*(axis_label(n, False) for n in plane_inputs(spec, table)),)
         title = "{} over {} and {}".format(axis_label(name, False), *plane)
         figure(f"{name}_map.png", title, plane_figure, look={"metric": name, "v": v})
@@ -357,6 +383,13 @@ def envelope_figures(table: pa.Table, spec: SweepSpec, drawn: str, figure) -> No
         captured = numbers(table, "captured")
         classes = np.where((status == "ok") & np.isfinite(captured), captured, np.nan)
         classes[status == "diverged"] = 0.0
+        if not np.any(classes == 1.0):
+            ok = int(np.sum(status == "ok"))
+            said.append(
+                f"No capture boundary: none of the {ok} finished runs captured (each contact "
+                "returned the spacecraft)."
+            )
+            return said
         look = {
             "class": classes,
             "word": "captured",
@@ -365,3 +398,4 @@ def envelope_figures(table: pa.Table, spec: SweepSpec, drawn: str, figure) -> No
             "rule": "the contact held the spacecraft, its port at rest against the target",
         }
         figure("capture_boundary.png", "Capture boundary", plane_figure, True, look=look)
+    return said

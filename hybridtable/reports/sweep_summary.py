@@ -11,28 +11,35 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["COR_GAIN_TOLERANCE", "ENERGY_GAIN_TOLERANCE", "energy_metric"]
+__all__ = ["COR_GAIN_TOLERANCE", "energy_metric"]
 __all__ += ["summarize", "verdict", "format_summary"]
 
 #: A CoR above 1 + this counts as energy created by the loop (the paper's
 #: four digits).
 COR_GAIN_TOLERANCE = 1e-4
 
-#: An energy ratio above 1 + this counts as energy created by the loop, where
-#: a campaign measures the energy ratio and no CoR (the 6-DoF loop: its ideal
-#: rig's ratio is 0.9999-1.0000 on the shipped scenarios, and SDMDC with the
-#: stiffness identified online lands within 5e-4 of the true stiffness's).
-ENERGY_GAIN_TOLERANCE = 0.01
 
+def energy_metric(metrics: tuple[str, ...], loop: str = "1d") -> tuple | None:
+    """How a campaign says whether a run created energy: ``(metric, words,
+    is_gain, distance)``: the 1-D loop's CoR (a gain above 1 + the
+    tolerance, the distance from 1 in decades); a 6-DoF campaign's energy
+    excess over the ideal rig (a gain above the 6-DoF tolerance, the
+    distance from 0), else its energy ratio; None: none of them measured."""
+    if loop == "1d":
+        if "cor" not in metrics:
+            return None
+        return "cor", "CoR", lambda v: v > 1.0 + COR_GAIN_TOLERANCE, _decades
+    from hybridtable.six_dof.metrics import ENERGY_MATCH_TOLERANCE as tol
 
-def energy_metric(metrics: tuple[str, ...]) -> tuple[str, str, float] | None:
-    """The metric that says whether a run created energy, its words and the
-    level above which it did: the CoR, else the energy ratio; None: neither."""
-    if "cor" in metrics:
-        return "cor", "CoR", 1.0 + COR_GAIN_TOLERANCE
+    if "energy_excess" in metrics:
+        return "energy_excess", "energy excess over the ideal rig", lambda v: v > tol, abs
     if "energy_ratio" in metrics:
-        return "energy_ratio", "energy ratio", 1.0 + ENERGY_GAIN_TOLERANCE
+        return "energy_ratio", "energy ratio", lambda v: v > 1.0 + tol, _decades
     return None
+
+
+def _decades(v: float) -> float:
+    return abs(math.log(v)) if v > 0 else math.inf
 
 
 def _column(table, name: str) -> np.ndarray:
@@ -46,9 +53,11 @@ def _stats(values: np.ndarray) -> dict[str, Any]:
     return {"min": float(x.min()), "median": float(np.median(x)), "max": float(x.max())}
 
 
-def summarize(table, n_runs: int, metrics: tuple[str, ...]) -> dict[str, Any]:
+def summarize(table, n_runs: int, metrics: tuple[str, ...], loop: str = "1d") -> dict[str, Any]:
     """Counts by status, and per compensator the runs, their statuses and the
-    spread of each metric; the worst runs (highest CoR, diverged first).
+    spread of each metric; the worst runs (diverged first, then by the
+    :func:`energy_metric`: the highest CoR; in 6-DoF the furthest from an
+    energy-honest docking). A 6-DoF campaign's summary says ``"loop"``.
 
     Parameters
     ----------
@@ -58,12 +67,15 @@ def summarize(table, n_runs: int, metrics: tuple[str, ...]) -> dict[str, Any]:
         Runs in the spec (the table may hold fewer: interrupted).
     metrics : tuple of str
         The spec's metrics.
+    loop : str
+        The spec's loop (``1d`` or ``six_dof``).
     """
     from hybridtable.sweeps.metrics import METRICS
 
     status = _column(table, "status")
     comps = _column(table, "compensator")
-    energy = energy_metric(metrics)
+    energy = energy_metric(metrics, loop)
+    gained = "cor_above_1" if loop == "1d" else "energy_gained"
     counts = {s: int(np.sum(status == s)) for s in dict.fromkeys(status.tolist())}
     per: dict[str, Any] = {}
     for comp in dict.fromkeys(comps.tolist()):
@@ -81,13 +93,14 @@ def summarize(table, n_runs: int, metrics: tuple[str, ...]) -> dict[str, Any]:
         if energy is not None:
             values = _column(table, energy[0])[mask]
             ok = [float(c) for c in values if c is not None and math.isfinite(c)]
-            entry[f"{energy[0]}_above_1"] = int(sum(1 for c in ok if c > energy[2]))
+            entry[gained] = int(sum(1 for c in ok if energy[2](c)))
         per[comp] = entry
     worst = []
     if energy is not None and table.num_rows:
+        badness = (lambda c: c) if loop == "1d" else energy[3]  # 1-D: the highest CoR
         cor = np.asarray(
             [
-                c if c is not None and math.isfinite(c) else -math.inf
+                badness(c) if c is not None and math.isfinite(c) else -math.inf
                 for c in _column(table, energy[0])
             ]
         )
@@ -97,13 +110,14 @@ def summarize(table, n_runs: int, metrics: tuple[str, ...]) -> dict[str, Any]:
         )
         rows = table.to_pylist()
         worst = [rows[i] for i in rank[:5] if status[i] in ("ok", "diverged")]
-    return {
+    out = {
         "runs": n_runs,
         "written": table.num_rows,
         "status": counts,
         "compensators": per,
         "worst": worst,
     }
+    return out if loop == "1d" else {"loop": loop, **out}
 
 
 def _range(stats: dict[str, Any], digits: int = 4) -> str:
@@ -116,8 +130,9 @@ def _range(stats: dict[str, Any], digits: int = 4) -> str:
 
 def verdict(name: str, summary: dict[str, Any]) -> str:
     """One plain sentence: how many runs finished, the compensators whose CoR
-    stays closest to and goes furthest from 1 (an energy-neutral bounce), and
-    how many runs diverged or failed."""
+    stays closest to and goes furthest from 1 (an energy-neutral bounce; in a
+    6-DoF campaign the energy excess over the ideal rig from 0, else the
+    energy ratio from 1), how many captured, and how many diverged or failed."""
     n, written = summary["runs"], summary["written"]
     counts = summary["status"]
     ok = counts.get("ok", 0)
@@ -126,8 +141,11 @@ def verdict(name: str, summary: dict[str, Any]) -> str:
         head += f" ({n - written} not run yet)"
     bad = [f"{counts[s]} {s}" for s in ("diverged", "failed", "invalid", "error") if counts.get(s)]
     per = summary["compensators"]
+    loop = summary.get("loop", "1d")
     first = next(iter(per.values()), {})
-    key, words = ("cor", "CoR") if "cor" in first else ("energy_ratio", "energy ratio")
+    energy = energy_metric(tuple(first), loop) or ("cor", "CoR", None, _decades)
+    key, words, distance = energy[0], energy[1], energy[3]
+    centre = 0.0 if key == "energy_excess" else 1.0
     cors = {c: e[key] for c, e in per.items() if key in e and e[key]["max"] is not None}
     if cors:
         if len(per) == 1:
@@ -139,15 +157,13 @@ def verdict(name: str, summary: dict[str, Any]) -> str:
             # than one that puts it in. Diverged runs count first.
             def far(c: str) -> tuple[int, float]:
                 lo, hi = cors[c]["min"], cors[c]["max"]
-                return per[c]["status"].get("diverged", 0), max(
-                    abs(math.log(lo)) if lo > 0 else math.inf, abs(math.log(hi))
-                )
+                return per[c]["status"].get("diverged", 0), max(distance(lo), distance(hi))
 
             near, away = min(cors, key=far), max(cors, key=far)
             diverged = per[away]["status"].get("diverged", 0)
             head += (
-                f"; closest to {words} 1: {near} ({_range(cors[near])}), furthest: {away} "
-                f"({_range(cors[away])}{f', {diverged} diverged' if diverged else ''})"
+                f"; closest to {words} {centre:g}: {near} ({_range(cors[near])}), furthest: "
+                f"{away} ({_range(cors[away])}{f', {diverged} diverged' if diverged else ''})"
             )
     elif any("stable" in e for e in per.values()):
         stable = sum(e.get("stable", 0) for e in per.values())
@@ -167,10 +183,12 @@ def format_summary(name: str, summary: dict[str, Any], metrics: tuple[str, ...])
     lines = [verdict(name, summary), ""]
     counted = [m for m in metrics if METRICS[m].kind == "bool"]  # stable, captured
     shown = [m for m in metrics if m not in counted][:4]
-    energy = energy_metric(metrics)
+    loop = summary.get("loop", "1d")
+    energy = energy_metric(metrics, loop)
+    gained = "cor_above_1" if loop == "1d" else "energy_gained"
     header = f"{'compensator':<14}{'runs':>6}{'ok':>6}{'diverged':>9}"
     if energy is not None:
-        header += f"{'CoR>1' if energy[0] == 'cor' else f'E>{energy[2]:g}':>7}"
+        header += f"{'CoR>1' if loop == '1d' else 'gained':>7}"
     header += "".join(f"{m:>{max(7, len(m) + 1)}}" for m in counted)
     header += "".join(f"  {m + ' (min..max)':<28}" for m in shown)
     lines.append(header)
@@ -180,12 +198,13 @@ def format_summary(name: str, summary: dict[str, Any], metrics: tuple[str, ...])
             f"{e['status'].get('diverged', 0):>9}"
         )
         if energy is not None:
-            line += f"{e.get(f'{energy[0]}_above_1', 0):>7}"
+            line += f"{e.get(gained, 0):>7}"
         line += "".join(f"{e.get(m, 0):>{max(7, len(m) + 1)}}" for m in counted)
         line += "".join(f"  {_range(e[m], 4 if m == 'cor' else 3):<28}" for m in shown)
         lines.append(line)
     if summary["worst"]:
-        lines += ["", f"worst runs (highest {energy[1]}, diverged first):"]
+        worst = f"highest {energy[1]}" if loop == "1d" else f"{energy[1]} furthest from honest"
+        lines += ["", f"worst runs ({worst}, diverged first):"]
         for row in summary["worst"]:
             inputs = [
                 f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}"

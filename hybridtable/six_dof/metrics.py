@@ -7,7 +7,17 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-__all__ = ["DockingMetrics", "docking_metrics"]
+__all__ = ["CAPTURE_SPEED_RATIO", "ENERGY_MATCH_TOLERANCE", "DockingMetrics", "docking_metrics"]
+
+#: A docking whose energy ratio is within this of the ideal rig's (no delay,
+#: an ideal table) is energy-honest: the rig returned the energy the contact
+#: alone would have.
+ENERGY_MATCH_TOLERANCE = 0.02
+
+#: A port that ends touching the target is at rest against it (captured) when
+#: its speed along the docking axis is at most this fraction of its approach
+#: speed; faster, the contact was cut, or neither separates nor settles.
+CAPTURE_SPEED_RATIO = 0.05
 
 
 @dataclass(frozen=True)
@@ -47,11 +57,13 @@ class DockingMetrics:
         the model first felt a wrench to separation (m): the docking's slide
         across the target.
     captured : bool
-        The devices still touched at the end of the record: the contact held
-        the spacecraft instead of returning it (on a run to separation, only
-        once its port has come to rest against the target,
-        :func:`~hybridtable.six_dof.simulation.simulate6`); CoR and energy
-        ratio are then taken at the record's end.
+        The record ends with the devices touching and the port at rest
+        against the target: its speed along the docking axis at most
+        :data:`CAPTURE_SPEED_RATIO` times its approach speed ``|v_in|``. The
+        contact held the spacecraft instead of returning it; CoR and energy
+        ratio are then taken at the record's end. (A record of a given
+        duration that ends in contact with the port still moving is not a
+        capture: it was cut mid-contact.)
     """
 
     cor_normal: float
@@ -139,5 +151,6 @@ def docking_metrics(
         lateral_velocity_m_per_s=float(np.linalg.norm(port_velocity_m_per_s[-1, :2])),
         peak_compensated_force_n=float(np.linalg.norm(compensated_wrench[:, 3:], axis=1).max()),
         lateral_drift_m=drift,
-        captured=bool(force[-1] > 0.0),
+        captured=bool(force[-1] > 0.0)
+        and abs(float(port_velocity_m_per_s[-1, 2])) <= CAPTURE_SPEED_RATIO * abs(v_in),
     )

@@ -543,6 +543,20 @@ class DockingLoopParams(NestedParams):
         k = self.contact.contact_stiffness_n_per_m
         return math.sqrt(k / self.spacecraft.mass_kg) / (2.0 * math.pi)
 
+    def ideal_rig(self) -> DockingLoopParams:
+        """The same docking on the ideal rig: no sensor delay, the ideal table
+        model, no compensation, no F/T noise (what ``simulate6`` compares a
+        run with, and a campaign's ``energy_excess``)."""
+        return self.with_(
+            sensor_delay_s=0.0,
+            table="model",
+            table_response_hz=math.inf,
+            compensator="none",
+            force_noise_n=0.0,
+            moment_noise_n_m=0.0,
+            stewart=None,
+        )
+
     def nominal_pose(self) -> np.ndarray:
         """The nominal docked pose ``q`` (6): aligned, on axis, every pad
         pressed by half the undamped peak penetration ``v0 / omega`` (m)."""

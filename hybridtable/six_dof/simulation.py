@@ -19,7 +19,6 @@ from hybridtable.six_dof.pose import rotation_exp
 
 __all__ = [
     "MAX_TICKS",
-    "CAPTURE_SPEED_RATIO",
     "DockingRun",
     "simulate6",
     "contact_potential_j",
@@ -102,20 +101,6 @@ def expected_end_s(params: DockingLoopParams) -> float:
     a = params.approach
     half_period = 0.5 / params.contact_frequency_hz
     return 2.0 * a.initial_gap_m / a.initial_velocity_m_per_s + 10.0 * half_period + 0.5
-
-
-#: A port still touching the target at the end of a run to separation is
-#: captured, not stuck in a loop that neither separates nor diverges, when its
-#: speed along the docking axis is below this fraction of the approach speed.
-CAPTURE_SPEED_RATIO = 0.05
-
-
-def _at_rest_in_contact(params: DockingLoopParams, data: np.ndarray) -> bool:
-    """The record ends with the devices touching and the port at rest along
-    the docking axis (:data:`CAPTURE_SPEED_RATIO`)."""
-    touching = float(np.linalg.norm(data[27:30, -1])) > 0.0
-    speed = abs(float(data[8, -1]))
-    return touching and speed <= CAPTURE_SPEED_RATIO * params.approach.initial_velocity_m_per_s
 
 
 def _split(data: np.ndarray) -> dict[str, np.ndarray]:
@@ -234,12 +219,14 @@ def simulate6(
             progress(t, rule.t_max)
         if ended:
             break
+    unended = None  # a contact that has not ended: an error unless it is a capture
     if separating:  # a record of a given duration is returned as it is
         try:
             rule.verdict()
-        except SimulationError:
-            if not (rule.started and _at_rest_in_contact(params, log.data())):
+        except SimulationError as err:
+            if not rule.started:
                 raise
+            unended = err
     run = DockingRun(params, np.array(log.sample_times()), _split(log.data()))
     if loop.compensator.HasOutputPort("stiffness_scale"):  # an online identifier's estimate
         scale = loop.compensator.GetOutputPort("stiffness_scale")
@@ -260,5 +247,7 @@ def simulate6(
     except ValueError as err:
         if params.duration_s is None:
             raise SimulationError(str(err)) from None
+    if unended is not None and not (run.metrics is not None and run.metrics.captured):
+        raise unended
     run.wall_time_s = time.perf_counter() - start
     return run

@@ -32,7 +32,11 @@ from functools import cache
 from typing import Any, get_type_hints
 
 from hybridtable.errors import ParameterError
-from hybridtable.sweeps.inputs import Input, check_kind
+from hybridtable.limits import LIMITS
+from hybridtable.sweeps.inputs import CONFLICTS as ONE_D_CONFLICTS
+from hybridtable.sweeps.inputs import INPUTS, Input, check_kind
+
+DERIVED_NAMES = ("contact_frequency_hz", "compensator_stiffness_ratio")
 
 __all__ = [
     "COMPONENTS",
@@ -42,6 +46,7 @@ __all__ = [
     "docking_params",
     "check_docking_value",
     "read_base_scenario",
+    "holds_frequency",
     "simulate_docking",
 ]
 
@@ -75,24 +80,19 @@ _UNITS: tuple[tuple[str, str], ...] = (
     ("_n", "N"),
 )
 
-#: The derived inputs (see the module docstring).
-DERIVED: dict[str, Input] = {
-    "contact_frequency_hz": Input(
-        "contact_frequency_hz", "number", "Hz", "on-axis contact frequency; sets the mass"
-    ),
-    "compensator_stiffness_ratio": Input(
-        "compensator_stiffness_ratio", "number", "1", "believed / true contact stiffness"
-    ),
-}
+#: The derived inputs (see the module docstring): the 1-D campaign's.
+DERIVED: dict[str, Input] = {n: INPUTS[n] for n in DERIVED_NAMES}
 
-#: Pairs of inputs that set the same quantity.
-CONFLICTS: tuple[tuple[str, str], ...] = (
-    ("spacecraft_mass_kg", "contact_frequency_hz"),
-    ("compensator_stiffness_n_per_m", "compensator_stiffness_ratio"),
+#: Pairs of inputs that set the same quantity: the 1-D campaign's pairs of a
+#: derived input (the 6-DoF loop's contact has no damping ratio).
+CONFLICTS: tuple[tuple[str, str], ...] = tuple(
+    pair for pair in ONE_D_CONFLICTS if set(pair) & set(DERIVED_NAMES)
 )
 
 
 def _unit(name: str) -> str:
+    if name in LIMITS:
+        return LIMITS[name].unit
     for ending, unit in _UNITS:
         if name.endswith(ending):
             return unit
@@ -142,7 +142,8 @@ def docking_inputs() -> dict[str, Input]:
         elif kind is str or text == "str":
             out[name] = Input(name, "text", "", _words(name, unit))
         else:
-            out[name] = Input(name, "number", unit or "1", _words(name, unit))
+            whole = kind is int or text == "int"
+            out[name] = Input(name, "number", unit or "1", _words(name, unit), whole)
     out.update(DERIVED)
     return out
 
@@ -233,9 +234,17 @@ def docking_params(base, values: dict[str, Any], seed: int, holds_frequency: boo
     return base.with_(**changes)
 
 
-def check_docking_value(base, name: str, value: Any) -> Any:
+def holds_frequency(raw: dict[str, Any]) -> bool:
+    """Whether a scenario's TOML gives the contact frequency (not the mass):
+    a campaign varying the stiffness then keeps the frequency."""
+    spacecraft = raw.get("spacecraft", {})
+    return isinstance(spacecraft, dict) and "contact_frequency_hz" in spacecraft
+
+
+def check_docking_value(base, name: str, value: Any, holds: bool = False) -> Any:
     """``value`` of input ``name`` as a spec gives it, checked by building the
-    base scenario with it (a derived input with the quantity it sets).
+    base scenario with it (a derived input with the quantity it sets;
+    ``holds``: :func:`holds_frequency` of the scenario).
 
     Raises
     ------
@@ -252,22 +261,26 @@ def check_docking_value(base, name: str, value: Any) -> Any:
         from hybridtable.limits import check_plausible
 
         value = check_plausible(name, value)
-    try:
-        docking_params(base, {name: value}, 0)
-    except ParameterError as err:
-        text = str(err)
-        raise ParameterError(text if text.startswith(name) else f"{name}: {text}") from None
-    return float(value) if spec.kind == "number" and name != "pad_count" else value
+    if spec.whole and value != int(value):
+        raise ParameterError(f"{name} must be a whole number (got {value!r})")
+    docking_params(base, {name: value}, 0, holds)  # the spec names the key: grid.NAME[i]
+    if spec.whole:
+        return int(value)
+    return float(value) if spec.kind == "number" else value
 
 
-def simulate_docking(params) -> dict[str, Any]:
+def simulate_docking(params, ideal: bool = False) -> dict[str, Any]:
     """The metrics of one 6-DoF run by name (every 6-DoF metric of
-    :data:`~hybridtable.sweeps.metrics.METRICS`)."""
+    :data:`~hybridtable.sweeps.metrics.METRICS`; ``energy_excess`` only with
+    ``ideal``: the same docking on the ideal rig is simulated too)."""
     from hybridtable.six_dof.simulation import simulate6
 
     run = simulate6(params)
     found: dict[str, Any] = run.metrics.to_dict()
     found["identified_stiffness_n_per_m"] = run.extra.get("identified_stiffness_n_per_m", math.nan)
+    if ideal:
+        reference = simulate6(params.ideal_rig()).metrics
+        found["energy_excess"] = run.metrics.energy_ratio - reference.energy_ratio
     return found
 
 
@@ -282,11 +295,15 @@ def read_base_scenario(value: Any, folder):
     """
     from pathlib import Path
 
+    from hybridtable.errors import SpecError
     from hybridtable.loop.scenario import read_scenario
     from hybridtable.six_dof.scenario import parse_scenario
 
     if not isinstance(value, str) or not value:
         raise ParameterError(f"must be the path of a 6-DoF scenario file (got {value!r})")
     path = Path(value) if Path(value).is_absolute() else Path(folder) / value
-    raw = read_scenario(path)
-    return raw, str(path), parse_scenario(raw, str(path))
+    try:
+        raw = read_scenario(path)
+        return raw, str(path), parse_scenario(raw, str(path))
+    except SpecError as err:  # said under the spec's key, as a model file's errors are
+        raise ParameterError(str(err)) from None

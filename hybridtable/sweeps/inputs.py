@@ -62,12 +62,16 @@ class Input:
         SI unit ("1": dimensionless, "": text or bool).
     doc : str
         What it is, in a few words.
+    whole : bool
+        A whole number (a count): a grid or a ``choice`` gives it, no
+        continuous distribution.
     """
 
     name: str
     kind: str
     unit: str
     doc: str
+    whole: bool = False
 
 
 def _loop_inputs() -> dict[str, Input]:

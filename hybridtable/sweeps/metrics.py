@@ -102,6 +102,14 @@ _ALL = (
         loops=_SIX,
     ),
     Metric(
+        "energy_excess",
+        "1",
+        SIMULATION,
+        "energy ratio minus the ideal rig's (no delay, ideal table; a second run): > 0 the rig "
+        "created energy, < 0 it took energy out",
+        loops=_SIX,
+    ),
+    Metric(
         "rotational_energy_j", "J", SIMULATION, "rotational energy after the contact", loops=_SIX
     ),
     Metric(

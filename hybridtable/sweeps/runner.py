@@ -97,7 +97,7 @@ def row_problem(spec: SweepSpec, row: dict[str, Any]) -> str | None:
                 return f"a {row['status']} run with {name} = {value!r}"
         elif metric.kind == "bool":
             if not isinstance(value, bool):
-                return f"an ok run with stable = {value!r}"
+                return f"an ok run with {name} = {value!r}"
         elif not isinstance(value, int | float) or (
             metric.source == SIMULATION and metric.finite and not math.isfinite(value)
         ):
@@ -120,16 +120,16 @@ def _model(spec: SweepSpec):
 
 def _docking(spec: SweepSpec, inputs: RunInputs) -> dict[str, Any]:
     """The 6-DoF metrics of a run of a spec with a scenario."""
-    from hybridtable.sweeps.docking import docking_params, simulate_docking
+    from hybridtable.sweeps.docking import docking_params, holds_frequency, simulate_docking
 
     key = spec.fingerprint()
     if key not in _SCENARIOS:
         from hybridtable.six_dof.scenario import parse_scenario
 
         _SCENARIOS[key] = parse_scenario(spec.scenario, spec.scenario_path or "scenario")
-    holds = "contact_frequency_hz" in spec.scenario.get("spacecraft", {})
+    holds = holds_frequency(spec.scenario)
     params = docking_params(_SCENARIOS[key], inputs.values, inputs.seed, holds)
-    return simulate_docking(params)
+    return simulate_docking(params, ideal="energy_excess" in spec.metrics)
 
 
 def _engine(spec: SweepSpec, params, values: dict[str, Any]) -> str:

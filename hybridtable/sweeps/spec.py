@@ -142,10 +142,11 @@ def _parse(raw: Mapping[str, Any], source: str, folder: Path) -> SweepSpec:
         raise ParameterError(f"engine must be one of {', '.join(ENGINES)} (got {engine!r})")
     scenario, scenario_path, docking_base = None, None, None
     if "scenario" in raw:
-        from hybridtable.sweeps.docking import read_base_scenario
+        from hybridtable.sweeps.docking import holds_frequency, read_base_scenario
 
         with _Key("scenario"):
-            scenario, scenario_path, docking_base = read_base_scenario(raw["scenario"], folder)
+            scenario, scenario_path, params = read_base_scenario(raw["scenario"], folder)
+        docking_base = (params, holds_frequency(scenario))
     loop = "1d" if scenario is None else "six_dof"
     if loop == "six_dof":
         one_d = [k for k in ("model", "pade_order") if k in raw]
@@ -210,6 +211,8 @@ def _parse(raw: Mapping[str, Any], source: str, folder: Path) -> SweepSpec:
                 kind = input_for(k, loop).kind
                 if kind != "number" and dist.kind != "choice":
                     raise ParameterError(f"{k} is {kind}: only choice can draw it")
+                if input_for(k, loop).whole and dist.kind != "choice":
+                    raise ParameterError(f"{k} is a whole number: only choice can draw it")
                 if kind == "number" and dist.kind == "choice":
                     dist = Distribution(
                         "choice",
@@ -484,7 +487,9 @@ def _checker(loop: str, docking_base):
         return check_value
     from hybridtable.sweeps.docking import check_docking_value
 
+    params, holds = docking_base
+
     def check(name: str, value: Any) -> Any:
-        return check_docking_value(docking_base, name, value)
+        return check_docking_value(params, name, value, holds)
 
     return check

@@ -180,15 +180,22 @@ def test_a_6dof_campaign_writes_and_resumes_its_parquet(campaign):
     assert "energy_ratio" in row_problem(spec, bad)
 
 
-def test_a_record_that_ends_in_contact_is_captured(base):
+def test_a_record_ending_at_rest_in_contact_is_a_capture_and_one_cut_moving_is_not(base):
+    """``captured``: the devices touch at the record's end with the port at
+    rest along the axis (the deepest press of a contact), not merely touching."""
     from hybridtable.six_dof.simulation import simulate6
 
-    run = simulate6(base.with_(duration_s=0.3, compensator="none"))
-    assert run.metrics.captured
-    done = simulate6(base.with_(compensator="none"))
-    assert not done.metrics.captured
-    drift = done.metrics.lateral_drift_m
-    assert np.isfinite(drift) and drift >= 0.0
+    p = base.with_(compensator="none")
+    full = simulate6(p)
+    assert not full.metrics.captured
+    assert np.isfinite(full.metrics.lateral_drift_m) and full.metrics.lateral_drift_m >= 0.0
+    v = full.port_velocity_m_per_s[:, 2]
+    touching = np.flatnonzero(np.linalg.norm(full.log["contact_wrench"][:, 3:], axis=1) > 0)
+    deepest = touching[np.argmin(np.abs(v[touching]))]
+    at_rest = simulate6(p.with_(duration_s=float(full.time_s[deepest])))
+    assert at_rest.metrics.captured
+    cut = simulate6(p.with_(duration_s=float(full.time_s[deepest]) - 0.1))
+    assert not cut.metrics.captured  # touching, but moving at ~0.5 v0
 
 
 def test_the_params_dict_of_simulate6_is_unchanged_by_the_flat_names(base):
