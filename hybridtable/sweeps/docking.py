@@ -222,8 +222,9 @@ def docking_params(base, values: dict[str, Any], seed: int, holds_frequency: boo
         changes["seed"] = int(seed) % 2**63
     stiffness = changes.get("contact_stiffness_n_per_m", base.contact.contact_stiffness_n_per_m)
     frequency = values.get("contact_frequency_hz")
-    if frequency is None and holds_frequency and "spacecraft_mass_kg" not in changes:
-        frequency = base.contact_frequency_hz
+    varied = "contact_stiffness_n_per_m" in changes and "spacecraft_mass_kg" not in changes
+    if frequency is None and holds_frequency and varied:
+        frequency = base.contact_frequency_hz  # the scenario's, kept with the new stiffness
     if frequency is not None:
         changes["spacecraft_mass_kg"] = mass_for_contact_frequency_kg(
             float(stiffness), float(frequency)

@@ -133,7 +133,7 @@ name = "envelope"
 seed = 5
 compensators = ["none", "SDMDC", "sdmdc-online"]
 metrics = ["cor_normal", "energy_ratio", "peak_force_n", "lateral_drift_m", "captured",
-           "identified_stiffness_n_per_m"]
+           "identified_stiffness_n_per_m", "energy_excess"]
 [base]
 compensator_stiffness_ratio = 2.0
 [monte_carlo]
@@ -163,8 +163,21 @@ def test_a_6dof_campaign_measures_the_physics(campaign):
         assert online["identified_stiffness_n_per_m"] == pytest.approx(k, rel=0.05)
         assert math.isnan(sdmdc["identified_stiffness_n_per_m"])
         assert not online["captured"]
+        # against the same docking on the ideal rig (no delay, ideal table)
+        assert none["energy_excess"] > 0.1 and abs(online["energy_excess"]) < 0.01
+        assert sdmdc["energy_excess"] < -0.03
         # one draw: every compensator meets the same approach
         assert none["initial_velocity_m_per_s"] == online["initial_velocity_m_per_s"]
+
+
+def test_the_energy_excess_is_over_the_same_docking_on_the_ideal_rig(campaign, base):
+    from hybridtable.six_dof.simulation import simulate6
+
+    spec, rows, _ = campaign
+    row = rows[1]  # SDMDC, sample 0
+    params = docking_params(base, spec.run_inputs(1).values, spec.run_inputs(1).seed)
+    ideal = simulate6(params.ideal_rig()).metrics.energy_ratio
+    assert row["energy_excess"] == row["energy_ratio"] - ideal
 
 
 def test_a_6dof_campaign_writes_and_resumes_its_parquet(campaign):
