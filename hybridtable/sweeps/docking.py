@@ -182,11 +182,11 @@ def _choices(name: str) -> tuple[str, ...] | None:
     return None
 
 
-def docking_params(base, values: dict[str, Any], seed: int, holds_frequency: bool = False):
+def docking_params(base, values: dict[str, Any], seed: int, holds: bool = False):
     """The :class:`~hybridtable.six_dof.params.DockingLoopParams` of one run:
     ``base`` (the scenario's) with the run's ``values`` (inputs by name) and
-    the noise seeded by ``seed``. ``holds_frequency``: the scenario gave the
-    contact frequency, which a varied stiffness keeps.
+    the noise seeded by ``seed``. ``holds``: the scenario gave the contact
+    frequency, which a varied stiffness keeps (:func:`holds_frequency`).
 
     Raises
     ------
@@ -223,7 +223,7 @@ def docking_params(base, values: dict[str, Any], seed: int, holds_frequency: boo
     stiffness = changes.get("contact_stiffness_n_per_m", base.contact.contact_stiffness_n_per_m)
     frequency = values.get("contact_frequency_hz")
     varied = "contact_stiffness_n_per_m" in changes and "spacecraft_mass_kg" not in changes
-    if frequency is None and holds_frequency and varied:
+    if frequency is None and holds and varied:
         frequency = base.contact_frequency_hz  # the scenario's, kept with the new stiffness
     if frequency is not None:
         changes["spacecraft_mass_kg"] = mass_for_contact_frequency_kg(
@@ -250,7 +250,8 @@ def check_docking_value(base, name: str, value: Any, holds: bool = False) -> Any
     Raises
     ------
     ParameterError
-        One line naming ``name``.
+        One line: of the value's kind naming ``name``, else the config's
+        own (the spec prefixes the key that gave the value).
     """
     spec = docking_inputs().get(name)
     if spec is None:

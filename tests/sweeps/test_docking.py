@@ -80,9 +80,9 @@ def test_the_contact_frequency_sets_the_mass_and_a_scenario_holding_it_keeps_it(
     p = docking_params(base, {"contact_frequency_hz": 2.0, "contact_stiffness_n_per_m": k}, 0)
     assert p.spacecraft.mass_kg == pytest.approx(k / (2 * math.pi * 2.0) ** 2, rel=1e-12)
     # offset.toml gives contact_frequency_hz = 1: a stiffer contact, a heavier body
-    held = docking_params(base, {"contact_stiffness_n_per_m": k}, 0, holds_frequency=True)
+    held = docking_params(base, {"contact_stiffness_n_per_m": k}, 0, holds=True)
     assert held.contact_frequency_hz == pytest.approx(1.0, rel=1e-12)
-    kept = docking_params(base, {"contact_stiffness_n_per_m": k}, 0, holds_frequency=False)
+    kept = docking_params(base, {"contact_stiffness_n_per_m": k}, 0, holds=False)
     assert kept.spacecraft.mass_kg == base.spacecraft.mass_kg
     ratio = docking_params(base, {"compensator_stiffness_ratio": 0.5}, 0)
     assert ratio.compensator_stiffness_n_per_m == pytest.approx(
