@@ -98,7 +98,10 @@ def run(args: argparse.Namespace) -> int:
     reference = None
     if not args.no_reference:
         reference = simulate6(params.ideal_rig()).metrics
-    modes = contact_modes(params)
+    from hybridtable.six_dof.registry import linear_law
+
+    # A plug-in that declares no linear law has no margins (not the "none" loop's).
+    modes = contact_modes(params) if linear_law(params.compensator) is not None else None
     m = result.metrics
     sim_s = float(result.time_s[-1]) if len(result.time_s) else 0.0
     out = {
@@ -112,7 +115,7 @@ def run(args: argparse.Namespace) -> int:
         "contact_duration_s": m.contact_duration_s,
         "metrics": m.to_dict(),
         "reference": None if reference is None else reference.to_dict(),
-        "margins": modes.to_dict(),
+        "margins": None if modes is None else modes.to_dict(),
         "params": params.to_dict(),
         "simulated_s": sim_s,
         "wall_time_s": result.wall_time_s,
@@ -125,9 +128,14 @@ def run(args: argparse.Namespace) -> int:
         out["metrics"]["note"] = m.spin_note
     if reference is None:
         notes.append("reference null: --no-reference skipped the ideal rig's run")
+    if modes is None:
+        notes.append(
+            f"margins null: the plug-in {params.compensator!r} declares no linear law "
+            "(register_wrench_compensator(..., linear=LinearLaw(...)))"
+        )
     if notes:
         out["note"] = "; ".join(notes)
-    if math.isinf(modes.critical_delay_s):
+    if modes is not None and math.isinf(modes.critical_delay_s):
         out["margins"]["note"] = "critical_delay_s inf: no mode grows at any delay up to 50 ms"
     if not quiet:
         if reference is not None:

@@ -26,10 +26,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from hybridtable.analysis.critical import critical_delay
+from hybridtable.errors import ParameterError
 from hybridtable.loop.params import believed
 from hybridtable.six_dof.contact import DockingContact
 from hybridtable.six_dof.params import DockingLoopParams
 from hybridtable.six_dof.pose import skew
+from hybridtable.six_dof.registry import linear_law
 from hybridtable.six_dof.table import table_tick_matrices
 from hybridtable.systems.sensor import sample_taps
 
@@ -115,14 +117,20 @@ def tick_matrix(
         if ideal
         else table_tick_matrices(params.table_response_hz, params.table_damping_ratio, h)
     )
-    kind = params.compensator
+    linear = linear_law(params.compensator)
+    if linear is None:
+        raise ParameterError(
+            f"compensator {params.compensator!r} declares no linear law "
+            "(register_wrench_compensator(..., linear=LinearLaw(...))): no linear model"
+        )
+    kind = linear.law
     # The MDC's K and C are the contact's scaled by the stiffness the
-    # compensator believes; sdmdc-online's converge to the contact's.
+    # compensator believes; an online identifier's converge to the contact's.
     belief = (
         params.believed_contact.contact_stiffness_n_per_m / params.contact.contact_stiffness_n_per_m
     )
-    if kind == "sdmdc-online":
-        kind, belief = "SDMDC", 1.0
+    if linear.identifies_stiffness:
+        belief = 1.0
     delay_s = None if delay_ticks is None else float(delay_ticks) * h
     lead = believed(params, "lead_time_s", delay_s) if kind in ("SDC", "SDMDC") else 0.0
     mdc = kind in ("MDC", "SDMDC")

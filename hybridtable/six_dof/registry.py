@@ -11,11 +11,18 @@ returns a system with the ports of
 :mod:`~hybridtable.six_dof.identification`); other packages add
 theirs through the entry-point group ``hybridtable.wrench_compensators``, a
 script through :func:`register_wrench_compensator`.
+
+Each name may also say which of the paper's laws its loop is once linearized
+(:class:`LinearLaw`): the margins of :mod:`~hybridtable.six_dof.linear` are
+that law's. ``sdmdc-online`` is SDMDC whose stiffness converges to the
+contact's; a plug-in that declares none has no linear model (its margins are
+not computed, not guessed).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 from pydrake.systems.framework import System
@@ -26,6 +33,8 @@ from hybridtable.six_dof.compensator import StiffnessModel, WrenchCompensator
 from hybridtable.six_dof.identification import make_online_sdmdc
 
 __all__ = [
+    "LinearLaw",
+    "linear_law",
     "WrenchCompensatorFactory",
     "ENTRY_POINT_GROUP",
     "PAPER_WRENCH_COMPENSATORS",
@@ -49,9 +58,33 @@ def _paper(params: Any, stiffness: StiffnessModel) -> System:
     )
 
 
+@dataclass(frozen=True)
+class LinearLaw:
+    """What a wrench compensator is, linearized in contact.
+
+    Attributes
+    ----------
+    law : str
+        One of the paper's four (:data:`PAPER_WRENCH_COMPENSATORS`).
+    identifies_stiffness : bool
+        Its stiffness converges to the contact's (an online identifier), so
+        its MDC term is the contact's ``K``, not the believed one's.
+    """
+
+    law: str
+    identifies_stiffness: bool = False
+
+    def __post_init__(self) -> None:
+        check_choice("law", self.law, PAPER_WRENCH_COMPENSATORS)
+
+
 _REGISTRY: dict[str, WrenchCompensatorFactory] = {
     **{name: _paper for name in PAPER_WRENCH_COMPENSATORS},
     "sdmdc-online": make_online_sdmdc,
+}
+_LINEAR: dict[str, LinearLaw] = {
+    **{name: LinearLaw(name) for name in PAPER_WRENCH_COMPENSATORS},
+    "sdmdc-online": LinearLaw("SDMDC", identifies_stiffness=True),
 }
 _entry_points_loaded = False
 
@@ -65,9 +98,14 @@ def _load_entry_points() -> None:
 
 
 def register_wrench_compensator(
-    name: str, factory: WrenchCompensatorFactory, replace: bool = False
+    name: str,
+    factory: WrenchCompensatorFactory,
+    replace: bool = False,
+    linear: LinearLaw | None = None,
 ) -> None:
-    """Make ``name`` a choice of ``DockingLoopParams.compensator``.
+    """Make ``name`` a choice of ``DockingLoopParams.compensator``;
+    ``linear``: the paper's law its loop is once linearized (None: it has no
+    linear model, and ``simulate6`` reports no margins for it).
 
     Raises
     ------
@@ -77,6 +115,15 @@ def register_wrench_compensator(
     if name in PAPER_WRENCH_COMPENSATORS or (name in _REGISTRY and not replace):
         raise ValueError(f"wrench compensator {name!r} is already registered")
     _REGISTRY[name] = factory
+    _LINEAR.pop(name, None)
+    if linear is not None:
+        _LINEAR[name] = linear
+
+
+def linear_law(name: str) -> LinearLaw | None:
+    """The :class:`LinearLaw` of the compensator ``name`` (None: a plug-in
+    that declared none)."""
+    return _LINEAR.get(name)
 
 
 def wrench_compensator_names() -> tuple[str, ...]:

@@ -83,6 +83,30 @@ def test_a_plugin_wrench_compensator_registers_itself_and_runs():
     assert cor["SDC"] < cor["half-lead"] < cor["none"]
 
 
+def test_a_plugins_margins_are_those_of_the_linear_law_it_declares_or_none():
+    """A plug-in's linearized loop is the paper's law it declares; without
+    one it has no linear model (never the "none" loop's margins by default)."""
+    from hybridtable.errors import ParameterError
+    from hybridtable.six_dof.linear import contact_modes, tick_matrix
+    from hybridtable.six_dof.registry import LinearLaw, linear_law
+
+    def plain_sdc(params, stiffness):
+        return WrenchCompensator(params.sample_period_s, params.effective_lead_time_s)
+
+    register_wrench_compensator("plain-sdc", plain_sdc, replace=True)
+    assert linear_law("plain-sdc") is None
+    p = docking_params(sensor_delay_s=0.005, compensator="plain-sdc", table_response_hz=25.0)
+    K, C = np.eye(6) * 1e4, np.eye(6)
+    with pytest.raises(ParameterError, match="plain-sdc"):
+        tick_matrix(p, K, C)
+    register_wrench_compensator("plain-sdc", plain_sdc, replace=True, linear=LinearLaw("SDC"))
+    sdc = p.with_(compensator="SDC")
+    np.testing.assert_array_equal(tick_matrix(p, K, C), tick_matrix(sdc, K, C))
+    assert contact_modes(p).max_growth_rate_per_s == contact_modes(sdc).max_growth_rate_per_s
+    with pytest.raises(ParameterError, match="law"):
+        LinearLaw("PID")
+
+
 @pytest.mark.parametrize(
     "group,module",
     [
