@@ -121,9 +121,14 @@ def register_wrench_compensator(
 
 
 def linear_law(name: str) -> LinearLaw | None:
-    """The :class:`LinearLaw` of the compensator ``name`` (None: a plug-in
-    that declared none)."""
-    return _LINEAR.get(name)
+    """The :class:`LinearLaw` of the compensator ``name``: the one it was
+    registered with, else its factory's ``linear`` attribute (how an
+    entry-point plug-in declares it); None: a plug-in that declared none."""
+    _load_entry_points()
+    found = _LINEAR.get(name)
+    if found is None:
+        found = getattr(_REGISTRY.get(name), "linear", None)
+    return found if isinstance(found, LinearLaw) else None
 
 
 def wrench_compensator_names() -> tuple[str, ...]:

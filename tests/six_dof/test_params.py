@@ -105,6 +105,10 @@ def test_a_plugins_margins_are_those_of_the_linear_law_it_declares_or_none():
     assert contact_modes(p).max_growth_rate_per_s == contact_modes(sdc).max_growth_rate_per_s
     with pytest.raises(ParameterError, match="law"):
         LinearLaw("PID")
+    # an entry point's factory declares it as an attribute
+    plain_sdc.linear = LinearLaw("SDC")
+    register_wrench_compensator("plain-sdc", plain_sdc, replace=True)
+    assert linear_law("plain-sdc") == LinearLaw("SDC")
 
 
 @pytest.mark.parametrize(
