@@ -104,8 +104,9 @@ def register_wrench_compensator(
     linear: LinearLaw | None = None,
 ) -> None:
     """Make ``name`` a choice of ``DockingLoopParams.compensator``;
-    ``linear``: the paper's law its loop is once linearized (None: it has no
-    linear model, and ``simulate6`` reports no margins for it).
+    ``linear``: the paper's law its loop is once linearized (None: the
+    factory's ``linear`` attribute if it has one, else no linear model, and
+    ``simulate6`` reports no margins for it).
 
     Raises
     ------
