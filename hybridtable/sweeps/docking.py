@@ -129,9 +129,7 @@ def docking_inputs() -> dict[str, Input]:
             continue
         unit = _unit(name)
         if name in COMPONENTS:
-            stem = name[: -len(_unit_ending(name))]
-            for axis in COMPONENTS[name]:
-                component = f"{stem}_{axis}{_unit_ending(name)}"
+            for component, axis in zip(_component_names(name), COMPONENTS[name], strict=True):
                 words = f"{_words(name, unit)} ({axis})"
                 out[component] = Input(component, "number", unit, words)
             continue
@@ -156,14 +154,18 @@ def _unit_ending(name: str) -> str:
     return ""
 
 
-def _component_of(name: str) -> tuple[str, int] | None:
-    for vector, axes in COMPONENTS.items():
-        ending = _unit_ending(vector)
-        stem = vector[: -len(ending)]
-        for i, axis in enumerate(axes):
-            if name == f"{stem}_{axis}{ending}":
-                return vector, i
-    return None
+def _component_names(vector: str) -> list[str]:
+    """The inputs of a vector's components (``lateral_offset_m`` ->
+    ``lateral_offset_x_m``, ``lateral_offset_y_m``)."""
+    ending = _unit_ending(vector)
+    stem = vector[: -len(ending)]
+    return [f"{stem}_{axis}{ending}" for axis in COMPONENTS[vector]]
+
+
+#: Each component's input -> its vector and index.
+_COMPONENT_OF: dict[str, tuple[str, int]] = {
+    name: (vector, i) for vector in COMPONENTS for i, name in enumerate(_component_names(vector))
+}
 
 
 def _choices(name: str) -> tuple[str, ...] | None:
@@ -200,7 +202,7 @@ def docking_params(base, values: dict[str, Any], seed: int, holds: bool = False)
     for name, value in values.items():
         if name in DERIVED:
             continue
-        component = _component_of(name)
+        component = _COMPONENT_OF.get(name)
         if component is None:
             changes[name] = value
             continue
