@@ -25,7 +25,7 @@ from pydrake.systems.framework import Diagram, DiagramBuilder, System
 from pydrake.systems.primitives import LogVectorOutput, Multiplexer, VectorLogSink
 
 from hybridtable.six_dof.compensator import constant_stiffness
-from hybridtable.six_dof.contact import DockingContact, DockingContactSystem
+from hybridtable.six_dof.contact import DockingContact, DockingContactSystem, port_start_z_m
 from hybridtable.six_dof.params import DockingLoopParams
 from hybridtable.six_dof.registry import make_wrench_compensator
 from hybridtable.six_dof.sensor import add_wrench_sensor
@@ -110,14 +110,14 @@ def initial_port_state(
     params: DockingLoopParams, spacecraft: RigidSpacecraft
 ) -> tuple[np.ndarray, np.ndarray]:
     """The port's command ``[q; qd]`` (12) and the body state (18) at t = 0:
-    the attitude off by the misalignment, the port's axis through the target's
-    centre, the first pad ``initial_gap_m`` from the plate, moving at the
-    approach speed along +z."""
+    the attitude off by the misalignment, the port origin ``lateral_miss_m``
+    across the target's axis, the active device ``initial_gap_m`` before its
+    first touch (:func:`~hybridtable.six_dof.contact.port_start_z_m`), moving
+    at the approach speed along +z."""
     a = params.approach
     R0 = rotation_from_rpy(np.array([*a.misalignment_rad, 0.0]))
-    c = params.contact
-    lowest = float(np.max((c.pad_centres_m @ R0.T)[:, 2])) + c.pad_radius_m
-    port = np.array([0.0, 0.0, -a.initial_gap_m - lowest])
+    miss = np.array(a.lateral_miss_m)
+    port = np.array([*miss, port_start_z_m(params.contact, R0, miss, a.initial_gap_m)])
     v0 = np.array([0.0, 0.0, a.initial_velocity_m_per_s])
     body = spacecraft.initial_state(port, R0, v0, np.array(a.angular_rate_rad_per_s))
     return port_state(params.spacecraft, body), body

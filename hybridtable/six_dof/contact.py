@@ -1,68 +1,103 @@
-"""The docking devices' compliant contact, computed by Drake's point contact.
+"""The docking devices and their compliant contact, computed by Drake.
 
-The active device is a ring of spherical pads (:class:`DockingContactParams`),
-the passive one a flat plate whose face is the plane ``z = 0`` of the target
-frame W. :func:`register_docking_devices` adds both to any MultibodyPlant (the
+Two pairs of devices (:class:`DockingContactParams`, ``geometry``):
+
+- ``"plate"``: a ring of spherical pads against a flat plate whose face is the
+  plane ``z = 0`` of the target frame W, in Drake's compliant point contact
+  (:mod:`~hybridtable.six_dof.pads`);
+- ``"cone"``: a probe head entering a conical drogue, in Drake's hydroelastic
+  contact (:mod:`~hybridtable.six_dof.drogue`), so that an offset or a tilt
+  acts through the drogue's walls.
+
+:func:`register_docking_devices` adds either pair to any MultibodyPlant (the
 Stewart plant uses it too); :class:`DockingContact` holds a small plant of the
-two devices alone (the device a free body, the plate welded to the world) and
-evaluates the contact wrench at a pose and twist through the plant's contact
-results (Drake's compliant point contact with Hunt–Crossley dissipation and
-regularized Coulomb friction); :class:`DockingContactSystem` is that as a
-Drake system of the loop.
+two devices alone (the device a free body, the target welded to the world)
+and evaluates the contact wrench at a pose and twist through the plant's
+contact results (Hunt–Crossley dissipation and regularized Coulomb friction
+in both), and its 6x6 stiffness and damping in closed form;
+:class:`DockingContactSystem` is that as a Drake system of the loop.
 """
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass
 
 import numpy as np
-from pydrake.geometry import AddContactMaterial, Box, ProximityProperties, Sphere
+from pydrake.geometry import HydroelasticContactRepresentation
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.math import SpatialVelocity
-from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, CoulombFriction
+from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
 from pydrake.multibody.tree import RigidBody, SpatialInertia
 from pydrake.systems.framework import BasicVector, DiagramBuilder, LeafSystem
 
-from hybridtable._validation import check_nonnegative, check_positive
+from hybridtable._validation import check_choice, check_nonnegative, check_positive
 from hybridtable.errors import ParameterError
-from hybridtable.laws.compiled import compiled_available, njit_cached
 from hybridtable.limits import check_plausible
+from hybridtable.six_dof import drogue
+from hybridtable.six_dof.pads import STICTION_TOLERANCE_M_PER_S, pad_jacobians, register_pads
 from hybridtable.six_dof.pose import rotation_exp, rotation_jacobian
 from hybridtable.stewart.geometry import cross
 
 __all__ = [
+    "GEOMETRIES",
     "DockingContactParams",
     "register_docking_devices",
     "DockingContact",
     "DockingContactSystem",
     "STICTION_TOLERANCE_M_PER_S",
+    "peak_press_m",
+    "port_start_z_m",
 ]
+
+#: The docking devices: a pad ring on a flat plate, or a probe in a drogue.
+GEOMETRIES: tuple[str, ...] = ("plate", "cone")
+
+#: The cone's half angle (its wall from the axis) may lie in this range (rad):
+#: 5 to 75 deg.
+CONE_HALF_ANGLE_RANGE_RAD = (math.radians(5.0), math.radians(75.0))
 
 
 @dataclass(frozen=True)
 class DockingContactParams:
-    """The docking devices and their compliant contact (Drake point contact).
+    """The docking devices and their compliant contact.
 
-    The active device (on the table) is a ring of ``pad_count`` spherical
-    pads of radius ``pad_radius_m`` on a circle of ``ring_radius_m``, their
-    tops in the port's face plane; the passive device is a flat plate.
+    ``geometry = "plate"`` (Drake's point contact): the active device (on the
+    table) is a ring of ``pad_count`` spherical pads of radius
+    ``pad_radius_m`` on a circle of ``ring_radius_m``, their tops in the
+    port's face plane; the passive device is a flat plate.
+
+    ``geometry = "cone"`` (Drake's hydroelastic contact): the active device
+    is a spherical probe head of radius ``probe_radius_m``, its tip at the
+    port origin; the passive device a drogue: a cone of half angle
+    ``cone_half_angle_rad`` from its mouth (radius ``mouth_radius_m``, in
+    the target's face plane) to its throat (``throat_radius_m``), then a
+    socket ``socket_depth_m`` deep (:mod:`~hybridtable.six_dof.drogue`). The
+    pad fields are not used, nor the cone's by a plate.
 
     Parameters
     ----------
     contact_stiffness_n_per_m : float
-        Total normal stiffness k of the contact with every pad touching, > 0
-        (each pad ``k / pad_count``).
+        Plate: total normal stiffness k with every pad touching, > 0 (each
+        pad ``k / pad_count``). Cone: the probe's tangent stiffness at a
+        press of a tenth of its radius (its force grows as the press squared:
+        :func:`~hybridtable.six_dof.drogue.probe_modulus_pa`).
     contact_dissipation_s_per_m : float
-        Hunt–Crossley dissipation d of each pad, ``f = k_i x (1 + d dx/dt)``, >= 0.
+        Hunt–Crossley dissipation d, ``f = f_elastic (1 + d dx/dt)``, >= 0.
     friction_coefficient : float
-        Coulomb friction mu of the pads on the plate, >= 0 (Drake's
-        regularized friction).
+        Coulomb friction mu of the devices, >= 0 (Drake's regularized friction).
     pad_count : int
         Number of pads, >= 3.
     ring_radius_m, pad_radius_m : float
         Ring and pad radii, > 0, ``pad_radius_m < ring_radius_m``.
+    geometry : {"plate", "cone"}
+    cone_half_angle_rad : float
+        The drogue's wall from the axis (rad), 5 to 75 deg.
+    mouth_radius_m, throat_radius_m, probe_radius_m : float
+        ``probe_radius_m < throat_radius_m < mouth_radius_m``, > 0.
+    socket_depth_m : float
+        Depth of the socket past the throat, > ``probe_radius_m`` (a head
+        whose centre has passed the throat fits in it).
     """
 
     contact_stiffness_n_per_m: float
@@ -71,6 +106,12 @@ class DockingContactParams:
     pad_count: int = 8
     ring_radius_m: float = 0.3
     pad_radius_m: float = 0.01
+    geometry: str = "plate"
+    cone_half_angle_rad: float = math.radians(30.0)
+    mouth_radius_m: float = 0.3
+    throat_radius_m: float = 0.08
+    socket_depth_m: float = 0.15
+    probe_radius_m: float = 0.05
 
     def __post_init__(self) -> None:
         s = object.__setattr__
@@ -89,6 +130,39 @@ class DockingContactParams:
             raise ParameterError(
                 f"pad_radius_m {self.pad_radius_m:g} must be < ring_radius_m {self.ring_radius_m:g}"
             )
+        s(self, "geometry", check_choice("geometry", self.geometry, GEOMETRIES))
+        for name in ("mouth_radius_m", "throat_radius_m", "socket_depth_m", "probe_radius_m"):
+            s(self, name, check_positive(name, getattr(self, name)))
+        alpha = check_positive("cone_half_angle_rad", self.cone_half_angle_rad)
+        lo, hi = CONE_HALF_ANGLE_RANGE_RAD
+        if not lo <= alpha <= hi:
+            raise ParameterError(
+                f"cone_half_angle_rad must be in [{lo:.4g}, {hi:.4g}] rad (5 to 75 deg; "
+                f"got {alpha:g})"
+            )
+        s(self, "cone_half_angle_rad", alpha)
+        r, rt, rm = self.probe_radius_m, self.throat_radius_m, self.mouth_radius_m
+        if not r < rt < rm:
+            raise ParameterError(
+                f"probe_radius_m {r:g} < throat_radius_m {rt:g} < mouth_radius_m {rm:g} must "
+                "hold: the probe head passes the throat, the cone narrows to it"
+            )
+        if self.socket_depth_m <= r:
+            raise ParameterError(
+                f"socket_depth_m {self.socket_depth_m:g} must be > probe_radius_m {r:g}: a head "
+                "whose centre has passed the throat fits in the socket"
+            )
+
+    @property
+    def is_cone(self) -> bool:
+        """The probe and drogue (hydroelastic), not the pads and plate."""
+        return self.geometry == "cone"
+
+    @property
+    def moment_arm_m(self) -> float:
+        """A lever arm of the contact's moments about the port (m): the pads'
+        ring radius, or the probe's radius."""
+        return self.probe_radius_m if self.is_cone else self.ring_radius_m
 
     @property
     def pad_centres_m(self) -> np.ndarray:
@@ -99,127 +173,10 @@ class DockingContactParams:
             [r * np.cos(a), r * np.sin(a), np.full(self.pad_count, -self.pad_radius_m)]
         )
 
-
-#: Drake's stiction tolerance of a continuous plant (m/s), stated on the plant:
-#: below it the friction coefficient rises as a smooth step from 0.
-STICTION_TOLERANCE_M_PER_S = 1e-4
-#: Drake's point contact has no friction below this slip speed (m/s).
-_NONZERO_SLIP_M_PER_S = 1e-14
-
-
-def _pad_jacobians(U, F, X, N, J, qd, k, d, mu, r, w_q, w_qd) -> None:
-    """Add to ``w_q = dw/dq`` and ``w_qd = dw/dqd`` (6x6) the touching pads' terms
-    (see :meth:`DockingContact.stiffness`): row ``i`` of ``U``, ``F``, ``X``, ``N``
-    is a pad's contact point from the port origin, its force on the device, its
-    depth and the face's normal toward the device. ``J`` is the rotation
-    vector's Jacobian; ``k``, ``d``, ``mu``, ``r`` the pad pair's stiffness,
-    dissipation, friction coefficient and the pads' radius. Plain loops: numba
-    compiles the function, and it runs as Python where numba is missing."""
-    du = np.zeros((3, 6))
-    vc_q = np.zeros((3, 6))
-    vc_qd = np.zeros((3, 6))
-    f_q = np.zeros((3, 6))
-    f_qd = np.zeros((3, 6))
-    turn = np.zeros((3, 3))
-    dx = np.zeros(6)
-    fn_q = np.zeros(6)
-    fn_qd = np.zeros(6)
-    for i in range(U.shape[0]):
-        u0, u1, u2 = U[i, 0], U[i, 1], U[i, 2]
-        n0, n1, n2 = N[i, 0], N[i, 1], N[i, 2]
-        x = X[i]
-        lift = r - 0.5 * x
-        b0, b1, b2 = u0 + lift * n0, u1 + lift * n1, u2 + lift * n2  # the pad's centre
-        for c in range(3):  # turn = -[b]x J: d(centre - p)/dtheta
-            turn[0, c] = b2 * J[1, c] - b1 * J[2, c]
-            turn[1, c] = b0 * J[2, c] - b2 * J[0, c]
-            turn[2, c] = b1 * J[0, c] - b0 * J[1, c]
-        dx[0], dx[1], dx[2] = -n0, -n1, -n2  # d depth / dq
-        for c in range(3):
-            dx[3 + c] = -(n0 * turn[0, c] + n1 * turn[1, c] + n2 * turn[2, c])
-        for j in range(6):  # d(C - p)/dq
-            du[0, j] = 0.5 * n0 * dx[j]
-            du[1, j] = 0.5 * n1 * dx[j]
-            du[2, j] = 0.5 * n2 * dx[j]
-        for a in range(3):
-            for c in range(3):
-                du[a, 3 + c] += turn[a, c]
-        w0, w1, w2 = qd[3], qd[4], qd[5]
-        vc0 = qd[0] + w1 * u2 - w2 * u1  # the device's point at C
-        vc1 = qd[1] + w2 * u0 - w0 * u2
-        vc2 = qd[2] + w0 * u1 - w1 * u0
-        for j in range(6):  # d v_C/dq = [omega]x du; d v_C/dqd = [I, -[u]x]
-            vc_q[0, j] = w1 * du[2, j] - w2 * du[1, j]
-            vc_q[1, j] = w2 * du[0, j] - w0 * du[2, j]
-            vc_q[2, j] = w0 * du[1, j] - w1 * du[0, j]
-        for a in range(3):
-            for j in range(3):
-                vc_qd[a, j] = 1.0 if a == j else 0.0
-        vc_qd[0, 3], vc_qd[0, 4], vc_qd[0, 5] = 0.0, u2, -u1
-        vc_qd[1, 3], vc_qd[1, 4], vc_qd[1, 5] = -u2, 0.0, u0
-        vc_qd[2, 3], vc_qd[2, 4], vc_qd[2, 5] = u1, -u0, 0.0
-        n_vc = n0 * vc0 + n1 * vc1 + n2 * vc2  # minus the penetration rate
-        fn = k * x * (1.0 - d * n_vc)
-        for j in range(6):
-            fn_q[j] = k * (1.0 - d * n_vc) * dx[j] - k * x * d * (
-                n0 * vc_q[0, j] + n1 * vc_q[1, j] + n2 * vc_q[2, j]
-            )
-            fn_qd[j] = -k * x * d * (n0 * vc_qd[0, j] + n1 * vc_qd[1, j] + n2 * vc_qd[2, j])
-            f_q[0, j], f_q[1, j], f_q[2, j] = n0 * fn_q[j], n1 * fn_q[j], n2 * fn_q[j]
-            f_qd[0, j], f_qd[1, j], f_qd[2, j] = n0 * fn_qd[j], n1 * fn_qd[j], n2 * fn_qd[j]
-        s0, s1, s2 = vc0 - n_vc * n0, vc1 - n_vc * n1, vc2 - n_vc * n2  # the slip
-        s = math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
-        if mu > 0.0 and s > _NONZERO_SLIP_M_PER_S:
-            # Drake's regularized Coulomb friction: mu step5(s / v_s) below the
-            # stiction tolerance v_s, mu above; step5(z) = z^3 (10 - 15 z + 6 z^2).
-            z = s / STICTION_TOLERANCE_M_PER_S
-            mu_s, dmu = mu, 0.0
-            if z < 1.0:
-                mu_s = mu * z * z * z * (10.0 + z * (6.0 * z - 15.0))
-                dmu = mu * 30.0 * z * z * (1.0 - z) * (1.0 - z) / STICTION_TOLERANCE_M_PER_S
-            t = (s0 / s, s1 / s, s2 / s)
-            nn = (n0, n1, n2)
-            # d(mu(s) t)/d v_C = H (I - n n'), H = mu(s)/s (I - t t') + mu'(s) t t'
-            H = np.zeros((3, 3))
-            for a in range(3):
-                for c in range(3):
-                    e = 1.0 if a == c else 0.0
-                    H[a, c] = (mu_s / s) * (e - t[a] * t[c]) + dmu * t[a] * t[c]
-            P = np.zeros((3, 3))
-            for a in range(3):
-                hn = H[a, 0] * nn[0] + H[a, 1] * nn[1] + H[a, 2] * nn[2]
-                for c in range(3):
-                    P[a, c] = H[a, c] - hn * nn[c]
-            for a in range(3):
-                for j in range(6):
-                    f_q[a, j] -= mu_s * t[a] * fn_q[j] + fn * (
-                        P[a, 0] * vc_q[0, j] + P[a, 1] * vc_q[1, j] + P[a, 2] * vc_q[2, j]
-                    )
-                    f_qd[a, j] -= mu_s * t[a] * fn_qd[j] + fn * (
-                        P[a, 0] * vc_qd[0, j] + P[a, 1] * vc_qd[1, j] + P[a, 2] * vc_qd[2, j]
-                    )
-        f0, f1, f2 = F[i, 0], F[i, 1], F[i, 2]
-        for j in range(6):  # moment u x f: [u]x df - [f]x du (the geometric term)
-            w_q[0, j] += u1 * f_q[2, j] - u2 * f_q[1, j] - (f1 * du[2, j] - f2 * du[1, j])
-            w_q[1, j] += u2 * f_q[0, j] - u0 * f_q[2, j] - (f2 * du[0, j] - f0 * du[2, j])
-            w_q[2, j] += u0 * f_q[1, j] - u1 * f_q[0, j] - (f0 * du[1, j] - f1 * du[0, j])
-            w_qd[0, j] += u1 * f_qd[2, j] - u2 * f_qd[1, j]
-            w_qd[1, j] += u2 * f_qd[0, j] - u0 * f_qd[2, j]
-            w_qd[2, j] += u0 * f_qd[1, j] - u1 * f_qd[0, j]
-            for a in range(3):
-                w_q[3 + a, j] += f_q[a, j]
-                w_qd[3 + a, j] += f_qd[a, j]
-
-
-@functools.cache
-def _jacobian_kernel():
-    """:func:`_pad_jacobians`, compiled by numba if it is importable."""
-    return njit_cached(_pad_jacobians) if compiled_available() else _pad_jacobians
-
-
-#: Half the side of the passive plate's collision box (m): large enough that
-#: its face stays the nearest face of every pad over any reachable pose.
-_PLATE_HALF_SIDE_M = 5.0
+    @property
+    def probe_centre_m(self) -> np.ndarray:
+        """The probe head's centre in the port frame (m)."""
+        return np.array([0.0, 0.0, -self.probe_radius_m])
 
 
 def register_docking_devices(
@@ -229,9 +186,10 @@ def register_docking_devices(
     target_body: RigidBody,
     X_target_face: RigidTransform,
     params: DockingContactParams,
-    pad_stiffness_scale: float = 1.0,
 ) -> list:
-    """Register the pads on ``device_body`` and the plate on ``target_body``.
+    """Register the active device on ``device_body`` and the passive one on
+    ``target_body`` (:func:`~hybridtable.six_dof.pads.register_pads` or
+    :func:`~hybridtable.six_dof.drogue.register_drogue_devices`).
 
     Parameters
     ----------
@@ -242,53 +200,72 @@ def register_docking_devices(
         The port frame P in the device body's frame.
     target_body : RigidBody
     X_target_face : RigidTransform
-        The target frame W (plate face at its z = 0, plate at z > 0) in the
-        target body's frame.
+        The target frame W (the plate's face or the drogue's mouth at its
+        z = 0, the target at z > 0) in the target body's frame.
     params : DockingContactParams
-    pad_stiffness_scale : float
-        Multiplies every point stiffness (1: the pad pair's combined
-        stiffness is ``k / pad_count``; each geometry gets twice that, since
-        point-contact stiffnesses combine in series).
 
     Returns
     -------
     list of GeometryId
-        The pads' collision geometries.
+        The active device's collision geometries.
     """
-    k_pair = params.contact_stiffness_n_per_m / params.pad_count * pad_stiffness_scale
-    mu = params.friction_coefficient
+    register = drogue.register_drogue_devices if params.is_cone else register_pads
+    return register(plant, device_body, X_device_port, target_body, X_target_face, params)
 
-    def material() -> ProximityProperties:
-        props = ProximityProperties()
-        AddContactMaterial(
-            dissipation=params.contact_dissipation_s_per_m,
-            point_stiffness=2.0 * k_pair,
-            friction=CoulombFriction(mu, mu),
-            properties=props,
+
+def peak_press_m(params: DockingContactParams, mass_kg: float, speed_m_per_s: float) -> float:
+    """How far a body of ``mass_kg`` arriving head-on at ``speed_m_per_s``
+    presses the contact before it stops, without dissipation (m): pads
+    ``v sqrt(m / k)``; the probe on a flat floor, where its work
+    :func:`~hybridtable.six_dof.drogue.probe_energy_j` equals ``m v^2 / 2``
+    (bisection), at most its radius."""
+    if not params.is_cone:
+        omega = (
+            2.0
+            * math.pi
+            * (math.sqrt(params.contact_stiffness_n_per_m / mass_kg) / (2.0 * math.pi))
         )
-        return props
+        return speed_m_per_s / omega
+    energy = 0.5 * mass_kg * speed_m_per_s**2
+    lo, hi = 0.0, params.probe_radius_m
+    if float(drogue.probe_energy_j(params, hi)) <= energy:
+        return hi
+    for _ in range(80):
+        mid = 0.5 * (lo + hi)
+        if float(drogue.probe_energy_j(params, mid)) < energy:
+            lo = mid
+        else:
+            hi = mid
+    return hi
 
-    pads = []
-    blue = np.array([0.2, 0.4, 0.8, 1.0])
-    for i, centre in enumerate(params.pad_centres_m):
-        X = X_device_port @ RigidTransform(centre)
-        sphere = Sphere(params.pad_radius_m)
-        pads.append(plant.RegisterCollisionGeometry(device_body, X, sphere, f"pad_{i}", material()))
-        plant.RegisterVisualGeometry(device_body, X, sphere, f"pad_{i}", blue)
-    h = _PLATE_HALF_SIDE_M
-    X_plate = X_target_face @ RigidTransform([0.0, 0.0, h])
-    plant.RegisterCollisionGeometry(
-        target_body, X_plate, Box(2 * h, 2 * h, 2 * h), "plate", material()
-    )
-    side = 2.6 * params.ring_radius_m
-    plant.RegisterVisualGeometry(
-        target_body,
-        X_target_face @ RigidTransform([0.0, 0.0, 0.02]),
-        Box(side, side, 0.04),
-        "plate",
-        np.array([0.8, 0.5, 0.2, 0.8]),
-    )
-    return pads
+
+def port_start_z_m(
+    params: DockingContactParams, R0: np.ndarray, across_m: np.ndarray, gap_m: float
+) -> float:
+    """The port origin's z at t = 0 (m, W) with the port turned by ``R0``
+    and ``across_m`` (x, y) off the axis: the active device ``gap_m`` before
+    it would first touch the target, moving along +z (the pads: the plate;
+    the probe: whichever of the drogue's rim, cone, socket or floor it
+    meets, :func:`~hybridtable.six_dof.drogue.first_touch_gap_m`).
+
+    Raises
+    ------
+    ParameterError
+        If the probe, flying along the axis, would never touch the drogue.
+    """
+    if not params.is_cone:
+        lowest = float(np.max((params.pad_centres_m @ R0.T)[:, 2])) + params.pad_radius_m
+        return -gap_m - lowest
+    z_ref = -2.0 * params.probe_radius_m  # the head wholly before the mouth's plane
+    port = np.array([across_m[0], across_m[1], z_ref])
+    travel = drogue.first_touch_gap_m(params, port + R0 @ params.probe_centre_m)
+    if not math.isfinite(travel):
+        miss = math.hypot(across_m[0], across_m[1])
+        raise ParameterError(
+            f"lateral_miss_m puts the probe {miss:g} m off the axis: it passes outside the "
+            f"drogue's rim (radius {2.0 * params.mouth_radius_m:g} m) and never touches it"
+        )
+    return z_ref + travel - gap_m
 
 
 class DockingContact:
@@ -305,7 +282,7 @@ class DockingContact:
         plant, _ = AddMultibodyPlantSceneGraph(builder, 0.0)
         # The device's inertia plays no part: its motion is prescribed.
         self._device = plant.AddRigidBody("device", SpatialInertia.SolidSphereWithMass(1.0, 0.1))
-        register_docking_devices(
+        self._geometries = register_docking_devices(
             plant,
             self._device,
             RigidTransform(),
@@ -314,6 +291,9 @@ class DockingContact:
             params,
         )
         plant.set_stiction_tolerance(STICTION_TOLERANCE_M_PER_S)
+        # A tetrahedron's slice of the drogue's surface is one polygon, not a
+        # fan of triangles: a third of the faces to integrate and to linearize.
+        plant.set_contact_surface_representation(HydroelasticContactRepresentation.kPolygon)
         plant.Finalize()
         self._plant = plant
         self._diagram = builder.Build()
@@ -322,10 +302,9 @@ class DockingContact:
         self._results = plant.get_contact_results_output_port()
         self._device_index = self._device.index()
 
-    def _contacts(self, q: np.ndarray, qd: np.ndarray | None):
-        """Drake's point pairs of the pads with the device at ``q`` moving at
-        ``qd``: ``(port origin p, [(contact point, force on the device, the
-        pair's depth, normal out of the plate toward the device), ...])``."""
+    def _evaluate(self, q: np.ndarray, qd: np.ndarray | None):
+        """The port origin and Drake's contact results with the device at
+        ``q`` moving at ``qd`` (None: at rest)."""
         p = np.asarray(q[:3], dtype=float)
         R = rotation_exp(q[3:])
         plant, ctx = self._plant, self._plant_context
@@ -336,7 +315,13 @@ class DockingContact:
             plant.SetFreeBodySpatialVelocity(
                 ctx, self._device, SpatialVelocity(np.asarray(qd[3:]), np.asarray(qd[:3]))
             )
-        results = self._results.Eval(ctx)
+        return p, self._results.Eval(ctx)
+
+    def _contacts(self, q: np.ndarray, qd: np.ndarray | None):
+        """Drake's point pairs of the pads with the device at ``q`` moving at
+        ``qd``: ``(port origin p, [(contact point, force on the device, the
+        pair's depth, normal out of the plate toward the device), ...])``."""
+        p, results = self._evaluate(q, qd)
         pairs = []
         for i in range(results.num_point_pair_contacts()):
             info = results.point_pair_contact_info(i)
@@ -350,17 +335,52 @@ class DockingContact:
             pairs.append((info.contact_point(), f, pair.depth, normal))
         return p, pairs
 
+    def _surfaces(self, q: np.ndarray, qd: np.ndarray | None):
+        """The probe's hydroelastic contacts at ``q`` moving at ``qd``:
+        ``(port origin p, [(the surface's centroid, force on the device, its
+        moment about the centroid, HydroelasticContactInfo), ...])``. A probe
+        further from the drogue's smooth surface than its facets sag is apart
+        from the faceted one too, and Drake's query (up to 1 ms inside the
+        drogue) is skipped."""
+        c = self.params
+        centre = np.asarray(q[:3], dtype=float) + rotation_exp(q[3:]) @ c.probe_centre_m
+        if drogue.wall_depth_m(c, centre) < -drogue.facet_sag_m(c):
+            return np.asarray(q[:3], dtype=float), []  # apart: no query
+        p, results = self._evaluate(q, qd)
+        out = []
+        for i in range(results.num_hydroelastic_contacts()):
+            info = results.hydroelastic_contact_info(i)
+            F = info.F_Ac_W()  # on the body of the surface's geometry M, at its centroid
+            sign = 1.0 if info.contact_surface().id_M() == self._geometries[0] else -1.0
+            out.append(
+                (
+                    info.contact_surface().centroid(),
+                    sign * F.translational(),
+                    sign * F.rotational(),
+                    info,
+                )
+            )
+        return p, out
+
     def wrench(
         self, q: np.ndarray, qd: np.ndarray | None = None, points: list | None = None
     ) -> np.ndarray:
         """The contact wrench on the device ``[moment; force]`` (6: N m, N) at
         the port origin, in W, with the device at ``q = [p; theta]`` moving at
         ``qd = [v; omega]`` (default at rest). ``points``, when given, gets
-        ``(contact point, force on the device)`` of every touching pad (W, m, N)."""
-        p, pairs = self._contacts(q, qd)
+        ``(contact point, force on the device)`` of every touching pad or
+        contact surface (its centroid) (W, m, N)."""
         force = np.zeros(3)
         moment = np.zeros(3)
-        for c, f, _, _ in pairs:
+        if self.params.is_cone:
+            p, surfaces = self._surfaces(q, qd)
+            touches = [(c, f) for c, f, _, _ in surfaces]
+            for _, _, m, _ in surfaces:
+                moment += m
+        else:
+            p, pairs = self._contacts(q, qd)
+            touches = [(c, f) for c, f, _, _ in pairs]
+        for c, f in touches:
             force += f
             moment += cross(c - p, f)
             if points is not None:
@@ -374,34 +394,62 @@ class DockingContact:
         ``K = -dw/dq`` and ``C = -dw/dqd`` (6x6 each, ``w`` the wrench of
         :meth:`wrench`), in closed form from one evaluation of Drake's contact.
 
-        Each touching pad is a sphere of radius ``r`` pressed ``x`` into the
+        **Pads** (:func:`~hybridtable.six_dof.pads.pad_jacobians`). Each
+        touching pad is a sphere of radius ``r`` pressed ``x`` into the
         plate's face (normal ``n`` out of the plate), with Drake's point-contact
         law: normal force ``k x (1 + d xdot)``, ``k`` the pad pair's stiffness,
         ``d`` the dissipation, ``xdot = -n . v_C`` the penetration rate of the
         device's point at the contact point ``C`` (half-way between the two
         surfaces: ``C = c - (r - x/2) n`` with ``c`` the pad's centre), and the
         regularized Coulomb friction ``-mu(s) f_n t`` against the slip ``s t``
-        (Drake's Stribeck curve, see :func:`_pad_jacobians`). Moving the pose by ``dq = [dp;
+        (Drake's Stribeck curve). Moving the pose by ``dq = [dp;
         dtheta]`` moves the centre by ``dp - [c - p]x J dtheta`` (``J`` the
         rotation vector's Jacobian, :func:`~hybridtable.six_dof.pose.rotation_jacobian`),
         the depth by ``-n`` times that, and the lever arm ``C - p`` with
         both: its change times the force is the geometric term of the moment.
         The target's face is flat (its normal does not turn with the contact
         point); a pad's derivative is taken where it touches (a pad that
-        starts or stops touching at ``q`` is a kink of ``w``)."""
+        starts or stops touching at ``q`` is a kink of ``w``).
+
+        **Probe** (:func:`~hybridtable.six_dof.drogue.hydroelastic_jacobians`).
+        The contact surface lies on the rigid drogue; each face of it (area
+        ``A``, centroid ``x``, normal ``n`` toward the probe) carries the
+        probe's pressure ``P (1 - d n . v_x)``, ``v_x`` the device's velocity
+        at ``x``. Moving the probe changes the pressure at the face's fixed
+        point by ``-g . (its displacement)``, ``g`` the pressure field's
+        gradient there (the surface's edge, where the pressure is 0, moves
+        without changing the integral); the lever arm ``x - p`` shortens as
+        the port moves. Without friction (the compensator's contact model
+        has none): friction with a slip raises ParameterError.
+        """
         q = np.asarray(q, dtype=float)
+        moving = qd is not None and bool(np.any(np.asarray(qd) != 0.0))
         qd = np.zeros(6) if qd is None else np.asarray(qd, dtype=float)
-        p, pairs = self._contacts(q, qd)
         w_q = np.zeros((6, 6))  # dw/dq
         w_qd = np.zeros((6, 6))  # dw/dqd
+        c = self.params
+        J = rotation_jacobian(q[3:])
+        if c.is_cone:
+            if moving and c.friction_coefficient > 0.0:
+                raise ParameterError(
+                    "the probe's closed-form stiffness has no friction: linearize a moving "
+                    "probe with friction_coefficient = 0 (as the compensator's model is)"
+                )
+            p, surfaces = self._surfaces(q, qd)
+            for _, _, _, info in surfaces:
+                A, X, N, P, G = drogue.face_data(info, self._geometries[0])
+                drogue.hydroelastic_jacobians()(
+                    A, X, N, P, G, p, J, qd, c.contact_dissipation_s_per_m, w_q, w_qd
+                )
+            return -w_q, -w_qd
+        p, pairs = self._contacts(q, qd)
         if pairs:
-            c = self.params
-            _jacobian_kernel()(
+            pad_jacobians()(
                 np.array([c for c, _, _, _ in pairs]) - p,
                 np.array([f for _, f, _, _ in pairs]),
                 np.array([x for _, _, x, _ in pairs]),
                 np.array([n for _, _, _, n in pairs]),
-                rotation_jacobian(q[3:]),
+                J,
                 qd,
                 c.contact_stiffness_n_per_m / c.pad_count,
                 c.contact_dissipation_s_per_m,

@@ -84,7 +84,7 @@ class StiffnessIdentifier(LeafSystem):
         self.model = model
         self.params = params
         self._k_model = model.params.contact_stiffness_n_per_m
-        arm = model.params.ring_radius_m
+        arm = model.params.moment_arm_m
         self._scale = np.array([1.0 / arm] * 3 + [1.0] * 3)  # moments -> forces
         self._lam = forgetting_factor(params.forgetting_time_s, period_s)
         self._info = [params.prior_information()[0]]

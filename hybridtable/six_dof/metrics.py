@@ -57,13 +57,15 @@ class DockingMetrics:
         the model first felt a wrench to separation (m): the docking's slide
         across the target.
     captured : bool
-        The record ends with the devices touching and the port at rest
-        against the target: its speed along the docking axis at most
+        On a plate: the record ends with the devices touching and the port at
+        rest against the target: its speed along the docking axis at most
         :data:`CAPTURE_SPEED_RATIO` times its approach speed ``|v_in|``. The
         contact held the spacecraft instead of returning it; CoR and energy
         ratio are then taken at the record's end. (A record of a given
         duration that ends in contact with the port still moving is not a
-        capture: it was cut mid-contact.)
+        capture: it was cut mid-contact.) In a drogue: the probe head's
+        centre passed the throat, where the drogue's latches would close
+        behind it (they are not modelled: the record goes on to separation).
     """
 
     cor_normal: float
@@ -108,10 +110,14 @@ def docking_metrics(
     contact_wrench: np.ndarray,
     compensated_wrench: np.ndarray,
     port_position_m: np.ndarray | None = None,
+    captured: bool | None = None,
 ) -> DockingMetrics:
     """Metrics of the first contact in a record (arrays over the ticks;
     velocities and positions (N, 3), wrenches (N, 6); without the port's
-    positions the lateral drift is NaN).
+    positions the lateral drift is NaN). ``captured``: the target's own
+    capture test, when it has one (a drogue's: the probe passed its throat);
+    None: the port at rest against the target at the end (see
+    :attr:`DockingMetrics.captured`).
 
     Raises
     ------
@@ -151,6 +157,10 @@ def docking_metrics(
         lateral_velocity_m_per_s=float(np.linalg.norm(port_velocity_m_per_s[-1, :2])),
         peak_compensated_force_n=float(np.linalg.norm(compensated_wrench[:, 3:], axis=1).max()),
         lateral_drift_m=drift,
-        captured=bool(force[-1] > 0.0)
-        and abs(float(port_velocity_m_per_s[-1, 2])) <= CAPTURE_SPEED_RATIO * abs(v_in),
+        captured=(
+            bool(force[-1] > 0.0)
+            and abs(float(port_velocity_m_per_s[-1, 2])) <= CAPTURE_SPEED_RATIO * abs(v_in)
+        )
+        if captured is None
+        else bool(captured),
     )

@@ -32,7 +32,8 @@ from hybridtable._validation import (
 from hybridtable.errors import ParameterError
 from hybridtable.limits import LIMITS, check_plausible
 from hybridtable.loop.params import believed
-from hybridtable.six_dof.contact import DockingContactParams
+from hybridtable.six_dof.contact import DockingContactParams, peak_press_m
+from hybridtable.six_dof.drogue import profile
 from hybridtable.systems.sensor import SensorParams, sample_taps
 from hybridtable.systems.table import TableParams
 
@@ -187,12 +188,18 @@ class ApproachParams:
         The spacecraft's angular velocity at t = 0 in its body frame (rad/s),
         of norm at most 1 rad/s; the port then moves at the centre of mass's
         approach velocity plus ``omega x arm``.
+    lateral_miss_m : 2 numbers
+        ``[x, y]`` of the port origin across the docking axis at t = 0 (m, in
+        the target frame W), at most 10 m: how far the approach misses the
+        target's centre (a drogue guides a miss within its mouth to its
+        socket; on a plate it only moves where the pads land).
     """
 
     initial_velocity_m_per_s: float = 0.1
     initial_gap_m: float = 0.001
     misalignment_rad: tuple[float, float] = (0.0, 0.0)
     angular_rate_rad_per_s: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    lateral_miss_m: tuple[float, float] = (0.0, 0.0)
 
     def __post_init__(self) -> None:
         s = object.__setattr__
@@ -220,6 +227,10 @@ class ApproachParams:
                 f"{MAX_ANGULAR_RATE_RAD_PER_S:g} rad/s (got {rate!r})"
             )
         s(self, "angular_rate_rad_per_s", w)
+        miss = _pair("lateral_miss_m", self.lateral_miss_m)
+        if math.hypot(*miss) > 10.0:
+            raise ParameterError(f"lateral_miss_m must be within 10 m of the axis (got {miss})")
+        s(self, "lateral_miss_m", miss)
 
 
 @dataclass(frozen=True)
@@ -467,6 +478,7 @@ class DockingLoopParams(NestedParams):
         "initial_gap_m": ("approach", "initial_gap_m"),
         "misalignment_rad": ("approach", "misalignment_rad"),
         "angular_rate_rad_per_s": ("approach", "angular_rate_rad_per_s"),
+        "lateral_miss_m": ("approach", "lateral_miss_m"),
         "sample_rate_hz": ("rig", "sample_rate_hz"),
         "sensor_delay_s": ("rig", "sensor", "sensor_delay_s"),
         "table": ("plant", "table", "backend"),
@@ -557,11 +569,22 @@ class DockingLoopParams(NestedParams):
             stewart=None,
         )
 
+    @property
+    def peak_press_m(self) -> float:
+        """The undamped head-on peak press of the contact (m): the spacecraft's
+        approach energy taken by the contact alone (:func:`~hybridtable.six_dof.contact.peak_press_m`)."""
+        return peak_press_m(
+            self.contact, self.spacecraft.mass_kg, self.approach.initial_velocity_m_per_s
+        )
+
     def nominal_pose(self) -> np.ndarray:
-        """The nominal docked pose ``q`` (6): aligned, on axis, every pad
-        pressed by half the undamped peak penetration ``v0 / omega`` (m)."""
-        omega = 2.0 * math.pi * self.contact_frequency_hz
-        return np.array([0.0, 0.0, 0.5 * self.approach.initial_velocity_m_per_s / omega, 0, 0, 0])
+        """The nominal docked pose ``q`` (6): aligned, on axis, pressed by half
+        the undamped peak press (:attr:`peak_press_m`): every pad into the
+        plate, or the probe into the socket's floor."""
+        z = 0.5 * self.peak_press_m
+        if self.contact.is_cone:
+            z += float(profile(self.contact)[-1, 1])
+        return np.array([0.0, 0.0, z, 0.0, 0.0, 0.0])
 
 
 def _stiffness_matrix(value) -> tuple:

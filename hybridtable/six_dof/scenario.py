@@ -9,9 +9,13 @@ Sections and keys (SI units; every key optional unless marked)::
                    inertia_kg_m2 (3 numbers or 3x3), port_distance_m,
                    lateral_offset_m = [x, y]
     [contact]      contact_stiffness_n_per_m (required), contact_dissipation_s_per_m,
-                   friction_coefficient, pad_count, ring_radius_m, pad_radius_m
+                   friction_coefficient, geometry = "plate" | "cone";
+                   plate: pad_count, ring_radius_m, pad_radius_m;
+                   cone: cone_half_angle_rad, mouth_radius_m, throat_radius_m,
+                   socket_depth_m, probe_radius_m
     [approach]     initial_velocity_m_per_s, initial_gap_m, misalignment_deg = [roll, pitch],
-                   angular_rate_rad_per_s = [x, y, z] (body frame)
+                   angular_rate_rad_per_s = [x, y, z] (body frame),
+                   lateral_miss_m = [x, y]
     [rig]          sample_rate_hz, sensor_delay_s, force_noise_n, moment_noise_n_m,
                    seed, duration_s
     [table]        backend = "model" | "stewart", response_hz (a number or "inf"),
@@ -71,6 +75,7 @@ SCENARIO_KEYS: dict[str, tuple[str, ...]] = {
         "initial_gap_m",
         "misalignment_deg",
         "angular_rate_rad_per_s",
+        "lateral_miss_m",
     ),
     "rig": (
         "sample_rate_hz",
@@ -123,8 +128,9 @@ def _parse(raw: Mapping[str, Any]) -> DockingLoopParams:
     )
     for name, values in (("spacecraft", sc), ("contact", ct), ("approach", ap), ("rig", rig)):
         for key, value in values.items():
-            if key not in ("seed", "pad_count"):
+            if key not in ("seed", "pad_count", "geometry"):
                 number(name, key, value)
+    _one_geometry(ct)
     if "contact_stiffness_n_per_m" not in ct:
         raise SpecError("[contact] contact_stiffness_n_per_m is required")
     contact = keyed("contact", "", lambda: DockingContactParams(**ct))
@@ -176,6 +182,33 @@ def _parse(raw: Mapping[str, Any]) -> DockingLoopParams:
     for key, value in cp.items():
         kwargs[renames.get(key, key)] = value
     return DockingLoopParams(spacecraft=body, contact=contact, approach=approach, **kwargs)
+
+
+#: The [contact] keys of each geometry's devices.
+_DEVICE_KEYS: dict[str, tuple[str, ...]] = {
+    "plate": ("pad_count", "ring_radius_m", "pad_radius_m"),
+    "cone": (
+        "cone_half_angle_rad",
+        "mouth_radius_m",
+        "throat_radius_m",
+        "socket_depth_m",
+        "probe_radius_m",
+    ),
+}
+
+
+def _one_geometry(contact: Mapping[str, Any]) -> None:
+    """Refuse the other geometry's device keys (a pad ring given to a cone
+    is a mistake, not a default)."""
+    geometry = contact.get("geometry", "plate")
+    for other, keys in _DEVICE_KEYS.items():
+        if other == geometry:
+            continue
+        for key in keys:
+            if key in contact:
+                raise SpecError(
+                    f"[contact] {key} describes the {other}'s devices, but geometry is {geometry!r}"
+                )
 
 
 def _stewart(value: Any):

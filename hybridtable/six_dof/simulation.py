@@ -13,6 +13,13 @@ from hybridtable._plugins import simulation_failure
 from hybridtable.errors import SimulationError
 from hybridtable.laws.separation import SeparationRule
 from hybridtable.six_dof.builder import LOG_LAYOUT, DockingLoop, build_docking_loop
+from hybridtable.six_dof.drogue import (
+    probe_energy_j,
+    probe_force_n,
+    profile,
+    throat_depth_m,
+    wall_depth_m,
+)
 from hybridtable.six_dof.metrics import DockingMetrics, docking_metrics
 from hybridtable.six_dof.params import DockingLoopParams
 from hybridtable.six_dof.pose import rotation_exp
@@ -23,6 +30,7 @@ __all__ = [
     "simulate6",
     "contact_potential_j",
     "expected_end_s",
+    "captured_in_drogue",
 ]
 
 #: Simulated time between checks of the record (s).
@@ -82,9 +90,22 @@ class DockingRun:
         return self.kinetic_energy_j + contact_potential_j(self.params, self.log["table_state"])
 
 
+def probe_centres_m(params: DockingLoopParams, table_state: np.ndarray) -> np.ndarray:
+    """The probe head's centre at each table pose (N, 3; m, W)."""
+    c = params.contact.probe_centre_m
+    return np.array([x[:3] + rotation_exp(x[3:6]) @ c for x in table_state])
+
+
 def contact_potential_j(params: DockingLoopParams, table_state: np.ndarray) -> np.ndarray:
-    """Elastic energy ``sum k_i delta_i^2 / 2`` of the pads at each table pose (J)."""
+    """Elastic energy of the contact at each table pose (J): the pads'
+    ``sum k_i delta_i^2 / 2``; the probe's work
+    :func:`~hybridtable.six_dof.drogue.probe_energy_j` at its press into the
+    drogue's nearest wall (exact on a flat wall; on the cone's curved wall,
+    or at an edge, the flat wall's law at the same press)."""
     c = params.contact
+    if c.is_cone:
+        depth = [wall_depth_m(c, centre) for centre in probe_centres_m(params, table_state)]
+        return np.asarray(probe_energy_j(c, np.maximum(depth, 0.0)), dtype=float)
     k_pad = c.contact_stiffness_n_per_m / c.pad_count
     out = np.zeros(len(table_state))
     for n, x in enumerate(table_state):
@@ -97,10 +118,32 @@ def contact_potential_j(params: DockingLoopParams, table_state: np.ndarray) -> n
 
 def expected_end_s(params: DockingLoopParams) -> float:
     """A generous bound on when the first contact has ended (s): the approach
-    over twice the gap, plus ten undamped contact durations, plus 0.5 s."""
+    over twice the gap, plus ten undamped contact durations, plus 0.5 s; in a
+    drogue, plus four times the way from its mouth to the socket's floor at
+    the approach speed (the probe slides in, and out again)."""
     a = params.approach
     half_period = 0.5 / params.contact_frequency_hz
-    return 2.0 * a.initial_gap_m / a.initial_velocity_m_per_s + 10.0 * half_period + 0.5
+    end = 2.0 * a.initial_gap_m / a.initial_velocity_m_per_s + 10.0 * half_period + 0.5
+    if params.contact.is_cone:
+        end += 4.0 * float(profile(params.contact)[-1, 1]) / a.initial_velocity_m_per_s
+    return end
+
+
+def captured_in_drogue(params: DockingLoopParams, table_state: np.ndarray) -> bool:
+    """Whether the probe head's centre passed the drogue's throat (its
+    widest section past the latches' plane) at any pose of the record."""
+    depth = throat_depth_m(params.contact)
+    return bool(np.any(probe_centres_m(params, table_state)[:, 2] > depth))
+
+
+def _peak_force_n(params: DockingLoopParams) -> float:
+    """The undamped head-on peak force (N): the pads' ``k v0 / omega``, the
+    probe's force at its peak press."""
+    c = params.contact
+    if c.is_cone:
+        return float(probe_force_n(c, params.peak_press_m))
+    omega = 2.0 * math.pi * params.contact_frequency_hz
+    return c.contact_stiffness_n_per_m * params.approach.initial_velocity_m_per_s / omega
 
 
 def _split(data: np.ndarray) -> dict[str, np.ndarray]:
@@ -170,15 +213,13 @@ def simulate6(
     loop.set_initial_conditions(context)
     simulator.Initialize()
     h = params.sample_period_s
-    a = params.approach
-    omega = 2.0 * math.pi * params.contact_frequency_hz
     separating = params.duration_s is None
     quiet_ticks = params.delay_ticks + 20
     rule = SeparationRule(
         expected_end_s(params) if separating else params.duration_s,
         settle_s=(quiet_ticks - 0.5) * h,  # the contact has ended after quiet_ticks quiet ticks
         check_interval_s=_CHUNK_S,
-        peak_force_n=params.contact.contact_stiffness_n_per_m * a.initial_velocity_m_per_s / omega,
+        peak_force_n=_peak_force_n(params),
         stop_at_separation=separating,
         end_tolerance_s=0.5 * h,
     )
@@ -204,6 +245,8 @@ def simulate6(
             float(np.max(np.linalg.norm(fresh[36:39], axis=0), initial=0.0)) / lever,
         )
         quiet = (force == 0.0) & ~np.any(data[36:42] != 0.0, axis=0)
+        if params.contact.is_cone:  # a probe between the drogue's walls has not left it
+            quiet &= data[14] < 0.0  # the port (the probe's tip) back out of the mouth's plane
         loud = np.flatnonzero(~quiet)
         touched = bool(np.any(force > 0.0))  # the contact starts with a contact force
         ended = rule.check(
@@ -243,6 +286,11 @@ def simulate6(
             run.log["contact_wrench"],
             run.log["compensated_wrench"],
             run.log["commanded_state"][:, 0:3],
+            captured=(
+                captured_in_drogue(params, run.log["table_state"])
+                if params.contact.is_cone
+                else None
+            ),
         )
     except ValueError as err:
         if params.duration_s is None:

@@ -60,7 +60,8 @@ from pydrake.systems.framework import BasicVector, Diagram, DiagramBuilder, Leaf
 from pydrake.systems.primitives import LinearSystem, ZeroOrderHold
 
 from hybridtable.errors import DivergenceError, ParameterError, WorkspaceError
-from hybridtable.six_dof.contact import register_docking_devices
+from hybridtable.six_dof.contact import port_start_z_m, register_docking_devices
+from hybridtable.six_dof.drogue import profile
 from hybridtable.six_dof.params import DockingLoopParams
 from hybridtable.six_dof.pose import rotation_exp, rotation_log
 from hybridtable.stewart.backend import connect_servo_and_device, export_plate_pose
@@ -568,11 +569,11 @@ def _approach_poses(params: DockingLoopParams, count: int = 201) -> tuple[np.nda
     a = params.approach
     c = params.contact
     R0 = rotation_from_rpy(np.array([*a.misalignment_rad, 0.0]))
-    lowest = float(np.max((c.pad_centres_m @ R0.T)[:, 2])) + c.pad_radius_m
-    z0 = -a.initial_gap_m - lowest
-    omega = 2.0 * math.pi * params.contact_frequency_hz
-    z1 = 3.0 * a.initial_velocity_m_per_s / omega
+    miss = np.array(a.lateral_miss_m)
+    z0 = port_start_z_m(c, R0, miss, a.initial_gap_m)
+    z1 = 3.0 * params.peak_press_m + (float(profile(c)[-1, 1]) if c.is_cone else 0.0)
     poses = np.zeros((count, 6))
+    poses[:, :2] = miss
     poses[:, 2] = np.linspace(z0, z1, count)
     rate = np.array(a.angular_rate_rad_per_s)
     times = (poses[:, 2] - z0) / a.initial_velocity_m_per_s

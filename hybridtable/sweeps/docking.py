@@ -55,6 +55,7 @@ __all__ = [
 #: with products of inertia cannot vary them one by one).
 COMPONENTS: dict[str, tuple[str, ...]] = {
     "lateral_offset_m": ("x", "y"),
+    "lateral_miss_m": ("x", "y"),
     "misalignment_rad": ("roll", "pitch"),
     "angular_rate_rad_per_s": ("x", "y", "z"),
     "inertia_kg_m2": ("x", "y", "z"),
@@ -177,6 +178,10 @@ def _choices(name: str) -> tuple[str, ...] | None:
         from hybridtable.six_dof.params import TABLE_BACKENDS
 
         return TABLE_BACKENDS
+    if name == "geometry":
+        from hybridtable.six_dof.contact import GEOMETRIES
+
+        return GEOMETRIES
     if name == "stiffness_model":
         from hybridtable.six_dof.params import STIFFNESS_MODELS
 

@@ -40,8 +40,10 @@ def test_every_single_quantity_of_the_scenario_is_an_input(base):
             assert name not in inputs
         elif name in COMPONENTS:
             assert name not in inputs
-            stem = name.split("_")[0]
-            axes = [n for n in inputs if n.startswith(stem + "_") and n != name]
+            # a component is the vector's name with its axis before the unit
+            axes = [
+                n for n in inputs for a in COMPONENTS[name] if n.replace(f"_{a}_", "_", 1) == name
+            ]
             assert len(axes) == len(COMPONENTS[name]), (name, axes)
         else:
             assert name in inputs, name

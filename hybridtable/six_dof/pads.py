@@ -1,0 +1,193 @@
+"""The pad ring against the flat plate: the docking devices of Drake's point contact.
+
+The active device is a ring of spherical pads, the passive one a flat plate
+whose face is the plane ``z = 0`` of the target frame W
+(:class:`~hybridtable.six_dof.contact.DockingContactParams`). Each pad touches
+the plate as a point pair: Drake's compliant point contact with Hunt-Crossley
+dissipation and regularized Coulomb friction. :func:`register_pads` adds both
+devices to a plant; :func:`pad_jacobians` is the closed form of the contact's
+6x6 stiffness and damping from one evaluation.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+from pydrake.geometry import AddContactMaterial, Box, ProximityProperties, Sphere
+from pydrake.math import RigidTransform
+from pydrake.multibody.plant import CoulombFriction
+
+from hybridtable.laws.compiled import compiled_available, njit_cached
+
+__all__ = ["STICTION_TOLERANCE_M_PER_S", "register_pads", "pad_jacobians"]
+
+
+#: Drake's stiction tolerance of a continuous plant (m/s), stated on the plant:
+#: below it the friction coefficient rises as a smooth step from 0.
+STICTION_TOLERANCE_M_PER_S = 1e-4
+#: Drake's point contact has no friction below this slip speed (m/s).
+_NONZERO_SLIP_M_PER_S = 1e-14
+
+
+def _pad_jacobians(U, F, X, N, J, qd, k, d, mu, r, w_q, w_qd) -> None:
+    """Add to ``w_q = dw/dq`` and ``w_qd = dw/dqd`` (6x6) the touching pads' terms
+    (see :meth:`DockingContact.stiffness`): row ``i`` of ``U``, ``F``, ``X``, ``N``
+    is a pad's contact point from the port origin, its force on the device, its
+    depth and the face's normal toward the device. ``J`` is the rotation
+    vector's Jacobian; ``k``, ``d``, ``mu``, ``r`` the pad pair's stiffness,
+    dissipation, friction coefficient and the pads' radius. Plain loops: numba
+    compiles the function, and it runs as Python where numba is missing."""
+    du = np.zeros((3, 6))
+    vc_q = np.zeros((3, 6))
+    vc_qd = np.zeros((3, 6))
+    f_q = np.zeros((3, 6))
+    f_qd = np.zeros((3, 6))
+    turn = np.zeros((3, 3))
+    dx = np.zeros(6)
+    fn_q = np.zeros(6)
+    fn_qd = np.zeros(6)
+    for i in range(U.shape[0]):
+        u0, u1, u2 = U[i, 0], U[i, 1], U[i, 2]
+        n0, n1, n2 = N[i, 0], N[i, 1], N[i, 2]
+        x = X[i]
+        lift = r - 0.5 * x
+        b0, b1, b2 = u0 + lift * n0, u1 + lift * n1, u2 + lift * n2  # the pad's centre
+        for c in range(3):  # turn = -[b]x J: d(centre - p)/dtheta
+            turn[0, c] = b2 * J[1, c] - b1 * J[2, c]
+            turn[1, c] = b0 * J[2, c] - b2 * J[0, c]
+            turn[2, c] = b1 * J[0, c] - b0 * J[1, c]
+        dx[0], dx[1], dx[2] = -n0, -n1, -n2  # d depth / dq
+        for c in range(3):
+            dx[3 + c] = -(n0 * turn[0, c] + n1 * turn[1, c] + n2 * turn[2, c])
+        for j in range(6):  # d(C - p)/dq
+            du[0, j] = 0.5 * n0 * dx[j]
+            du[1, j] = 0.5 * n1 * dx[j]
+            du[2, j] = 0.5 * n2 * dx[j]
+        for a in range(3):
+            for c in range(3):
+                du[a, 3 + c] += turn[a, c]
+        w0, w1, w2 = qd[3], qd[4], qd[5]
+        vc0 = qd[0] + w1 * u2 - w2 * u1  # the device's point at C
+        vc1 = qd[1] + w2 * u0 - w0 * u2
+        vc2 = qd[2] + w0 * u1 - w1 * u0
+        for j in range(6):  # d v_C/dq = [omega]x du; d v_C/dqd = [I, -[u]x]
+            vc_q[0, j] = w1 * du[2, j] - w2 * du[1, j]
+            vc_q[1, j] = w2 * du[0, j] - w0 * du[2, j]
+            vc_q[2, j] = w0 * du[1, j] - w1 * du[0, j]
+        for a in range(3):
+            for j in range(3):
+                vc_qd[a, j] = 1.0 if a == j else 0.0
+        vc_qd[0, 3], vc_qd[0, 4], vc_qd[0, 5] = 0.0, u2, -u1
+        vc_qd[1, 3], vc_qd[1, 4], vc_qd[1, 5] = -u2, 0.0, u0
+        vc_qd[2, 3], vc_qd[2, 4], vc_qd[2, 5] = u1, -u0, 0.0
+        n_vc = n0 * vc0 + n1 * vc1 + n2 * vc2  # minus the penetration rate
+        fn = k * x * (1.0 - d * n_vc)
+        for j in range(6):
+            fn_q[j] = k * (1.0 - d * n_vc) * dx[j] - k * x * d * (
+                n0 * vc_q[0, j] + n1 * vc_q[1, j] + n2 * vc_q[2, j]
+            )
+            fn_qd[j] = -k * x * d * (n0 * vc_qd[0, j] + n1 * vc_qd[1, j] + n2 * vc_qd[2, j])
+            f_q[0, j], f_q[1, j], f_q[2, j] = n0 * fn_q[j], n1 * fn_q[j], n2 * fn_q[j]
+            f_qd[0, j], f_qd[1, j], f_qd[2, j] = n0 * fn_qd[j], n1 * fn_qd[j], n2 * fn_qd[j]
+        s0, s1, s2 = vc0 - n_vc * n0, vc1 - n_vc * n1, vc2 - n_vc * n2  # the slip
+        s = math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
+        if mu > 0.0 and s > _NONZERO_SLIP_M_PER_S:
+            # Drake's regularized Coulomb friction: mu step5(s / v_s) below the
+            # stiction tolerance v_s, mu above; step5(z) = z^3 (10 - 15 z + 6 z^2).
+            z = s / STICTION_TOLERANCE_M_PER_S
+            mu_s, dmu = mu, 0.0
+            if z < 1.0:
+                mu_s = mu * z * z * z * (10.0 + z * (6.0 * z - 15.0))
+                dmu = mu * 30.0 * z * z * (1.0 - z) * (1.0 - z) / STICTION_TOLERANCE_M_PER_S
+            t = (s0 / s, s1 / s, s2 / s)
+            nn = (n0, n1, n2)
+            # d(mu(s) t)/d v_C = H (I - n n'), H = mu(s)/s (I - t t') + mu'(s) t t'
+            H = np.zeros((3, 3))
+            for a in range(3):
+                for c in range(3):
+                    e = 1.0 if a == c else 0.0
+                    H[a, c] = (mu_s / s) * (e - t[a] * t[c]) + dmu * t[a] * t[c]
+            P = np.zeros((3, 3))
+            for a in range(3):
+                hn = H[a, 0] * nn[0] + H[a, 1] * nn[1] + H[a, 2] * nn[2]
+                for c in range(3):
+                    P[a, c] = H[a, c] - hn * nn[c]
+            for a in range(3):
+                for j in range(6):
+                    f_q[a, j] -= mu_s * t[a] * fn_q[j] + fn * (
+                        P[a, 0] * vc_q[0, j] + P[a, 1] * vc_q[1, j] + P[a, 2] * vc_q[2, j]
+                    )
+                    f_qd[a, j] -= mu_s * t[a] * fn_qd[j] + fn * (
+                        P[a, 0] * vc_qd[0, j] + P[a, 1] * vc_qd[1, j] + P[a, 2] * vc_qd[2, j]
+                    )
+        f0, f1, f2 = F[i, 0], F[i, 1], F[i, 2]
+        for j in range(6):  # moment u x f: [u]x df - [f]x du (the geometric term)
+            w_q[0, j] += u1 * f_q[2, j] - u2 * f_q[1, j] - (f1 * du[2, j] - f2 * du[1, j])
+            w_q[1, j] += u2 * f_q[0, j] - u0 * f_q[2, j] - (f2 * du[0, j] - f0 * du[2, j])
+            w_q[2, j] += u0 * f_q[1, j] - u1 * f_q[0, j] - (f0 * du[1, j] - f1 * du[0, j])
+            w_qd[0, j] += u1 * f_qd[2, j] - u2 * f_qd[1, j]
+            w_qd[1, j] += u2 * f_qd[0, j] - u0 * f_qd[2, j]
+            w_qd[2, j] += u0 * f_qd[1, j] - u1 * f_qd[0, j]
+            for a in range(3):
+                w_q[3 + a, j] += f_q[a, j]
+                w_qd[3 + a, j] += f_qd[a, j]
+
+
+@functools.cache
+def pad_jacobians():
+    """:func:`_pad_jacobians`, compiled by numba if it is importable."""
+    return njit_cached(_pad_jacobians) if compiled_available() else _pad_jacobians
+
+
+#: Half the side of the passive plate's collision box (m): large enough that
+#: its face stays the nearest face of every pad over any reachable pose.
+_PLATE_HALF_SIDE_M = 5.0
+
+
+def register_pads(plant, device_body, X_device_port, target_body, X_target_face, params) -> list:
+    """Register the pads on ``device_body`` and the plate on ``target_body``
+    (arguments as :func:`~hybridtable.six_dof.contact.register_docking_devices`;
+    each pad pair's stiffness is ``k / pad_count``, each geometry gets twice
+    that, since point-contact stiffnesses combine in series).
+
+    Returns
+    -------
+    list of GeometryId
+        The pads' collision geometries.
+    """
+    k_pair = params.contact_stiffness_n_per_m / params.pad_count
+    mu = params.friction_coefficient
+
+    def material() -> ProximityProperties:
+        props = ProximityProperties()
+        AddContactMaterial(
+            dissipation=params.contact_dissipation_s_per_m,
+            point_stiffness=2.0 * k_pair,
+            friction=CoulombFriction(mu, mu),
+            properties=props,
+        )
+        return props
+
+    pads = []
+    blue = np.array([0.2, 0.4, 0.8, 1.0])
+    for i, centre in enumerate(params.pad_centres_m):
+        X = X_device_port @ RigidTransform(centre)
+        sphere = Sphere(params.pad_radius_m)
+        pads.append(plant.RegisterCollisionGeometry(device_body, X, sphere, f"pad_{i}", material()))
+        plant.RegisterVisualGeometry(device_body, X, sphere, f"pad_{i}", blue)
+    h = _PLATE_HALF_SIDE_M
+    X_plate = X_target_face @ RigidTransform([0.0, 0.0, h])
+    plant.RegisterCollisionGeometry(
+        target_body, X_plate, Box(2 * h, 2 * h, 2 * h), "plate", material()
+    )
+    side = 2.6 * params.ring_radius_m
+    plant.RegisterVisualGeometry(
+        target_body,
+        X_target_face @ RigidTransform([0.0, 0.0, 0.02]),
+        Box(side, side, 0.04),
+        "plate",
+        np.array([0.8, 0.5, 0.2, 0.8]),
+    )
+    return pads
