@@ -45,6 +45,7 @@ from pydrake.geometry import (
     AddCompliantHydroelasticProperties,
     AddContactMaterial,
     AddRigidHydroelasticProperties,
+    Box,
     InMemoryMesh,
     Mesh,
     ProximityProperties,
@@ -62,6 +63,8 @@ __all__ = [
     "probe_force_n",
     "probe_energy_j",
     "profile",
+    "throat_depth_m",
+    "drogue_mesh",
     "register_drogue_devices",
     "face_data",
     "hydroelastic_jacobians",
@@ -148,9 +151,11 @@ def _surface_obj(prof: tuple) -> str:
     return "\n".join(rows + faces) + "\n"
 
 
-def drogue_mesh(contact) -> Mesh:
-    """The drogue's surface as a Drake mesh held in memory."""
-    text = _surface_obj(tuple(map(tuple, profile(contact).tolist())))
+def drogue_mesh(contact, floor: bool = True) -> Mesh:
+    """The drogue's surface as a Drake mesh held in memory (without the
+    socket's floor: open at the socket's bottom ring)."""
+    prof = profile(contact) if floor else profile(contact)[:-1]
+    text = _surface_obj(tuple(map(tuple, prof.tolist())))
     return Mesh(InMemoryMesh(mesh_file=MemoryFile(text, ".obj", "drogue")))
 
 
@@ -179,10 +184,17 @@ def register_drogue_devices(
     rigid = ProximityProperties()
     AddRigidHydroelasticProperties(0.1 * r, rigid)
     AddContactMaterial(dissipation=d, friction=CoulombFriction(mu, mu), properties=rigid)
-    mesh = drogue_mesh(contact)
-    plant.RegisterCollisionGeometry(target_body, X_target_face, mesh, "drogue", rigid)
+    walls = drogue_mesh(contact, floor=False)
+    plant.RegisterCollisionGeometry(target_body, X_target_face, walls, "drogue", rigid)
+    # The socket's floor is a box's face: a fan of thin triangles to the axis
+    # would cut a centred head into a polygon per triangle (5 ms a query).
+    rt, floor = contact.throat_radius_m, float(profile(contact)[-1, 1])
+    X_floor = X_target_face @ RigidTransform([0.0, 0.0, floor + 0.5 * rt])
+    plant.RegisterCollisionGeometry(
+        target_body, X_floor, Box(2.2 * rt, 2.2 * rt, rt), "drogue_floor", rigid
+    )
     plant.RegisterVisualGeometry(
-        target_body, X_target_face, mesh, "drogue", np.array([0.8, 0.5, 0.2, 0.6])
+        target_body, X_target_face, drogue_mesh(contact), "drogue", np.array([0.8, 0.5, 0.2, 0.6])
     )
     plant.set_contact_model(ContactModel.kHydroelasticWithFallback)
     return [head]

@@ -13,13 +13,7 @@ from hybridtable._plugins import simulation_failure
 from hybridtable.errors import SimulationError
 from hybridtable.laws.separation import SeparationRule
 from hybridtable.six_dof.builder import LOG_LAYOUT, DockingLoop, build_docking_loop
-from hybridtable.six_dof.drogue import (
-    probe_energy_j,
-    probe_force_n,
-    profile,
-    throat_depth_m,
-    wall_depth_m,
-)
+from hybridtable.six_dof.drogue import probe_force_n, profile, throat_depth_m
 from hybridtable.six_dof.metrics import DockingMetrics, docking_metrics
 from hybridtable.six_dof.params import DockingLoopParams
 from hybridtable.six_dof.pose import rotation_exp
@@ -86,8 +80,11 @@ class DockingRun:
 
     @property
     def total_energy_j(self) -> np.ndarray:
-        """Kinetic energy plus the contact's potential at the table's pose (N,)."""
-        return self.kinetic_energy_j + contact_potential_j(self.params, self.log["table_state"])
+        """Kinetic energy plus the contact's potential at the table's pose (N,)
+        (:func:`contact_potential_j`; the probe's from the record's wrench)."""
+        return self.kinetic_energy_j + contact_potential_j(
+            self.params, self.log["table_state"], self.log["contact_wrench"]
+        )
 
 
 def probe_centres_m(params: DockingLoopParams, table_state: np.ndarray) -> np.ndarray:
@@ -96,16 +93,25 @@ def probe_centres_m(params: DockingLoopParams, table_state: np.ndarray) -> np.nd
     return np.array([x[:3] + rotation_exp(x[3:6]) @ c for x in table_state])
 
 
-def contact_potential_j(params: DockingLoopParams, table_state: np.ndarray) -> np.ndarray:
+def contact_potential_j(
+    params: DockingLoopParams, table_state: np.ndarray, contact_wrench: np.ndarray | None = None
+) -> np.ndarray:
     """Elastic energy of the contact at each table pose (J): the pads'
-    ``sum k_i delta_i^2 / 2``; the probe's work
-    :func:`~hybridtable.six_dof.drogue.probe_energy_j` at its press into the
-    drogue's nearest wall (exact on a flat wall; on the cone's curved wall,
-    or at an edge, the flat wall's law at the same press)."""
+    ``sum k_i delta_i^2 / 2``; the probe's, the work the device did against
+    the contact since the record's start, ``-integral w . dq`` over the
+    record's ``contact_wrench`` (trapezoids; the rotation vector's
+    differences: small turns between ticks), since Drake's meshed probe
+    follows its smooth law only to a few per cent
+    (:mod:`~hybridtable.six_dof.drogue`)."""
     c = params.contact
     if c.is_cone:
-        depth = [wall_depth_m(c, centre) for centre in probe_centres_m(params, table_state)]
-        return np.asarray(probe_energy_j(c, np.maximum(depth, 0.0)), dtype=float)
+        if contact_wrench is None:
+            raise ValueError("the probe's potential needs the record's contact_wrench")
+        w = np.asarray(contact_wrench, dtype=float)
+        dq = np.diff(np.asarray(table_state, dtype=float)[:, :6], axis=0)
+        mean = 0.5 * (w[1:] + w[:-1])
+        work = np.einsum("ij,ij->i", mean[:, [3, 4, 5, 0, 1, 2]], dq)
+        return np.concatenate([[0.0], -np.cumsum(work)])
     k_pad = c.contact_stiffness_n_per_m / c.pad_count
     out = np.zeros(len(table_state))
     for n, x in enumerate(table_state):

@@ -39,6 +39,7 @@ from pydrake.math import RigidTransform, RotationMatrix
 
 from hybridtable._validation import check_positive
 from hybridtable.errors import ParameterError
+from hybridtable.six_dof.drogue import drogue_mesh
 from hybridtable.six_dof.pose import rotation_exp, rotation_log
 from hybridtable.six_dof.simulation import DockingRun
 from hybridtable.stewart.geometry import StewartGeometry, rpy_from_rotation
@@ -132,9 +133,11 @@ def _body_port_poses(run: DockingRun) -> np.ndarray:
 
 
 def peak_displacement_m(run: DockingRun) -> float:
-    """Largest distance of a pad centre of the device (at the table's pose)
-    or of the spacecraft's port from its place at the docked pose (m)."""
-    pads = run.params.contact.pad_centres_m
+    """Largest distance of a pad centre (or the probe head's centre) of the
+    device (at the table's pose) or of the spacecraft's port from its place
+    at the docked pose (m)."""
+    c = run.params.contact
+    pads = c.probe_centre_m[None, :] if c.is_cone else c.pad_centres_m
     peak = 0.0
     for poses in (run.log["table_state"][:, :6], _body_port_poses(run)):
         for q in poses:
@@ -176,7 +179,7 @@ class DockingScene:
         self.peak_force_n = float(force[self.peak_index])
         self.peak_displacement_m = peak_displacement_m(run)
         if magnify is None:
-            magnify = auto_magnify(self.peak_displacement_m, p.contact.ring_radius_m)
+            magnify = auto_magnify(self.peak_displacement_m, p.contact.moment_arm_m)
         if force_scale_n_per_m is None:
             force_scale_n_per_m = auto_force_scale_n_per_m(self.peak_force_n)
         self.magnify = check_positive("magnify", magnify)
@@ -245,10 +248,17 @@ class DockingScene:
         m.SetProperty("/Grid", "visible", False)
         m.SetProperty("/Axes", "visible", False)
         a, r, t, top = c.ring_radius_m, c.pad_radius_m, _PLATE_THICKNESS_M, _TARGET_THICKNESS_M
+        if c.is_cone:  # the probe's head on a disc of its size; the drogue, the target
+            a, r = c.probe_radius_m, c.probe_radius_m
+            self._set("target", drogue_mesh(c), "target")
+            self._set("device/probe", Sphere(r), "pad", RigidTransform(c.probe_centre_m))
+        else:
+            self._set("target", Cylinder(1.4 * a, top), "target", RigidTransform([0, 0, top / 2]))
+            for i, centre in enumerate(c.pad_centres_m):
+                self._set(f"device/pad{i}", Sphere(r), "pad", RigidTransform(centre))
         disc = max(2.0 * r, 0.02)
         column = max(g.device_length_m - r - disc, 1e-3)
         for path, shape, colour, z in (
-            ("target", Cylinder(1.4 * a, top), "target", top / 2),
             ("device/disc", Cylinder(a + 1.5 * r, disc), "device", -r - disc / 2),
             ("device/column", Cylinder(0.2 * a, column), "device", column / 2 - g.device_length_m),
             (
@@ -260,15 +270,14 @@ class DockingScene:
             ("base", Cylinder(g.base_radius_m + 0.05, t), "base", self._base_origin[2] - t / 2),
         ):
             self._set(path, shape, colour, RigidTransform([0.0, 0.0, z]))
-        for i, centre in enumerate(c.pad_centres_m):
-            self._set(f"device/pad{i}", Sphere(r), "pad", RigidTransform(centre))
         for i in range(6):
             self._set(f"legs/{i}", Cylinder(_LEG_RADIUS_M, 1.0), "leg")
         # The box ends below the table's base where it can (it is virtual, but
         # the rig reads better uncluttered).
         below = b.port_distance_m - g.home_height_m - g.device_length_m - 0.05
         height = max(0.5 * b.port_distance_m, min(b.port_distance_m, 2.0 * below))
-        self._set("spacecraft/box", Box(2.6 * a, 2.6 * a, height), "spacecraft")
+        side = 2.6 * (c.mouth_radius_m if c.is_cone else a)
+        self._set("spacecraft/box", Box(side, side, height), "spacecraft")
         self._set("spacecraft/centre_of_mass", Sphere(0.04), "boom")
         arm = b.port_position_m
         self._set(
