@@ -47,7 +47,13 @@ def format_docking(compensator: str, metrics, reference, modes, wall_time_s: flo
         f"{compensator}: CoR normal {m.cor_normal:.5f}  energy ratio {m.energy_ratio:.5f}  "
         f"peak force {m.peak_force_n:.1f} N  peak moment {m.peak_moment_n_m:.1f} N m  "
         f"contact {m.contact_duration_s:.3f} s",
-        f"after the contact: rotation {m.rotational_energy_j:.4g} J, the port's lateral velocity "
+        f"after the contact: {'captured' if m.captured else 'not captured'}"
+        + (
+            f" (the ideal rig: {'captured' if reference.captured else 'not captured'})"
+            if reference is not None and reference.captured != m.captured
+            else ""
+        )
+        + f", rotation {m.rotational_energy_j:.4g} J, the port's lateral velocity "
         f"{1000 * m.lateral_velocity_m_per_s:.3f} mm/s",
     ]
     if modes is not None:

@@ -41,6 +41,7 @@ from hybridtable.stewart.geometry import cross
 
 __all__ = [
     "GEOMETRIES",
+    "DEVICE_FIELDS",
     "DockingContactParams",
     "register_docking_devices",
     "DockingContact",
@@ -52,6 +53,18 @@ __all__ = [
 
 #: The docking devices: a pad ring on a flat plate, or a probe in a drogue.
 GEOMETRIES: tuple[str, ...] = ("plate", "cone")
+
+#: The fields of each geometry's own devices (the other's are not used).
+DEVICE_FIELDS: dict[str, tuple[str, ...]] = {
+    "plate": ("pad_count", "ring_radius_m", "pad_radius_m"),
+    "cone": (
+        "cone_half_angle_rad",
+        "mouth_radius_m",
+        "throat_radius_m",
+        "socket_depth_m",
+        "probe_radius_m",
+    ),
+}
 
 #: The cone's half angle (its wall from the axis) may lie in this range (rad):
 #: 5 to 75 deg.

@@ -32,7 +32,7 @@ from hybridtable._validation import (
 from hybridtable.errors import ParameterError
 from hybridtable.limits import LIMITS, check_plausible
 from hybridtable.loop.params import believed
-from hybridtable.six_dof.contact import DockingContactParams, peak_press_m
+from hybridtable.six_dof.contact import DEVICE_FIELDS, DockingContactParams, peak_press_m
 from hybridtable.six_dof.drogue import profile
 from hybridtable.systems.sensor import SensorParams, sample_taps
 from hybridtable.systems.table import TableParams
@@ -501,8 +501,8 @@ class DockingLoopParams(NestedParams):
 
     def to_dict(self) -> dict:
         """Every quantity by flat name, a config (spacecraft, contact,
-        approach, stewart) as a dict of its fields: the layout of
-        ``simulate6 --json``'s ``params``."""
+        approach, stewart) as a dict of its fields (the contact's devices of
+        its geometry only): the layout of ``simulate6 --json``'s ``params``."""
         out: dict = {}
         configs = [path for path in self.FIELDS.values() if len(path) == 2 and path[0] == "plant"]
         configs += [("plant", "table", "stewart"), ("approach",)]
@@ -511,7 +511,11 @@ class DockingLoopParams(NestedParams):
             if any(path[: len(c)] == c and path != c for c in configs):
                 continue  # inside a config given whole (spacecraft, contact, approach)
             out[name] = asdict(value) if is_dataclass(value) else value
-            if name == "contact":
+            if name == "contact":  # the devices of its geometry only
+                for other, keys in DEVICE_FIELDS.items():
+                    if other != value.geometry:
+                        for key in keys:
+                            del out[name][key]
                 out["approach"] = asdict(self.approach)
         return out
 

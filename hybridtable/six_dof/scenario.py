@@ -49,6 +49,7 @@ from hybridtable.loop.scenario import (
     table_response_hz,
     top_level,
 )
+from hybridtable.six_dof.contact import DEVICE_FIELDS
 from hybridtable.six_dof.params import (
     MAX_MISALIGNMENT_RAD,
     ApproachParams,
@@ -184,24 +185,11 @@ def _parse(raw: Mapping[str, Any]) -> DockingLoopParams:
     return DockingLoopParams(spacecraft=body, contact=contact, approach=approach, **kwargs)
 
 
-#: The [contact] keys of each geometry's devices.
-_DEVICE_KEYS: dict[str, tuple[str, ...]] = {
-    "plate": ("pad_count", "ring_radius_m", "pad_radius_m"),
-    "cone": (
-        "cone_half_angle_rad",
-        "mouth_radius_m",
-        "throat_radius_m",
-        "socket_depth_m",
-        "probe_radius_m",
-    ),
-}
-
-
 def _one_geometry(contact: Mapping[str, Any]) -> None:
     """Refuse the other geometry's device keys (a pad ring given to a cone
     is a mistake, not a default)."""
     geometry = contact.get("geometry", "plate")
-    for other, keys in _DEVICE_KEYS.items():
+    for other, keys in DEVICE_FIELDS.items():
         if other == geometry:
             continue
         for key in keys:

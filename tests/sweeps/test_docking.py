@@ -64,6 +64,9 @@ def test_every_single_quantity_of_the_scenario_is_an_input(base):
         ("angular_rate_y_rad_per_s", 0.02, lambda p: p.approach.angular_rate_rad_per_s[1]),
         ("sensor_delay_s", 0.012, lambda p: p.rig.sensor.sensor_delay_s),
         ("compensator", "SDC", lambda p: p.rig.compensator.name),
+        ("lateral_miss_x_m", 0.12, lambda p: p.approach.lateral_miss_m[0]),
+        ("geometry", "cone", lambda p: p.contact.geometry),
+        ("cone_half_angle_rad", 0.4, lambda p: p.contact.cone_half_angle_rad),
     ],
 )
 def test_an_input_sets_its_quantity_and_leaves_the_rest(base, name, value, read):
@@ -102,6 +105,8 @@ def test_the_contact_frequency_sets_the_mass_and_a_scenario_holding_it_keeps_it(
         ("[grid]\nmisalignment_roll_rad = [0.0, 0.9]", "grid.misalignment_roll_rad[1]"),
         ("[base]\npad_count = 2", "base.pad_count: pad_count must be in [3, 64]"),
         ("[base]\ncompensator = 'polynomial'", "compensator must be one of"),
+        ("[grid]\ngeometry = ['cone', 'funnel']", "grid.geometry[1]"),
+        ("[base]\ngeometry = 'cone'\nprobe_radius_m = 0.2", "base.probe_radius_m"),
         (
             "[base]\nspacecraft_mass_kg = 1000.0\n[grid]\ncontact_frequency_hz = [1.0]",
             "set the same quantity",
