@@ -14,7 +14,7 @@ from hybridtable.errors import SimulationError
 from hybridtable.laws.separation import SeparationRule
 from hybridtable.six_dof.builder import LOG_LAYOUT, DockingLoop, build_docking_loop
 from hybridtable.six_dof.drogue import probe_force_n, profile, throat_depth_m
-from hybridtable.six_dof.metrics import DockingMetrics, docking_metrics
+from hybridtable.six_dof.metrics import CAPTURE_SPEED_RATIO, DockingMetrics, docking_metrics
 from hybridtable.six_dof.params import DockingLoopParams
 from hybridtable.six_dof.pose import rotation_exp
 
@@ -152,6 +152,31 @@ def _peak_force_n(params: DockingLoopParams) -> float:
     return c.contact_stiffness_n_per_m * params.approach.initial_velocity_m_per_s / omega
 
 
+def _centre_z_m(params: DockingLoopParams, rows: np.ndarray) -> np.ndarray:
+    """The probe head's centre's z at the log's ``rows`` (columns of
+    :data:`~hybridtable.six_dof.builder.LOG_LAYOUT`'s blocks): the port's z
+    less the probe's radius times ``R_zz`` of the table's rotation vector."""
+    theta = rows[15:18]
+    angle = np.sqrt(np.sum(theta * theta, axis=0))
+    c = np.cos(angle)
+    safe = np.where(angle > 0.0, angle, 1.0)
+    r_zz = c + (1.0 - c) * (theta[2] / safe) ** 2
+    return rows[14] - params.contact.probe_radius_m * r_zz
+
+
+def _held_in_socket(params: DockingLoopParams, data: np.ndarray, ticks: int) -> bool:
+    """The probe head stays in the socket: its centre past the throat over
+    the record's last ``ticks``, and its port's speed along the axis at most
+    :data:`~hybridtable.six_dof.metrics.CAPTURE_SPEED_RATIO` of the approach's
+    (it may rattle across the socket, it does not leave)."""
+    if data.shape[1] < ticks:
+        return False
+    window = data[:, -ticks:]
+    inside = np.all(_centre_z_m(params, window) > throat_depth_m(params.contact))
+    axial = np.max(np.abs(window[8]))
+    return bool(inside and axial <= CAPTURE_SPEED_RATIO * params.approach.initial_velocity_m_per_s)
+
+
 def _split(data: np.ndarray) -> dict[str, np.ndarray]:
     out, row = {}, 0
     for name, size in LOG_LAYOUT.items():
@@ -171,7 +196,11 @@ def simulate6(
     Runs ``params.duration_s``, or until the contact has ended and the
     compensated wrench has stayed zero for the sensor delay plus 20 ticks
     (:class:`~hybridtable.laws.separation.SeparationRule`: the 1-D loop's
-    divergence stop and step budget too).
+    divergence stop and step budget too); in a drogue, until the probe has
+    left its mouth that way, or is held in the socket: its head's centre past
+    the throat and its speed along the axis at most
+    :data:`~hybridtable.six_dof.metrics.CAPTURE_SPEED_RATIO` of the
+    approach's, for as long.
 
     Parameters
     ----------
@@ -231,6 +260,8 @@ def simulate6(
     )
     log = loop.logger.FindLog(context)
     seen = 0
+    cone = params.contact.is_cone
+    settled = False  # a probe held in the drogue's socket
     while True:
         t = rule.next_check_s
         try:
@@ -266,10 +297,12 @@ def simulate6(
         )
         if progress is not None:
             progress(t, rule.t_max)
-        if ended:
+        if cone and separating:
+            settled = _held_in_socket(params, data, quiet_ticks)
+        if ended or settled:
             break
     unended = None  # a contact that has not ended: an error unless it is a capture
-    if separating:  # a record of a given duration is returned as it is
+    if separating and not settled:  # a record of a given duration is returned as it is
         try:
             rule.verdict()
         except SimulationError as err:

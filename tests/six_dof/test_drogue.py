@@ -27,7 +27,7 @@ from hybridtable.six_dof.drogue import (
 from hybridtable.six_dof.params import DockingLoopParams, RigidBodyParams
 from hybridtable.six_dof.pose import rotation_exp
 from hybridtable.six_dof.scenario import parse_scenario
-from hybridtable.six_dof.simulation import simulate6
+from hybridtable.six_dof.simulation import expected_end_s, probe_centres_m, simulate6
 from tests.generators.drogue_billiard import Drogue, predict
 
 K_N_PER_M = 1e5
@@ -295,3 +295,24 @@ def test_offsets_capture_or_not_as_the_geometry_says(alpha_deg, miss_m):
     assert after[0] == pytest.approx(vx, abs=0.01 * 0.2)
     assert after[2] == pytest.approx(vz, abs=0.01 * 0.2)
     assert abs(after[1]) < 1e-6
+
+
+def test_a_probe_held_in_the_socket_ends_the_run():
+    """A lossy head that stops on the socket's floor: the run ends once it has
+    stayed past the throat, nearly still along the axis, for the sensor delay
+    plus 20 ticks, long before the record's bound; a lively one that bounces
+    back out runs until it has left the mouth."""
+    held = simulate6(
+        DockingLoopParams(
+            spacecraft=RigidBodyParams(2000.0),
+            contact=_cone(contact_dissipation_s_per_m=50.0),
+            initial_velocity_m_per_s=0.1,
+            lateral_miss_m=(0.01, 0.0),
+        )
+    )
+    assert held.metrics.captured
+    assert held.time_s[-1] < 1.0 < expected_end_s(held.params)
+    last = held.log["table_state"][-20:]  # the window: 0 ticks of delay + 20
+    assert np.all(probe_centres_m(held.params, last)[:, 2] > throat_depth_m(held.params.contact))
+    assert np.max(np.abs(held.port_velocity_m_per_s[-20:, 2])) <= 0.05 * 0.1
+    assert held.metrics.energy_ratio < 0.01
