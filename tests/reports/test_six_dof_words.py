@@ -17,6 +17,7 @@ METRICS = SimpleNamespace(
     contact_duration_s=0.5,
     rotational_energy_j=0.0,
     lateral_velocity_m_per_s=0.0,
+    captured=False,
 )
 
 
