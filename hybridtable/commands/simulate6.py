@@ -14,7 +14,9 @@ def register(sub) -> None:
         help="simulate one 6-DoF docking contact from a scenario file",
         description="Simulate one docking contact of the 6-DoF hybrid loop: a rigid "
         "spacecraft (mass, inertia tensor, docking port off its centre of mass), Drake's "
-        "compliant contact of a ring of pads on a plate, the table model or the Stewart "
+        "compliant contact of a ring of pads on a plate or of a probe in a drogue (geometry = "
+        '"cone": hydroelastic, captured when the probe head passes the throat), the table '
+        "model or the Stewart "
         "platform moved by full-pose inverse kinematics, a delayed 6-axis F/T sensor, and a "
         "compensator on the wrench (SDC, MDC with a 6x6 stiffness, SDMDC). Prints the CoR "
         "along the contact normal and the energy ratio against the ideal rig (no delay, ideal "

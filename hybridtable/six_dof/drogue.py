@@ -15,8 +15,9 @@ plane ``z = 0`` and its inside at ``z > 0``; in a meridian half-plane
 The probe head is a sphere of radius ``r < R_t`` on the port's axis, its tip
 at the port origin (its centre at ``-r`` along the port's z axis). A head that
 has passed the throat (its centre beyond ``z = D``) is **captured**: a real
-drogue's latches close behind it there. The latches are not modelled: the run
-goes on to separation, so its energy figures are those of the whole docking.
+drogue's latches close behind it there. The latches are not modelled: a run
+goes on until the probe has left the mouth, or is held in the socket
+(:func:`~hybridtable.six_dof.simulation.simulate6`).
 
 Contact: the probe head is compliant (Drake's hydroelastic sphere, modulus
 ``E``), the drogue rigid (a surface of revolution of :data:`FACETS` facets
@@ -64,6 +65,7 @@ __all__ = [
     "probe_energy_j",
     "profile",
     "throat_depth_m",
+    "floor_depth_m",
     "drogue_mesh",
     "register_drogue_devices",
     "face_data",
@@ -123,6 +125,11 @@ def profile(contact) -> np.ndarray:
 def throat_depth_m(contact) -> float:
     """``D``: the throat's plane (m along +z from the mouth)."""
     return float(profile(contact)[2, 1])
+
+
+def floor_depth_m(contact) -> float:
+    """``D + socket_depth_m``: the socket's floor (m along +z from the mouth)."""
+    return float(profile(contact)[-1, 1])
 
 
 @functools.lru_cache(maxsize=16)
@@ -188,7 +195,7 @@ def register_drogue_devices(
     plant.RegisterCollisionGeometry(target_body, X_target_face, walls, "drogue", rigid)
     # The socket's floor is a box's face: a fan of thin triangles to the axis
     # would cut a centred head into a polygon per triangle (5 ms a query).
-    rt, floor = contact.throat_radius_m, float(profile(contact)[-1, 1])
+    rt, floor = contact.throat_radius_m, floor_depth_m(contact)
     X_floor = X_target_face @ RigidTransform([0.0, 0.0, floor + 0.5 * rt])
     plant.RegisterCollisionGeometry(
         target_body, X_floor, Box(2.2 * rt, 2.2 * rt, rt), "drogue_floor", rigid
@@ -328,7 +335,7 @@ def first_touch_gap_m(contact, centre: np.ndarray) -> float:
     :func:`wall_depth_m` at ``centre + s e_z`` reaching 0, found on a grid of a
     fifth of the radius and refined by bisection."""
     r = contact.probe_radius_m
-    top = float(profile(contact)[-1, 1]) + r
+    top = floor_depth_m(contact) + r
     step = 0.2 * r
     c = np.array(centre, dtype=float)
     s_prev = 0.0

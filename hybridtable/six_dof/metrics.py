@@ -65,7 +65,8 @@ class DockingMetrics:
         duration that ends in contact with the port still moving is not a
         capture: it was cut mid-contact.) In a drogue: the probe head's
         centre passed the throat, where the drogue's latches would close
-        behind it (they are not modelled: the record goes on to separation).
+        behind it (they are not modelled: the record goes on until the probe
+        has left the mouth or is held in the socket).
     """
 
     cor_normal: float

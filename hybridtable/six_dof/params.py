@@ -33,7 +33,7 @@ from hybridtable.errors import ParameterError
 from hybridtable.limits import LIMITS, check_plausible
 from hybridtable.loop.params import believed
 from hybridtable.six_dof.contact import DEVICE_FIELDS, DockingContactParams, peak_press_m
-from hybridtable.six_dof.drogue import profile
+from hybridtable.six_dof.drogue import floor_depth_m
 from hybridtable.systems.sensor import SensorParams, sample_taps
 from hybridtable.systems.table import TableParams
 
@@ -587,7 +587,7 @@ class DockingLoopParams(NestedParams):
         plate, or the probe into the socket's floor."""
         z = 0.5 * self.peak_press_m
         if self.contact.is_cone:
-            z += float(profile(self.contact)[-1, 1])
+            z += floor_depth_m(self.contact)
         return np.array([0.0, 0.0, z, 0.0, 0.0, 0.0])
 
 

@@ -189,6 +189,8 @@ def _one_geometry(contact: Mapping[str, Any]) -> None:
     """Refuse the other geometry's device keys (a pad ring given to a cone
     is a mistake, not a default)."""
     geometry = contact.get("geometry", "plate")
+    if geometry not in DEVICE_FIELDS:
+        return  # the contact's own check names the choices
     for other, keys in DEVICE_FIELDS.items():
         if other == geometry:
             continue

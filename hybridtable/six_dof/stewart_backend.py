@@ -61,7 +61,7 @@ from pydrake.systems.primitives import LinearSystem, ZeroOrderHold
 
 from hybridtable.errors import DivergenceError, ParameterError, WorkspaceError
 from hybridtable.six_dof.contact import port_start_z_m, register_docking_devices
-from hybridtable.six_dof.drogue import profile
+from hybridtable.six_dof.drogue import floor_depth_m
 from hybridtable.six_dof.params import DockingLoopParams
 from hybridtable.six_dof.pose import rotation_exp, rotation_log
 from hybridtable.stewart.backend import connect_servo_and_device, export_plate_pose
@@ -560,20 +560,21 @@ class StewartPoseBackend(Diagram):
 
 def _approach_poses(params: DockingLoopParams, count: int = 201) -> tuple[np.ndarray, np.ndarray]:
     """Port poses (count, 6) along the approach, with the misalignment, from
-    the initial pose to ``3 v0 / omega_contact`` past the plate's face, and
-    the initial pose (6): the port's axis through the target's centre, the
-    first pad ``initial_gap_m`` from the plate (as the loop starts). A body
-    turning at the approach's angular rate turns on at it (torque-free, the
-    rate taken constant over the approach: a bound for the check, not the
-    body's motion)."""
+    the initial pose to three undamped peak presses past the target's face
+    (a drogue's: its socket's floor, on its axis, where the cone guides the
+    probe), and the initial pose (6): ``lateral_miss_m`` across the axis, the
+    active device ``initial_gap_m`` before its first touch (as the loop
+    starts). A body turning at the approach's angular rate turns on at it
+    (torque-free, the rate taken constant over the approach: a bound for the
+    check, not the body's motion)."""
     a = params.approach
     c = params.contact
     R0 = rotation_from_rpy(np.array([*a.misalignment_rad, 0.0]))
     miss = np.array(a.lateral_miss_m)
     z0 = port_start_z_m(c, R0, miss, a.initial_gap_m)
-    z1 = 3.0 * params.peak_press_m + (float(profile(c)[-1, 1]) if c.is_cone else 0.0)
+    z1 = 3.0 * params.peak_press_m + (floor_depth_m(c) if c.is_cone else 0.0)
     poses = np.zeros((count, 6))
-    poses[:, :2] = miss
+    poses[:, :2] = np.outer(np.linspace(1.0, 0.0 if c.is_cone else 1.0, count), miss)
     poses[:, 2] = np.linspace(z0, z1, count)
     rate = np.array(a.angular_rate_rad_per_s)
     times = (poses[:, 2] - z0) / a.initial_velocity_m_per_s
@@ -606,16 +607,29 @@ def check_stewart_scenario(params: DockingLoopParams) -> None:
     try:
         kinematics.leg_lengths(initial)
     except WorkspaceError as err:
+        advice = "lower [approach] initial_gap_m or misalignment_deg"
+        if params.contact.is_cone:  # the probe starts just before its first touch
+            advice = (
+                "a smaller [approach] lateral_miss_m or misalignment_deg, or a shallower "
+                "drogue ([contact] socket_depth_m, mouth_radius_m, cone_half_angle_rad)"
+            )
         raise WorkspaceError(
             f"initial_gap_m {a.initial_gap_m:g} with misalignment_deg [{tilt}] starts the "
-            f"Stewart platform out of its reach: {err}; lower [approach] initial_gap_m or "
-            "misalignment_deg"
+            f"Stewart platform out of its reach: {err}; {advice}"
         ) from None
     deepest = float(poses[-1, 2])
     for q in poses:
         try:
             kinematics.leg_lengths(q)
         except WorkspaceError as err:
+            if params.contact.is_cone:
+                raise WorkspaceError(
+                    f"the Stewart platform cannot follow the probe (misalignment_deg [{tilt}]) "
+                    f"into the drogue's socket, its floor {floor_depth_m(params.contact):.4f} m "
+                    f"deep, and three undamped peak presses past it (z = {deepest:.4f} m): "
+                    f"{err}; a shallower drogue ([contact] socket_depth_m, mouth_radius_m, "
+                    "throat_radius_m, cone_half_angle_rad) or a lower initial_velocity_m_per_s"
+                ) from None
             raise WorkspaceError(
                 f"the Stewart platform cannot follow the approach (misalignment_deg [{tilt}]) "
                 f"to the deepest expected press, 3 initial_velocity_m_per_s / (2 pi contact "
