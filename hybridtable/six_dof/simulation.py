@@ -189,9 +189,9 @@ def simulate6(
     (:class:`~hybridtable.laws.separation.SeparationRule`: the 1-D loop's
     divergence stop and step budget too); in a drogue, until the probe has
     left its mouth that way, or is held in the socket: its head's centre past
-    the throat and its speed along the axis at most
+    the throat, its speed and contact force along the axis at most
     :data:`~hybridtable.six_dof.metrics.CAPTURE_SPEED_RATIO` of the
-    approach's, for as long.
+    approach's speed and of the head-on peak force, for as long.
 
     Parameters
     ----------
