@@ -26,6 +26,7 @@ step control is unchanged).
 
 from __future__ import annotations
 
+import functools
 import math
 import operator
 import sys
@@ -58,6 +59,7 @@ from hybridtable.errors import SimulationError
 __all__ = [
     "CompiledLaw",
     "compiled_available",
+    "compiled_kernel",
     "compiled_system",
     "njit_cached",
     "python_function",
@@ -281,6 +283,31 @@ def njit_cached(function: Callable[..., Any]) -> Callable[..., Any]:
         return numba.njit(cache=True)(function)
     except RuntimeError:
         return numba.njit(function)
+
+
+#: Plain functions already made callable from compiled code.
+_JITABLE: set[Callable[..., Any]] = set()
+
+
+@functools.cache
+def compiled_kernel(
+    function: Callable[..., Any], helpers: tuple[Callable[..., Any], ...] = ()
+) -> Callable[..., Any]:
+    """``function`` compiled by numba (:func:`njit_cached`), once per process;
+    the plain functions it calls, ``helpers`` (every one, also those they call),
+    become callable from compiled code and stay plain functions for Python
+    (numba's ``register_jitable``). Where numba is missing, ``function`` itself:
+    the same operations, run as Python. The per-tick arithmetic of the 6-DoF
+    loop's systems runs so, one call per port evaluation."""
+    if not compiled_available():
+        return function
+    from numba.extending import register_jitable
+
+    for helper in helpers:
+        if helper not in _JITABLE:
+            register_jitable(helper)
+            _JITABLE.add(helper)
+    return njit_cached(function)
 
 
 def python_lambda(arguments: Sequence[str], source: str) -> Callable[..., Any]:

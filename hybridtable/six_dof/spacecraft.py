@@ -18,9 +18,10 @@ from __future__ import annotations
 import numpy as np
 from pydrake.systems.framework import BasicVector, LeafSystem
 
+from hybridtable.laws.compiled import compiled_kernel
 from hybridtable.six_dof.params import RigidBodyParams
 from hybridtable.six_dof.pose import rotation_exp, rotation_log
-from hybridtable.stewart.geometry import cross
+from hybridtable.stewart.geometry import cross, skew
 
 __all__ = ["RigidSpacecraft", "BODY_STATE_SIZE", "port_state", "kinetic_energy_j"]
 
@@ -28,13 +29,48 @@ __all__ = ["RigidSpacecraft", "BODY_STATE_SIZE", "port_state", "kinetic_energy_j
 BODY_STATE_SIZE = 18
 
 
+def _port_state(x: np.ndarray, port_position_m: np.ndarray) -> np.ndarray:
+    """:func:`port_state` on arrays (compiled by numba in the loop)."""
+    p, v = x[0:3], x[3:6]
+    R = np.ascontiguousarray(x[6:15]).reshape(3, 3)
+    omega = R @ x[15:18]
+    arm = R @ port_position_m
+    return np.concatenate((p + arm, rotation_log(R), v + cross(omega, arm), omega))
+
+
+def _step(
+    x: np.ndarray,
+    wrench: np.ndarray,
+    h: float,
+    mass: float,
+    inertia: np.ndarray,
+    inertia_inv: np.ndarray,
+    port_position_m: np.ndarray,
+) -> np.ndarray:
+    """The body state one tick on (see the module; compiled by numba in the loop)."""
+    p, v = x[0:3], x[3:6]
+    R = np.ascontiguousarray(x[6:15]).reshape(3, 3)
+    wb = x[15:18]
+    f = wrench[3:6]
+    tau = wrench[0:3] + cross(R @ port_position_m, f)  # about the centre of mass
+    v_new = v + (h / mass) * f
+    p_new = p + h * v_new
+    Iw = inertia @ wb
+    wb_new = wb + h * (inertia_inv @ (R.T @ tau - cross(wb, Iw)))
+    R_new = R @ rotation_exp(h * wb_new)
+    # Keep R a rotation against round-off (polar projection).
+    u, _, vt = np.linalg.svd(R_new)
+    R_new = u @ vt
+    return np.concatenate((p_new, v_new, R_new.ravel(), wb_new))
+
+
+#: The plain functions the kernels call.
+_HELPERS = (cross, skew, rotation_exp, rotation_log)
+
+
 def port_state(body: RigidBodyParams, x: np.ndarray) -> np.ndarray:
     """The port's ``[p_P; theta; v_P; omega]`` (12) of a body state ``x`` (18)."""
-    p, v = x[0:3], x[3:6]
-    R = x[6:15].reshape(3, 3)
-    omega = R @ x[15:18]
-    arm = R @ body.port_position_m
-    return np.concatenate([p + arm, rotation_log(R), v + cross(omega, arm), omega])
+    return _port_state(np.asarray(x, dtype=float), body.port_position_m)
 
 
 def kinetic_energy_j(body: RigidBodyParams, x: np.ndarray) -> float:
@@ -69,7 +105,9 @@ class RigidSpacecraft(LeafSystem):
         self._m = params.mass_kg
         self._I = params.inertia
         self._I_inv = np.linalg.inv(self._I)
-        self._arm = params.port_position_m
+        self._arm = np.ascontiguousarray(params.port_position_m, dtype=float)
+        self._port_state = compiled_kernel(_port_state, _HELPERS)
+        self._step = compiled_kernel(_step, _HELPERS)
         self._wrench = self.DeclareVectorInputPort("compensated_wrench", 6)
         x0 = np.zeros(BODY_STATE_SIZE)
         x0[6:15] = np.eye(3).ravel()
@@ -79,12 +117,7 @@ class RigidSpacecraft(LeafSystem):
         self.DeclareVectorOutputPort(
             "commanded_state", BasicVector(12), self._calc_port, prerequisites_of_calc=ticket
         )
-        self.DeclareVectorOutputPort(
-            "body_state",
-            BasicVector(BODY_STATE_SIZE),
-            lambda c, o: o.SetFromVector(c.get_discrete_state(0).value()),
-            prerequisites_of_calc=ticket,
-        )
+        self.DeclareStateOutputPort("body_state", self._x)
 
     def initial_state(
         self,
@@ -107,24 +140,16 @@ class RigidSpacecraft(LeafSystem):
         return x
 
     def _calc_port(self, context, output) -> None:
-        output.SetFromVector(port_state(self.params, context.get_discrete_state(0).value()))
+        output.SetFromVector(self._port_state(context.get_discrete_state(0).value(), self._arm))
 
     def _update(self, context, discrete_state) -> None:
-        x = context.get_discrete_state(0).value()
-        w = self._wrench.Eval(context)
-        h = self._h
-        p, v = x[0:3], x[3:6]
-        R = x[6:15].reshape(3, 3)
-        wb = x[15:18]
-        f = w[3:6]
-        tau = w[0:3] + cross(R @ self._arm, f)  # about the centre of mass
-        v_new = v + (h / self._m) * f
-        p_new = p + h * v_new
-        Iw = self._I @ wb
-        wb_new = wb + h * (self._I_inv @ (R.T @ tau - cross(wb, Iw)))
-        R_new = R @ rotation_exp(h * wb_new)
-        # Keep R a rotation against round-off (polar projection).
-        u, _, vt = np.linalg.svd(R_new)
-        R_new = u @ vt
-        out = discrete_state.get_mutable_vector(0)
-        out.SetFromVector(np.concatenate([p_new, v_new, R_new.ravel(), wb_new]))
+        x = self._step(
+            context.get_discrete_state(0).value(),
+            self._wrench.Eval(context),
+            self._h,
+            self._m,
+            self._I,
+            self._I_inv,
+            self._arm,
+        )
+        discrete_state.get_mutable_vector(0).SetFromVector(x)

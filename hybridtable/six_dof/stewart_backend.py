@@ -57,18 +57,23 @@ from pydrake.geometry import Meshcat
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.math import SpatialVelocity
 from pydrake.systems.framework import BasicVector, Diagram, DiagramBuilder, LeafSystem
-from pydrake.systems.primitives import LinearSystem, ZeroOrderHold
+from pydrake.systems.primitives import (
+    AffineSystem,
+    LinearSystem,
+    MatrixGain,
+    Multiplexer,
+    ZeroOrderHold,
+)
 
-from hybridtable.errors import DivergenceError, ParameterError, WorkspaceError
+from hybridtable.errors import ParameterError, WorkspaceError
 from hybridtable.six_dof.contact import port_start_z_m, register_docking_devices
 from hybridtable.six_dof.drogue import floor_depth_m
 from hybridtable.six_dof.params import DockingLoopParams
 from hybridtable.six_dof.pose import rotation_exp, rotation_log
+from hybridtable.six_dof.pose_kinematics import MAX_CONDITION_NUMBER, PoseKinematics
 from hybridtable.stewart.backend import connect_servo_and_device, export_plate_pose
 from hybridtable.stewart.ft_sensor import DeviceSensorBase
 from hybridtable.stewart.geometry import (
-    StewartGeometry,
-    cross,
     rotation_from_rpy,
     rpy_from_rotation,
 )
@@ -86,169 +91,6 @@ __all__ = [
     "set_plate_state",
     "check_stewart_scenario",
 ]
-
-#: Largest condition number of the leg Jacobian a commanded pose may have [1]:
-#: beyond it the pose is refused as (near) a singularity of the platform.
-MAX_CONDITION_NUMBER = 1e6
-
-
-def _cross_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise a x b of two (n, 3) arrays."""
-    out = np.empty_like(a)
-    out[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
-    out[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
-    out[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-    return out
-
-
-def _fmt(v) -> str:
-    return "[" + ", ".join(f"{float(x):.6g}" for x in v) + "]"
-
-
-class PoseKinematics:
-    """The port's pose in W <-> the plate's pose in the Stewart world, and the
-    legs' inverse kinematics of a port pose.
-
-    Parameters
-    ----------
-    geometry : StewartGeometry
-    max_condition_number : float
-        Refuse poses whose leg Jacobian is worse conditioned than this.
-    """
-
-    def __init__(
-        self, geometry: StewartGeometry, max_condition_number: float = MAX_CONDITION_NUMBER
-    ) -> None:
-        self.geometry = geometry
-        #: The origin of W in the Stewart world (m).
-        self.world_origin_m = np.array(
-            [0.0, 0.0, geometry.home_height_m + geometry.device_length_m]
-        )
-        #: The port's origin in the plate frame (m).
-        self.port_in_plate_m = np.array([0.0, 0.0, geometry.device_length_m])
-        self.max_condition_number = float(max_condition_number)
-        self._top = geometry.top_points_m
-        self._base = geometry.base_points_m
-        self._stroke = (geometry.leg_min_length_m, geometry.leg_max_length_m)
-        self._home_directions = geometry.home_leg_directions
-        # A margin below the joint limit's cosine: closer, the geometry decides.
-        self._min_cosine = math.cos(geometry.max_joint_angle_rad) + 1e-9
-
-    # -- frames ---------------------------------------------------------
-    def plate_of_port(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The plate's position (world, m) and rotation of a port pose ``q`` (W)."""
-        R = rotation_exp(np.asarray(q[3:6], dtype=float))
-        return self.world_origin_m + np.asarray(q[:3], dtype=float) - R @ self.port_in_plate_m, R
-
-    def plate_twist_of_port(self, R: np.ndarray, qd: np.ndarray) -> np.ndarray:
-        """``[v; omega]`` of the plate origin from the port's ``qd = [v_P; omega]``."""
-        omega = np.asarray(qd[3:6], dtype=float)
-        return np.concatenate([qd[:3] - cross(omega, R @ self.port_in_plate_m), omega])
-
-    def port_state(
-        self, position_m: np.ndarray, R: np.ndarray, v: np.ndarray, w: np.ndarray
-    ) -> np.ndarray:
-        """The port's ``[q; qd]`` (12, W) of the plate's pose and twist (world)."""
-        arm = R @ self.port_in_plate_m
-        return np.concatenate(
-            [position_m + arm - self.world_origin_m, rotation_log(R), v + cross(w, arm), w]
-        )
-
-    # -- kinematics -----------------------------------------------------
-    def leg_vectors(self, position_m: np.ndarray, R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Leg vectors (6, 3) and the plate's arms ``R t_i`` (6, 3) (world, m)."""
-        arm = self._top @ R.T
-        return position_m + arm - self._base, arm
-
-    def leg_lengths(self, q: np.ndarray, check: bool = True) -> np.ndarray:
-        """The six leg lengths (m) with the port at ``q`` (W).
-
-        Raises
-        ------
-        WorkspaceError
-            With ``check``, if the pose leaves the workspace (a leg's stroke,
-            a universal joint's limit, the base plane) or is near a singularity.
-        """
-        return self.inverse_kinematics(q, None, check)[0]
-
-    def inverse_kinematics(
-        self, q: np.ndarray, qd: np.ndarray | None = None, check: bool = True
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Leg lengths (6, m) and rates (6, m/s) of the port's pose ``q`` and
-        twist ``qd`` (W; rates zero without ``qd``).
-
-        Raises
-        ------
-        WorkspaceError
-            With ``check`` (see :meth:`leg_lengths`), in one line naming the
-            pose and the leg.
-        """
-        q = np.asarray(q, dtype=float)
-        if q.shape != (6,):
-            raise WorkspaceError(f"a port pose is 6 numbers [x, y, z, rx, ry, rz] (got {q})")
-        if not np.all(np.isfinite(q)):
-            raise DivergenceError(
-                f"the 6-DoF loop diverged: the commanded port pose {_fmt(q)} is not finite"
-            )
-        position, R = self.plate_of_port(q)
-        legs, arm = self.leg_vectors(position, R)
-        lengths = np.sqrt(np.einsum("ij,ij->i", legs, legs))
-        u = legs / lengths[:, None]
-        J = np.empty((6, 6))
-        J[:, :3] = u
-        J[:, 3:] = _cross_rows(arm, u)
-        if check:
-            self._check(q, position, lengths, legs, u, J)
-        if qd is None:
-            return lengths, np.zeros(6)
-        return lengths, J @ self.plate_twist_of_port(R, np.asarray(qd, dtype=float))
-
-    def jacobian(self, q: np.ndarray) -> np.ndarray:
-        """The leg Jacobian (6x6) at the port pose ``q``: ``dL/dt = J [v; omega]``
-        with the plate origin's velocity and the angular velocity (world)."""
-        position, R = self.plate_of_port(np.asarray(q, dtype=float))
-        legs, arm = self.leg_vectors(position, R)
-        u = legs / np.linalg.norm(legs, axis=1, keepdims=True)
-        return np.hstack([u, _cross_rows(arm, u)])
-
-    def _where(self, q: np.ndarray, position: np.ndarray) -> str:
-        return (
-            f"port at {_fmt(q[:3])} m, rotation vector {_fmt(q[3:])} rad "
-            f"(plate at {_fmt(position)} m above the base centre)"
-        )
-
-    def _check(self, q, position, lengths, legs, u, J) -> None:
-        g = self.geometry
-        # The geometry's checks (stroke, universal-joint angle), vectorized;
-        # near a limit its own check decides (and words the leg's message).
-        inside = (
-            position[2] > 0.0
-            and lengths.min() > self._stroke[0] + 1e-12
-            and lengths.max() < self._stroke[1] - 1e-12
-            and np.einsum("ij,ij->i", u, self._home_directions).min() > self._min_cosine
-        )
-        if not inside:
-            try:
-                if position[2] <= 0.0:
-                    raise WorkspaceError(
-                        f"the plate must be above the base (z = {position[2]:g} m)"
-                    )
-                g.check_legs(lengths, legs)
-            except WorkspaceError as err:
-                raise WorkspaceError(
-                    f"the commanded {self._where(q, position)} is outside the Stewart "
-                    f"platform's workspace: {err}"
-                ) from None
-        s = np.linalg.svd(J, compute_uv=False)
-        cond = math.inf if s[-1] <= 0.0 else s[0] / s[-1]
-        if not cond <= self.max_condition_number:
-            left = np.linalg.svd(J)[0][:, -1]
-            leg = int(np.argmax(np.abs(left)))
-            raise WorkspaceError(
-                f"the commanded {self._where(q, position)} is near a singularity of the Stewart "
-                f"platform: the leg Jacobian's condition number is {cond:.3g} (limit "
-                f"{self.max_condition_number:.3g}), leg {leg} the most involved"
-            )
 
 
 class PoseInverseKinematics(LeafSystem):
@@ -273,14 +115,17 @@ class PoseInverseKinematics(LeafSystem):
 
     def _calc(self, context, output) -> None:
         x = self._command.Eval(context)
-        lengths, rates = self.kinematics.inverse_kinematics(x[:6], x[6:])
-        output.SetFromVector(np.concatenate([lengths, rates]))
+        output.SetFromVector(self.kinematics.commanded_legs(x))
 
 
-class PoseLegServo(LeafSystem):
+class PoseLegServo(Diagram):
     """The legs' digital PD servo with the static gravity feed-forward:
     ``u_i = Kp (L_r,i - L_i) + Kd (L'_r,i - dL_i/dt) + u_g,i`` (the 1-D
     :class:`~hybridtable.stewart.backend.LegServo` on six independent legs).
+
+    Drake's primitives, no Python per step: a ``Multiplexer`` of the two
+    inputs, a ``MatrixGain`` selecting the errors ``[L_r - L; L'_r - dL/dt]``
+    (differences, exact), and an ``AffineSystem`` ``[Kp I, Kd I] e + u_g``.
 
     Ports
     -----
@@ -292,24 +137,39 @@ class PoseLegServo(LeafSystem):
     """
 
     def __init__(self, handles: StewartPlant, use_reference: bool) -> None:
-        LeafSystem.__init__(self)
-        self._kp, self._kd = handles.params.servo_gains()
-        self._uff = handles.gravity_feedforward_n.copy()
-        self._iq = handles.leg_position_indices
-        self._iv = handles.plant.num_positions() + handles.leg_velocity_indices
-        self._use_rates = bool(use_reference)
-        self._reference = self.DeclareVectorInputPort("leg_reference", 12)
-        self._state = self.DeclareVectorInputPort(
-            "plant_state", handles.plant.num_multibody_states()
+        Diagram.__init__(self)
+        kp, kd = handles.params.servo_gains()
+        n = handles.plant.num_multibody_states()
+        iq = 12 + np.asarray(handles.leg_position_indices)
+        iv = 12 + handles.plant.num_positions() + np.asarray(handles.leg_velocity_indices)
+        select = np.zeros((12, 12 + n))
+        legs = np.arange(6)
+        select[legs, legs] = 1.0
+        select[legs, iq] = -1.0
+        if use_reference:
+            select[6 + legs, 6 + legs] = 1.0
+        select[6 + legs, iv] = -1.0
+        eye = np.eye(6)
+        builder = DiagramBuilder()
+        mux = builder.AddNamedSystem("inputs", Multiplexer([12, n]))
+        errors = builder.AddNamedSystem("errors", MatrixGain(select))
+        pd = builder.AddNamedSystem(
+            "pd",
+            AffineSystem(
+                np.zeros((0, 0)),
+                np.zeros((0, 12)),
+                np.zeros(0),
+                np.zeros((6, 0)),
+                np.hstack([kp * eye, kd * eye]),
+                handles.gravity_feedforward_n.copy(),
+            ),
         )
-        self.DeclareVectorOutputPort("leg_forces", 6, self._calc)
-
-    def _calc(self, context, output) -> None:
-        r = self._reference.Eval(context)
-        x = self._state.Eval(context)
-        rates = r[6:] if self._use_rates else 0.0
-        u = self._kp * (r[:6] - x[self._iq]) + self._kd * (rates - x[self._iv]) + self._uff
-        output.SetFromVector(u)
+        builder.Connect(mux.get_output_port(), errors.get_input_port())
+        builder.Connect(errors.get_output_port(), pd.get_input_port())
+        builder.ExportInput(mux.get_input_port(0), "leg_reference")
+        builder.ExportInput(mux.get_input_port(1), "plant_state")
+        builder.ExportOutput(pd.get_output_port(), "leg_forces")
+        builder.BuildInto(self)
 
 
 class PoseDeviceSensor(DeviceSensorBase):
@@ -354,8 +214,8 @@ class PoseDeviceSensor(DeviceSensorBase):
         self.DeclareVectorOutputPort("weld_wrench", BasicVector(6), self._calc_weld_wrench)
 
     def _calc_port_state(self, context, output) -> None:
-        R, p, w, v = self._pose_twist(self._state.Eval(context))
-        output.SetFromVector(self._k.port_state(p, R, v, w))
+        x = self._state.Eval(context)
+        output.SetFromVector(self._k.port_state_of_plant(x, self._iq, self._nq + self._iv))
 
     def contact_wrench(self, context) -> np.ndarray:
         """The payload-compensated wrench (6, W, unrounded) over the coming step:

@@ -44,6 +44,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from pydrake.systems.framework import LeafSystem
 
+from hybridtable.laws.compiled import compiled_kernel
 from hybridtable.stewart.geometry import cross, rotation_from_quaternion
 
 if TYPE_CHECKING:
@@ -124,21 +125,50 @@ def payload_compensated_wrench(
         ``[t_p; f]``: the contact's moment about the point (N m) and force
         (N) on the device, in W.
     """
-    R = rotation
-    w = angular_velocity_rad_per_s
-    dw = angular_acceleration_rad_per_s2
-    f_sensor = R @ sensor_force_n
-    t_sensor = R @ sensor_torque_n_m  # about D's origin
-    r = R @ payload.com_m
-    a_com = origin_acceleration_m_per_s2 + cross(dw, r) + cross(w, cross(w, r))
+    return _compensate(
+        payload.mass_kg,
+        np.asarray(payload.com_m, dtype=float),
+        np.asarray(payload.inertia_kg_m2, dtype=float),
+        np.asarray(payload.gravity_m_per_s2, dtype=float),
+        np.asarray(rotation, dtype=float),
+        np.asarray(angular_velocity_rad_per_s, dtype=float),
+        np.asarray(angular_acceleration_rad_per_s2, dtype=float),
+        np.asarray(origin_acceleration_m_per_s2, dtype=float),
+        np.asarray(sensor_torque_n_m, dtype=float),
+        np.asarray(sensor_force_n, dtype=float),
+        np.zeros(3) if moment_point_m is None else np.asarray(moment_point_m, dtype=float),
+    )
+
+
+def _compensate(mass, com, inertia, gravity, R, w, dw, a_o, t_s, f_s, point) -> np.ndarray:
+    """:func:`payload_compensated_wrench` on arrays (``point``: ``p_D``, zeros
+    for D's origin), the law written once: numba compiles it for the sensors."""
+    f_sensor = R @ f_s
+    t_sensor = R @ t_s  # about D's origin
+    r = R @ com
+    a_com = a_o + cross(dw, r) + cross(w, cross(w, r))
     # Newton: m a_com = f_sensor + f_contact + m g.
-    f = payload.mass_kg * (a_com - payload.gravity_m_per_s2) - f_sensor
+    f = mass * (a_com - gravity) - f_sensor
     # Euler about the centre of mass: I dw + w x I w = t_sensor,com + t_contact,com.
-    I_w = R @ payload.inertia_kg_m2 @ R.T
+    I_w = R @ inertia @ R.T
     t_com = I_w @ dw + cross(w, I_w @ w) - (t_sensor - cross(r, f_sensor))
     # About the point.
-    arm = r if moment_point_m is None else r - R @ moment_point_m
-    return np.concatenate([t_com + cross(arm, f), f])
+    arm = r - R @ point
+    return np.concatenate((t_com + cross(arm, f), f))
+
+
+def _reading(x, a, quaternion_start, velocity_start, mass, com, inertia, gravity, t_s, f_s, point):
+    """``(R, wrench)``: the plate's rotation and the compensated wrench, from
+    the plant's state ``x`` (the plate's quaternion at ``quaternion_start``,
+    its angular velocity at ``velocity_start``), the plate's accelerations
+    ``a = [dw; dv]`` and the sensor's reading ``t_s``, ``f_s``."""
+    R = rotation_from_quaternion(x[quaternion_start : quaternion_start + 4])
+    w = x[velocity_start : velocity_start + 3]
+    return R, _compensate(mass, com, inertia, gravity, R, w, a[0:3], a[3:6], t_s, f_s, point)
+
+
+#: The plain functions the kernels call.
+_HELPERS = (cross, rotation_from_quaternion, _compensate)
 
 
 class DeviceSensorBase(LeafSystem):
@@ -165,6 +195,8 @@ class DeviceSensorBase(LeafSystem):
         self._accel = self.DeclareVectorInputPort(
             "generalized_acceleration", plant.num_velocities()
         )
+        self._reading = compiled_kernel(_reading, _HELPERS)
+        self._origin = np.zeros(3)
         self._reaction = self.DeclareAbstractInputPort(
             "reaction_forces", plant.get_reaction_forces_output_port().Allocate()
         )
@@ -182,18 +214,22 @@ class DeviceSensorBase(LeafSystem):
         """``(R, w, dw, dv, wrench)``: the plate's rotation, angular velocity
         and accelerations, and the payload-compensated contact wrench (W, moment
         about ``moment_point_m`` in the plate frame, default its origin)."""
-        R, _, w, _ = self._pose_twist(self._state.Eval(context))
+        x = self._state.Eval(context)
         a = self._accel.Eval(context)[self._iv : self._iv + 6]
-        dw, dv = a[:3], a[3:]
         F = self._weld_wrench(context)
-        wrench = payload_compensated_wrench(
-            self._payload,
-            R,
-            w,
-            dw,
-            dv,
+        p = self._payload
+        R, wrench = self._reading(
+            x,
+            a,
+            self._iq,
+            self._nq + self._iv,
+            p.mass_kg,
+            p.com_m,
+            p.inertia_kg_m2,
+            p.gravity_m_per_s2,
             F.rotational(),
             F.translational(),
-            moment_point_m=moment_point_m,
+            self._origin if moment_point_m is None else moment_point_m,
         )
-        return R, w, dw, dv, wrench
+        w = x[self._nq + self._iv : self._nq + self._iv + 3]
+        return R, w, a[:3], a[3:], wrench

@@ -81,7 +81,8 @@ def rotation_from_quaternion(q: np.ndarray) -> np.ndarray:
     """Rotation matrix of a quaternion ``[w, x, y, z]`` (normalized here), as a
     MultibodyPlant's floating-body positions hold it (scalar arithmetic: this
     runs at every tick of the Stewart back-ends)."""
-    w, x, y, z = q / np.linalg.norm(q)
+    n = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+    w, x, y, z = q[0] / n, q[1] / n, q[2] / n, q[3] / n
     return np.array(
         [
             [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],

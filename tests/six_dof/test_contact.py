@@ -106,17 +106,54 @@ def test_no_contact_no_stiffness():
     assert not K.any() and not C.any()
 
 
-def test_compiled_and_python_kernels_agree_bit_for_bit(monkeypatch):
+def test_compiled_and_python_kernels_agree_bit_for_bit():
     params = DockingContactParams(1e5, contact_dissipation_s_per_m=0.5, friction_coefficient=0.3)
-    contact = DockingContact(params)
     q = np.array([0.01, -0.02, 0.003, 0.02, -0.05, 0.1])
     qd = np.array([0.02, -0.01, 0.05, 0.1, 0.0, -0.2])
-    compiled = contact.stiffness(q, qd)
-    pads_module.pad_jacobians.cache_clear()
-    monkeypatch.setattr(pads_module, "compiled_available", lambda: False)
-    try:
-        python = contact.stiffness(q, qd)
-    finally:
-        pads_module.pad_jacobians.cache_clear()
-    for a, b in zip(compiled, python, strict=True):
+    args = (
+        q,
+        qd,
+        np.ascontiguousarray(params.pad_centres_m),
+        params.pad_radius_m,
+        params.contact_stiffness_n_per_m / params.pad_count,
+        params.contact_dissipation_s_per_m,
+        params.friction_coefficient,
+    )
+    compiled = pads_module.pad_stiffness()
+    assert compiled is not pads_module._pad_stiffness  # numba is a dependency
+    assert DockingContact(params).stiffness(q, qd)[0].any()
+    for a, b in zip(compiled(*args), pads_module._pad_stiffness(*args), strict=True):
         assert np.array_equal(a, b)
+
+
+def test_pads_as_drakes_point_pairs():
+    """The pads' contacts without Drake's query (points, forces, depths,
+    normals) are Drake's point pairs, with dissipation and friction, sliding
+    and below the stiction tolerance."""
+    params = DockingContactParams(1e5, contact_dissipation_s_per_m=0.5, friction_coefficient=0.3)
+    contact = DockingContact(params)
+    rng = np.random.default_rng(11)
+    for draw in range(30):
+        q = np.concatenate(
+            [rng.uniform(-0.05, 0.05, 2), [rng.uniform(-0.004, 0.02)], rng.uniform(-0.2, 0.2, 3)]
+        )
+        speed = 1e-4 if draw % 3 == 0 else 0.1
+        qd = rng.uniform(-speed, speed, 6)
+        p, pairs = contact._contacts(q, qd)
+        U, F, X, N = pads_module._pad_contacts(
+            q[:3],
+            rotation_exp(q[3:]),
+            qd,
+            params.pad_centres_m,
+            params.pad_radius_m,
+            params.contact_stiffness_n_per_m / params.pad_count,
+            params.contact_dissipation_s_per_m,
+            params.friction_coefficient,
+        )
+        assert len(X) == len(pairs)
+        for point, force, depth, normal in pairs:
+            i = int(np.argmin(np.linalg.norm(U - (point - p), axis=1)))
+            np.testing.assert_allclose(U[i], point - p, rtol=0, atol=1e-15)
+            np.testing.assert_allclose(F[i], force, rtol=0, atol=1e-12 * np.linalg.norm(force))
+            assert abs(X[i] - depth) <= 1e-15
+            np.testing.assert_array_equal(N[i], normal)

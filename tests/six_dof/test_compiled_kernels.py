@@ -1,0 +1,100 @@
+"""The 6-DoF loop's per-tick kernels: numba's compilation computes what the plain
+functions compute (the same operations; to round-off where numba's BLAS and
+LAPACK stand in for numpy's), and the systems refuse as the Python path words it."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from hybridtable.errors import DivergenceError, WorkspaceError
+from hybridtable.laws.compiled import compiled_kernel
+from hybridtable.six_dof import pose_kinematics, spacecraft
+from hybridtable.six_dof.pose import rotation_exp
+from hybridtable.stewart import ft_sensor
+from hybridtable.stewart.geometry import StewartGeometry
+
+RNG = np.random.default_rng(3)
+
+
+def _close(a, b, scale: float = 1.0) -> None:
+    for x, y in zip(np.atleast_1d(a), np.atleast_1d(b), strict=True):
+        np.testing.assert_allclose(x, y, rtol=0, atol=1e-13 * scale)
+
+
+def _body_state() -> np.ndarray:
+    x = np.zeros(18)
+    x[:6] = RNG.normal(size=6)
+    x[6:15] = rotation_exp(RNG.normal(size=3)).ravel()
+    x[15:18] = RNG.normal(size=3)
+    return x
+
+
+def test_spacecraft_step_and_port():
+    inertia = np.array([[900.0, 20.0, -5.0], [20.0, 1100.0, 8.0], [-5.0, 8.0, 1300.0]])
+    arm = np.array([0.1, -0.2, 1.5])
+    step = compiled_kernel(spacecraft._step, spacecraft._HELPERS)
+    port = compiled_kernel(spacecraft._port_state, spacecraft._HELPERS)
+    assert step is not spacecraft._step
+    for _ in range(10):
+        x, wrench = _body_state(), RNG.normal(scale=1e3, size=6)
+        args = (x, wrench, 1e-3, 2533.0, inertia, np.linalg.inv(inertia), arm)
+        new = step(*args)
+        _close(new, spacecraft._step(*args), 10.0)
+        R = new[6:15].reshape(3, 3)
+        np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-15)
+        _close(port(x, arm), spacecraft._port_state(x, arm), 10.0)
+
+
+def test_legs_and_port_of_the_plant():
+    kin = pose_kinematics.PoseKinematics(StewartGeometry())
+    legs = compiled_kernel(pose_kinematics._legs, pose_kinematics._HELPERS)
+    of_plant = compiled_kernel(pose_kinematics._port_of_plant_state, pose_kinematics._HELPERS)
+    for _ in range(10):
+        q = np.concatenate([RNG.uniform(-0.02, 0.02, 3), RNG.uniform(-0.05, 0.05, 3)])
+        qd = RNG.normal(scale=0.1, size=6)
+        args = (q, qd, kin.world_origin_m, kin.port_in_plate_m, kin._top, kin._base)
+        for a, b in zip(legs(*args), pose_kinematics._legs(*args), strict=True):
+            _close(a, b)
+        x = RNG.normal(size=30)
+        x[3:7] /= np.linalg.norm(x[3:7])
+        wanted = pose_kinematics._port_of_plant_state(
+            x, 3, 17, kin.world_origin_m, kin.port_in_plate_m
+        )
+        _close(of_plant(x, 3, 17, kin.world_origin_m, kin.port_in_plate_m), wanted, 10.0)
+        lengths, rates = kin.inverse_kinematics(q, qd)
+        np.testing.assert_array_equal(
+            kin.commanded_legs(np.concatenate([q, qd])), np.concatenate([lengths, rates])
+        )
+
+
+def test_commanded_legs_refuse_in_words():
+    kin = pose_kinematics.PoseKinematics(StewartGeometry())
+    far = np.zeros(12)
+    far[2] = 5.0
+    with pytest.raises(WorkspaceError, match="outside the Stewart platform's workspace"):
+        kin.commanded_legs(far)
+    near = pose_kinematics.PoseKinematics(StewartGeometry(), max_condition_number=1.5)
+    with pytest.raises(WorkspaceError, match="near a singularity"):
+        near.commanded_legs(np.zeros(12))
+    with pytest.raises(DivergenceError, match="not finite"):
+        kin.commanded_legs(np.full(12, np.nan))
+
+
+def test_payload_reading():
+    reading = compiled_kernel(ft_sensor._reading, ft_sensor._HELPERS)
+    inertia = np.array([[0.5, 0.01, 0.0], [0.01, 0.6, 0.02], [0.0, 0.02, 0.3]])
+    payload = (12.0, np.array([0.0, 0.01, 0.2]), inertia, np.array([0.0, 0.0, -9.81]))
+    for _ in range(10):
+        x = RNG.normal(size=26)
+        a = RNG.normal(size=6)
+        t_s, f_s, point = RNG.normal(size=3), RNG.normal(scale=100.0, size=3), RNG.normal(size=3)
+        args = (x, a, 4, 19, *payload, t_s, f_s, point)
+        for got, wanted in zip(reading(*args), ft_sensor._reading(*args), strict=True):
+            _close(got, wanted, 100.0)
+        R, wrench = ft_sensor._reading(*args)
+        w = x[19:22]
+        by_law = ft_sensor.payload_compensated_wrench(
+            ft_sensor.DevicePayload(*payload), R, w, a[:3], a[3:], t_s, f_s, point
+        )
+        np.testing.assert_array_equal(wrench, by_law)
