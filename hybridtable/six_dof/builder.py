@@ -98,7 +98,7 @@ class DockingLoop:
         """Write the approach of :attr:`params` into a root context."""
         command, body = initial_port_state(self.params, self.spacecraft)
         sc = self.spacecraft.GetMyMutableContextFromRoot(root_context)
-        sc.SetDiscreteState(body)
+        self.spacecraft.set_state(sc, body)
         table_state = command.copy()
         # Steady tracking of the approach ramp (the 1-D "tracking" start).
         table_state[:6] -= self.params.plant.table.response.ramp_lag_s * command[6:]

@@ -96,8 +96,56 @@ def _inside(
         and cosines.min() > min_cosine
     ):
         return False
+    # |J|_F |J^-1|_F bounds the condition number from above (at most 6x it):
+    # below the limit, the pose is certainly conditioned well enough; only
+    # near it does the SVD (10x the cost) decide.
+    if _frobenius(J) * _inverse_frobenius(J) <= max_condition_number:
+        return True
     s = np.linalg.svd(J)[1]
     return s[5] > 0.0 and s[0] / s[5] <= max_condition_number
+
+
+def _frobenius(A: np.ndarray) -> float:
+    """The Frobenius norm of a square matrix."""
+    total = 0.0
+    for i in range(A.shape[0]):
+        for j in range(A.shape[1]):
+            total += A[i, j] * A[i, j]
+    return math.sqrt(total)
+
+
+def _inverse_frobenius(A: np.ndarray) -> float:
+    """The Frobenius norm of ``A``'s inverse (Gauss-Jordan with partial
+    pivoting); infinite for a singular ``A``."""
+    n = A.shape[0]
+    M = np.zeros((n, 2 * n))
+    for i in range(n):
+        for j in range(n):
+            M[i, j] = A[i, j]
+        M[i, n + i] = 1.0
+    for c in range(n):
+        pivot = c
+        for r in range(c + 1, n):
+            if abs(M[r, c]) > abs(M[pivot, c]):
+                pivot = r
+        if M[pivot, c] == 0.0:
+            return math.inf
+        if pivot != c:
+            for j in range(2 * n):
+                M[c, j], M[pivot, j] = M[pivot, j], M[c, j]
+        scale = 1.0 / M[c, c]
+        for j in range(2 * n):
+            M[c, j] *= scale
+        for r in range(n):
+            if r != c and M[r, c] != 0.0:
+                factor = M[r, c]
+                for j in range(2 * n):
+                    M[r, j] -= factor * M[c, j]
+    total = 0.0
+    for i in range(n):
+        for j in range(n, 2 * n):
+            total += M[i, j] * M[i, j]
+    return math.sqrt(total)
 
 
 def _commanded_legs(
@@ -171,6 +219,8 @@ _HELPERS = (
     rotation_from_quaternion,
     _plate_of_port,
     _legs,
+    _frobenius,
+    _inverse_frobenius,
     _inside,
     _port_of_plate,
 )

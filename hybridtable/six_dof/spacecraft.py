@@ -16,7 +16,7 @@ Its output is the docking port's pose and twist: the table's command.
 from __future__ import annotations
 
 import numpy as np
-from pydrake.systems.framework import BasicVector, LeafSystem
+from pydrake.systems.framework import LeafSystem
 
 from hybridtable.laws.compiled import compiled_kernel
 from hybridtable.six_dof.params import RigidBodyParams
@@ -57,15 +57,42 @@ def _step(
     p_new = p + h * v_new
     Iw = inertia @ wb
     wb_new = wb + h * (inertia_inv @ (R.T @ tau - cross(wb, Iw)))
-    R_new = R @ rotation_exp(h * wb_new)
-    # Keep R a rotation against round-off (polar projection).
-    u, _, vt = np.linalg.svd(R_new)
-    R_new = u @ vt
+    R_new = _nearest_rotation(R @ rotation_exp(h * wb_new))
     return np.concatenate((p_new, v_new, R_new.ravel(), wb_new))
 
 
+def _nearest_rotation(M: np.ndarray) -> np.ndarray:
+    """The rotation nearest a matrix ``M`` that is one to round-off: its polar
+    factor, by one Newton step ``(M + M^-T) / 2`` (quadratic: from an error
+    of 1e-16, exact to round-off; the SVD's ``U V^T`` costs 10x as much).
+    Keeps the attitude a rotation against round-off."""
+    a, b, c = M[:, 0], M[:, 1], M[:, 2]
+    bc, ca, ab = cross(b, c), cross(c, a), cross(a, b)
+    det = a[0] * bc[0] + a[1] * bc[1] + a[2] * bc[2]
+    out = np.empty((3, 3))
+    for i in range(3):
+        out[i, 0] = 0.5 * (M[i, 0] + bc[i] / det)
+        out[i, 1] = 0.5 * (M[i, 1] + ca[i] / det)
+        out[i, 2] = 0.5 * (M[i, 2] + ab[i] / det)
+    return out
+
+
+def _tick(
+    x: np.ndarray,
+    wrench: np.ndarray,
+    h: float,
+    mass: float,
+    inertia: np.ndarray,
+    inertia_inv: np.ndarray,
+    port_position_m: np.ndarray,
+):
+    """The body state one tick on and its port's state (one compiled call a tick)."""
+    new = _step(x, wrench, h, mass, inertia, inertia_inv, port_position_m)
+    return new, _port_state(new, port_position_m)
+
+
 #: The plain functions the kernels call.
-_HELPERS = (cross, skew, rotation_exp, rotation_log)
+_HELPERS = (cross, skew, rotation_exp, rotation_log, _nearest_rotation, _step, _port_state)
 
 
 def port_state(body: RigidBodyParams, x: np.ndarray) -> np.ndarray:
@@ -106,17 +133,16 @@ class RigidSpacecraft(LeafSystem):
         self._I = params.inertia
         self._I_inv = np.linalg.inv(self._I)
         self._arm = np.ascontiguousarray(params.port_position_m, dtype=float)
-        self._port_state = compiled_kernel(_port_state, _HELPERS)
-        self._step = compiled_kernel(_step, _HELPERS)
+        self._tick = compiled_kernel(_tick, _HELPERS)
         self._wrench = self.DeclareVectorInputPort("compensated_wrench", 6)
         x0 = np.zeros(BODY_STATE_SIZE)
         x0[6:15] = np.eye(3).ravel()
+        # Two groups, the body's state and its port's (a function of it, kept
+        # beside it so both outputs are the state: no Python per evaluation).
         self._x = self.DeclareDiscreteState(x0)
+        self._port = self.DeclareDiscreteState(port_state(params, x0))
         self.DeclarePeriodicDiscreteUpdateEvent(self._h, 0.0, self._update)
-        ticket = {self.xd_ticket()}
-        self.DeclareVectorOutputPort(
-            "commanded_state", BasicVector(12), self._calc_port, prerequisites_of_calc=ticket
-        )
+        self.DeclareStateOutputPort("commanded_state", self._port)
         self.DeclareStateOutputPort("body_state", self._x)
 
     def initial_state(
@@ -139,11 +165,14 @@ class RigidSpacecraft(LeafSystem):
             x[15:18] = angular_velocity_rad_per_s
         return x
 
-    def _calc_port(self, context, output) -> None:
-        output.SetFromVector(self._port_state(context.get_discrete_state(0).value(), self._arm))
+    def set_state(self, context, body_state: np.ndarray) -> None:
+        """Write a body state (18) and its port's into this system's context."""
+        x = np.asarray(body_state, dtype=float)
+        context.SetDiscreteState(0, x)
+        context.SetDiscreteState(1, port_state(self.params, x))
 
     def _update(self, context, discrete_state) -> None:
-        x = self._step(
+        x, port = self._tick(
             context.get_discrete_state(0).value(),
             self._wrench.Eval(context),
             self._h,
@@ -153,3 +182,4 @@ class RigidSpacecraft(LeafSystem):
             self._arm,
         )
         discrete_state.get_mutable_vector(0).SetFromVector(x)
+        discrete_state.get_mutable_vector(1).SetFromVector(port)
