@@ -29,9 +29,10 @@ Each tick of the rig computer (the plant's time step):
    :func:`~hybridtable.stewart.params.reference_matrices` (exact for the
    command held over the tick; it takes the length only, the rates set its
    initial state);
-3. the legs' digital PD servo with the static gravity feed-forward of the 1-D
-   :class:`~hybridtable.stewart.backend.LegServo` tracks the reference
-   (without a reference model: the commanded lengths at zero rate, as there);
+3. the legs' digital PD servo with the static gravity feed-forward,
+   :class:`~hybridtable.stewart.servo.LegServo` (the 1-D back-end's, Drake's
+   primitives), tracks the reference (without a reference model: the
+   commanded lengths at zero rate);
 4. the F/T sensor (:class:`PoseDeviceSensor`) reads the weld's reaction
    wrench and corrects it for the device's weight and inertia by
    Newton–Euler (:mod:`hybridtable.stewart.ft_sensor`): the contact wrench
@@ -58,10 +59,7 @@ from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.math import SpatialVelocity
 from pydrake.systems.framework import BasicVector, Diagram, DiagramBuilder, LeafSystem
 from pydrake.systems.primitives import (
-    AffineSystem,
     LinearSystem,
-    MatrixGain,
-    Multiplexer,
     ZeroOrderHold,
 )
 
@@ -79,12 +77,12 @@ from hybridtable.stewart.geometry import (
 )
 from hybridtable.stewart.params import StewartParams, reference_matrices
 from hybridtable.stewart.plant import StewartPlant, add_stewart_plant
+from hybridtable.stewart.servo import LegServo
 
 __all__ = [
     "MAX_CONDITION_NUMBER",
     "PoseKinematics",
     "PoseInverseKinematics",
-    "PoseLegServo",
     "PoseDeviceSensor",
     "StewartPoseBackend",
     "stewart_params_for_docking",
@@ -116,60 +114,6 @@ class PoseInverseKinematics(LeafSystem):
     def _calc(self, context, output) -> None:
         x = self._command.Eval(context)
         output.SetFromVector(self.kinematics.commanded_legs(x))
-
-
-class PoseLegServo(Diagram):
-    """The legs' digital PD servo with the static gravity feed-forward:
-    ``u_i = Kp (L_r,i - L_i) + Kd (L'_r,i - dL_i/dt) + u_g,i`` (the 1-D
-    :class:`~hybridtable.stewart.backend.LegServo` on six independent legs).
-
-    Drake's primitives, no Python per step: a ``Multiplexer`` of the two
-    inputs, a ``MatrixGain`` selecting the errors ``[L_r - L; L'_r - dL/dt]``
-    (differences, exact), and an ``AffineSystem`` ``[Kp I, Kd I] e + u_g``.
-
-    Ports
-    -----
-    Input ``leg_reference`` (12: m, m/s)
-        ``[L_r; L'_r]``: the reference model's output, or without one the
-        commanded lengths (their rates are then not used: zero, as in 1-D).
-    Input ``plant_state``
-    Output ``leg_forces`` (6, N)
-    """
-
-    def __init__(self, handles: StewartPlant, use_reference: bool) -> None:
-        Diagram.__init__(self)
-        kp, kd = handles.params.servo_gains()
-        n = handles.plant.num_multibody_states()
-        iq = 12 + np.asarray(handles.leg_position_indices)
-        iv = 12 + handles.plant.num_positions() + np.asarray(handles.leg_velocity_indices)
-        select = np.zeros((12, 12 + n))
-        legs = np.arange(6)
-        select[legs, legs] = 1.0
-        select[legs, iq] = -1.0
-        if use_reference:
-            select[6 + legs, 6 + legs] = 1.0
-        select[6 + legs, iv] = -1.0
-        eye = np.eye(6)
-        builder = DiagramBuilder()
-        mux = builder.AddNamedSystem("inputs", Multiplexer([12, n]))
-        errors = builder.AddNamedSystem("errors", MatrixGain(select))
-        pd = builder.AddNamedSystem(
-            "pd",
-            AffineSystem(
-                np.zeros((0, 0)),
-                np.zeros((0, 12)),
-                np.zeros(0),
-                np.zeros((6, 0)),
-                np.hstack([kp * eye, kd * eye]),
-                handles.gravity_feedforward_n.copy(),
-            ),
-        )
-        builder.Connect(mux.get_output_port(), errors.get_input_port())
-        builder.Connect(errors.get_output_port(), pd.get_input_port())
-        builder.ExportInput(mux.get_input_port(0), "leg_reference")
-        builder.ExportInput(mux.get_input_port(1), "plant_state")
-        builder.ExportOutput(pd.get_output_port(), "leg_forces")
-        builder.BuildInto(self)
 
 
 class PoseDeviceSensor(DeviceSensorBase):
@@ -307,7 +251,7 @@ class StewartPoseBackend(Diagram):
     """The Stewart platform as a table back-end of the 6-DoF loop.
 
     Inside: ``commanded_state`` -> :class:`PoseInverseKinematics` ->
-    per-leg reference model (if any) -> :class:`PoseLegServo` -> plant (with
+    per-leg reference model (if any) -> :class:`~hybridtable.stewart.servo.LegServo` -> plant (with
     the docking devices) -> :class:`PoseDeviceSensor` -> one-tick hold of the
     wrench -> ``contact_wrench``.
 
@@ -362,7 +306,7 @@ class StewartPoseBackend(Diagram):
         h = stewart.time_step_s
         use_reference = stewart.reference_response_hz is not None
         ik = builder.AddNamedSystem("inverse_kinematics", PoseInverseKinematics(kinematics))
-        servo = builder.AddNamedSystem("leg_servo", PoseLegServo(handles, use_reference))
+        servo = builder.AddNamedSystem("leg_servo", LegServo(handles, use_rates=use_reference))
         sensor = builder.AddNamedSystem("ft_sensor", PoseDeviceSensor(handles, kinematics))
         hold = builder.AddNamedSystem("sensor_sample", ZeroOrderHold(h, 6))
         if use_reference:

@@ -42,9 +42,10 @@ from hybridtable.stewart.ft_sensor import DeviceSensorBase
 from hybridtable.stewart.hunt_crossley import hunt_crossley_dissipation
 from hybridtable.stewart.params import StewartParams, reference_matrices
 from hybridtable.stewart.plant import StewartPlant, add_stewart_plant
+from hybridtable.stewart.servo import LegServo
 
 __all__ = [
-    "LegServo",
+    "AxisInverseKinematics",
     "DeviceSensor",
     "StewartTable",
     "StewartContactReadout",
@@ -74,15 +75,13 @@ def connect_servo_and_device(builder: DiagramBuilder, plant, servo, sensor) -> N
     builder.Connect(plant.get_reaction_forces_output_port(), sensor.GetInputPort("reaction_forces"))
 
 
-class LegServo(LeafSystem):
-    """The legs' digital PD servo with the inverse kinematics of the docking axis.
-
-    ``u_i = Kp (L_i(p_r) - L_i) + Kd (dL_i/dp(p_r) v_r - dL_i/dt) + u_g,i`` where
-    ``L_i(p)`` is the length of leg i with the plate at ``p`` from home along
-    the docking axis (z) and ``u_g`` the static leg forces against gravity at
-    home. The servo tracks the reference ``[p_r, v_r]``: the output of the
-    reference model, or without one ``[p_des, 0]`` (the servo then follows the
-    commanded position only, like the second-order table model).
+class AxisInverseKinematics(LeafSystem):
+    """The legs' reference from the docking axis: ``L_r,i = L_i(p_r)`` and
+    ``L'_r,i = dL_i/dp(p_r) v_r``, where ``L_i(p)`` is the length of leg i
+    with the plate at ``p`` from home along the docking axis (z). The
+    reference ``[p_r, v_r]`` is the reference model's output, or without one
+    ``[p_des, 0]`` (the servo then follows the commanded position only, like
+    the second-order table model).
 
     Ports
     -----
@@ -90,9 +89,7 @@ class LegServo(LeafSystem):
         ``[p_des, v_des]``, checked against the workspace.
     Input ``reference_state`` (2: m, m/s), only with a reference model
         ``[p_r, v_r]``.
-    Input ``plant_state`` (the plant's state)
-    Output ``leg_forces`` (6, N)
-        Actuation of legs 0..5.
+    Output ``leg_reference`` (12: m, m/s)
 
     Raises :class:`~hybridtable.errors.WorkspaceError` during a
     simulation when ``p_des`` leaves the docking axis' workspace.
@@ -102,23 +99,16 @@ class LegServo(LeafSystem):
         LeafSystem.__init__(self)
         g = handles.geometry
         self._geometry = g
-        self._kp, self._kd = handles.params.servo_gains()
-        self._uff = handles.gravity_feedforward_n.copy()
         # L_i(p) = |c_i + p z|, precomputed: |c|^2 and c.z.
         c = g.leg_vectors(g.home_pose)
         self._c2 = np.einsum("ij,ij->i", c, c)
         self._cz = c[:, 2].copy()
-        self._iq = handles.leg_position_indices
-        self._iv = handles.plant.num_positions() + handles.leg_velocity_indices
         self.workspace_m = g.axis_workspace()
         self._command = self.DeclareVectorInputPort("commanded_state", 2)
         self._reference = (
             self.DeclareVectorInputPort("reference_state", 2) if use_reference else None
         )
-        self._state = self.DeclareVectorInputPort(
-            "plant_state", handles.plant.num_multibody_states()
-        )
-        self.DeclareVectorOutputPort("leg_forces", 6, self._calc)
+        self.DeclareVectorOutputPort("leg_reference", 12, self._calc)
 
     def leg_lengths(self, offset_m: float) -> np.ndarray:
         """Leg lengths with the plate at ``offset_m`` from home along z."""
@@ -140,15 +130,12 @@ class LegServo(LeafSystem):
     def _calc(self, context, output) -> None:
         p_des = float(self._command.Eval(context)[0])
         self._check(p_des)
-        x = self._state.Eval(context)
         if self._reference is None:
             p_ref, v_ref = p_des, 0.0
         else:
             p_ref, v_ref = self._reference.Eval(context)
         lengths = self.leg_lengths(p_ref)
-        rates = (self._cz + p_ref) / lengths * v_ref
-        u = self._kp * (lengths - x[self._iq]) + self._kd * (rates - x[self._iv]) + self._uff
-        output.SetFromVector(u)
+        output.SetFromVector(np.concatenate([lengths, (self._cz + p_ref) / lengths * v_ref]))
 
 
 class DeviceSensor(DeviceSensorBase):
@@ -231,8 +218,9 @@ class DeviceSensor(DeviceSensorBase):
 class StewartTable(Diagram):
     """The Stewart platform table back-end (plant, leg servo, F/T sensor).
 
-    Inside: the command -> (reference model, if any) -> :class:`LegServo` ->
-    plant -> :class:`DeviceSensor` -> one-tick hold of the step readings
+    Inside: the command -> (reference model, if any) ->
+    :class:`AxisInverseKinematics` -> :class:`~hybridtable.stewart.servo.LegServo`
+    -> plant -> :class:`DeviceSensor` -> one-tick hold of the step readings
     (force, acceleration) -> ``motion`` / ``sensed_force``.
 
     Ports
@@ -276,7 +264,11 @@ class StewartTable(Diagram):
         self.handles = handles
         plant = handles.plant
         use_reference = params.reference_response_hz is not None
-        servo = builder.AddNamedSystem("leg_servo", LegServo(handles, use_reference))
+        ik = builder.AddNamedSystem(
+            "axis_kinematics", AxisInverseKinematics(handles, use_reference)
+        )
+        servo = builder.AddNamedSystem("leg_servo", LegServo(handles))
+        builder.Connect(ik.get_output_port(), servo.GetInputPort("leg_reference"))
         sensor = builder.AddNamedSystem("ft_sensor", DeviceSensor(handles))
         h = params.time_step_s
         hold = builder.AddNamedSystem("sensor_sample", ZeroOrderHold(h, 2))
@@ -298,19 +290,19 @@ class StewartTable(Diagram):
                 LinearSystem(*reference_matrices(params), time_period=params.time_step_s),
             )
             command = builder.AddNamedSystem("command", PassThrough(2))
-            builder.Connect(command.get_output_port(), servo.GetInputPort("commanded_state"))
+            builder.Connect(command.get_output_port(), ik.GetInputPort("commanded_state"))
             builder.Connect(command.get_output_port(), reference.get_input_port())
-            builder.Connect(reference.get_output_port(), servo.GetInputPort("reference_state"))
+            builder.Connect(reference.get_output_port(), ik.GetInputPort("reference_state"))
             builder.ExportInput(command.get_input_port(), "commanded_state")
             self._reference = reference
         else:
-            builder.ExportInput(servo.GetInputPort("commanded_state"), "commanded_state")
+            builder.ExportInput(ik.GetInputPort("commanded_state"), "commanded_state")
             self._reference = None
         builder.ExportOutput(motion.get_output_port(), "motion")
         builder.ExportOutput(mux.get_output_port(), "sensed_force")
         builder.ExportOutput(sensor.GetOutputPort("wrench"), "sensor_wrench")
         self.visualizer = export_plate_pose(builder, handles, meshcat)
-        self._servo = servo
+        self._axis = ik
         self._sensor = sensor
         self._hold = hold
         builder.BuildInto(self)
@@ -322,7 +314,7 @@ class StewartTable(Diagram):
     @property
     def workspace_m(self) -> tuple[float, float]:
         """Reachable interval of the docking-axis position (m)."""
-        return self._servo.workspace_m
+        return self._axis.workspace_m
 
     def set_initial_state(self, context, position_m: float, velocity_m_per_s: float) -> None:
         """Put the device at penetration ``position_m`` moving at

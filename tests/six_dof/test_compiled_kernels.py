@@ -46,6 +46,15 @@ def test_spacecraft_step_and_port():
         _close(port(x, arm), spacecraft._port_state(x, arm), 10.0)
 
 
+def test_nearest_rotation_is_the_polar_factor():
+    """One Newton step from a rotation spoilt by round-off-sized errors (and
+    by 1e-8, far above them) lands on the SVD's polar factor ``U V^T``."""
+    for size in (1e-15, 1e-8):
+        M = rotation_exp(RNG.normal(size=3)) + RNG.normal(scale=size, size=(3, 3))
+        u, _, vt = np.linalg.svd(M)
+        np.testing.assert_allclose(spacecraft._nearest_rotation(M), u @ vt, rtol=0, atol=4e-15)
+
+
 def test_legs_and_port_of_the_plant():
     kin = pose_kinematics.PoseKinematics(StewartGeometry())
     legs = compiled_kernel(pose_kinematics._legs, pose_kinematics._HELPERS)
