@@ -46,8 +46,9 @@ def _step(
     inertia: np.ndarray,
     inertia_inv: np.ndarray,
     port_position_m: np.ndarray,
-) -> np.ndarray:
-    """The body state one tick on (see the module; compiled by numba in the loop)."""
+) -> tuple[np.ndarray, np.ndarray]:
+    """The body state one tick on (see the module) and its port's state (one
+    call a tick, compiled by numba in the loop)."""
     p, v = x[0:3], x[3:6]
     R = np.ascontiguousarray(x[6:15]).reshape(3, 3)
     wb = x[15:18]
@@ -58,7 +59,8 @@ def _step(
     Iw = inertia @ wb
     wb_new = wb + h * (inertia_inv @ (R.T @ tau - cross(wb, Iw)))
     R_new = _nearest_rotation(R @ rotation_exp(h * wb_new))
-    return np.concatenate((p_new, v_new, R_new.ravel(), wb_new))
+    new = np.concatenate((p_new, v_new, R_new.ravel(), wb_new))
+    return new, _port_state(new, port_position_m)
 
 
 def _nearest_rotation(M: np.ndarray) -> np.ndarray:
@@ -77,22 +79,8 @@ def _nearest_rotation(M: np.ndarray) -> np.ndarray:
     return out
 
 
-def _tick(
-    x: np.ndarray,
-    wrench: np.ndarray,
-    h: float,
-    mass: float,
-    inertia: np.ndarray,
-    inertia_inv: np.ndarray,
-    port_position_m: np.ndarray,
-):
-    """The body state one tick on and its port's state (one compiled call a tick)."""
-    new = _step(x, wrench, h, mass, inertia, inertia_inv, port_position_m)
-    return new, _port_state(new, port_position_m)
-
-
 #: The plain functions the kernels call.
-_HELPERS = (cross, skew, rotation_exp, rotation_log, _nearest_rotation, _step, _port_state)
+_HELPERS = (cross, skew, rotation_exp, rotation_log, _nearest_rotation, _port_state)
 
 
 def port_state(body: RigidBodyParams, x: np.ndarray) -> np.ndarray:
@@ -133,7 +121,7 @@ class RigidSpacecraft(LeafSystem):
         self._I = params.inertia
         self._I_inv = np.linalg.inv(self._I)
         self._arm = np.ascontiguousarray(params.port_position_m, dtype=float)
-        self._tick = compiled_kernel(_tick, _HELPERS)
+        self._step = compiled_kernel(_step, _HELPERS)
         self._wrench = self.DeclareVectorInputPort("compensated_wrench", 6)
         x0 = np.zeros(BODY_STATE_SIZE)
         x0[6:15] = np.eye(3).ravel()
@@ -172,7 +160,7 @@ class RigidSpacecraft(LeafSystem):
         context.SetDiscreteState(1, port_state(self.params, x))
 
     def _update(self, context, discrete_state) -> None:
-        x, port = self._tick(
+        x, port = self._step(
             context.get_discrete_state(0).value(),
             self._wrench.Eval(context),
             self._h,

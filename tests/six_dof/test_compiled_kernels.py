@@ -39,8 +39,11 @@ def test_spacecraft_step_and_port():
     for _ in range(10):
         x, wrench = _body_state(), RNG.normal(scale=1e3, size=6)
         args = (x, wrench, 1e-3, 2533.0, inertia, np.linalg.inv(inertia), arm)
-        new = step(*args)
-        _close(new, spacecraft._step(*args), 10.0)
+        new, port_new = step(*args)
+        plain, plain_port = spacecraft._step(*args)
+        _close(new, plain, 10.0)
+        _close(port_new, plain_port, 10.0)
+        np.testing.assert_array_equal(plain_port, spacecraft._port_state(plain, arm))
         R = new[6:15].reshape(3, 3)
         np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-15)
         _close(port(x, arm), spacecraft._port_state(x, arm), 10.0)
