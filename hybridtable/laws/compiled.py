@@ -26,11 +26,15 @@ step control is unchanged).
 
 from __future__ import annotations
 
+import contextlib
 import functools
+import hashlib
+import inspect
 import math
 import operator
 import sys
 from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -307,7 +311,38 @@ def compiled_kernel(
         if helper not in _JITABLE:
             register_jitable(helper)
             _JITABLE.add(helper)
-    return njit_cached(function)
+    kernel = njit_cached(function)
+    _flush_if_helpers_changed(kernel, function, helpers)
+    return kernel
+
+
+def _flush_if_helpers_changed(
+    kernel: Any, function: Callable[..., Any], helpers: Sequence[Callable[..., Any]]
+) -> None:
+    """numba compiles a cached function anew when its own file changes, not
+    when a helper in another file does (its machine code would be stale):
+    keep a digest of the helpers' source beside the cache, and empty the
+    cache when it differs."""
+    cache = getattr(kernel, "_cache", None)
+    folder = getattr(cache, "cache_path", None)
+    if folder is None:  # not cached
+        return
+    digest = hashlib.sha256()
+    for helper in helpers:
+        try:
+            digest.update(inspect.getsource(helper).encode())
+        except (OSError, TypeError):
+            digest.update(helper.__qualname__.encode())
+    stamp = digest.hexdigest()
+    marker = Path(folder) / f"{function.__module__}.{function.__qualname__}.helpers"
+    try:
+        if marker.read_text(encoding="utf-8") == stamp:
+            return
+    except OSError:
+        pass
+    cache.flush()
+    with contextlib.suppress(OSError):
+        marker.write_text(stamp, encoding="utf-8")
 
 
 def python_lambda(arguments: Sequence[str], source: str) -> Callable[..., Any]:

@@ -5,8 +5,10 @@ whose face is the plane ``z = 0`` of the target frame W
 (:class:`~hybridtable.six_dof.contact.DockingContactParams`). Each pad touches
 the plate as a point pair: Drake's compliant point contact with Hunt-Crossley
 dissipation and regularized Coulomb friction. :func:`register_pads` adds both
-devices to a plant; :func:`pad_jacobians` is the closed form of the contact's
-6x6 stiffness and damping from one evaluation.
+devices to a plant. :func:`pad_stiffness` is the closed form of the contact's
+6x6 stiffness and damping at a pose: the touching pads from the geometry
+(:func:`_pad_contacts`, Drake's point pairs in closed form) and their
+derivatives (:func:`pad_jacobians`), one compiled call.
 """
 
 from __future__ import annotations
@@ -143,11 +145,13 @@ def _pad_contacts(p, R, qd, centres, r, k, d, mu):
     ``r``) presses the plate's face ``z = 0`` by ``x = r + c_z``; the contact
     point is half-way into the press, ``C = c - (r - x/2) n`` with ``n = -z``
     the face's normal toward the device; the force on the device is Drake's
-    point contact, ``f_n (n - mu(s) t)`` with ``f_n = max(0, k x (1 - d n .
-    v_C))``, ``v_C`` the device's velocity at ``C``, ``s t`` its slip along
-    the face and ``mu(s)`` Drake's regularized Coulomb friction. Drake's
-    sphere-box query of the pads against the plate's box gives the same
-    numbers (tested); this is that contact without the query."""
+    point contact, ``f_n (n - mu(s) t)`` with ``f_n = k x (1 - d n . v_C)``,
+    ``v_C`` the device's velocity at ``C``, ``s t`` its slip along the face
+    and ``mu(s)`` Drake's regularized Coulomb friction. A pad whose
+    Hunt–Crossley force is not positive (separating faster than ``1 / d``)
+    is no contact, as Drake reports no pair for it. Drake's sphere-box
+    query of the pads against the plate's box gives the same numbers
+    (tested); this is that contact without the query."""
     m = centres.shape[0]
     U = np.zeros((m, 3))
     F = np.zeros((m, 3))
@@ -167,7 +171,9 @@ def _pad_contacts(p, R, qd, centres, r, k, d, mu):
         vc1 = qd[1] + w2 * u0 - w0 * u2
         vc2 = qd[2] + w0 * u1 - w1 * u0
         n_vc = -vc2
-        fn = max(0.0, k * x * (1.0 - d * n_vc))
+        fn = k * x * (1.0 - d * n_vc)
+        if not fn > 0.0:
+            continue
         f0, f1, f2 = 0.0, 0.0, -fn
         s0, s1 = vc0, vc1  # the slip along the face
         s = math.sqrt(s0 * s0 + s1 * s1)

@@ -346,18 +346,21 @@ class PoseKinematics:
         WorkspaceError, DivergenceError
             As :meth:`inverse_kinematics`.
         """
-        legs, inside = self._commanded(
-            x,
-            self.world_origin_m,
-            self.port_in_plate_m,
-            self._top,
-            self._base,
-            self._stroke[0] + 1e-12,
-            self._stroke[1] - 1e-12,
-            self._home_directions,
-            self._min_cosine,
-            self.max_condition_number,
-        )
+        try:
+            legs, inside = self._commanded(
+                x,
+                self.world_origin_m,
+                self.port_in_plate_m,
+                self._top,
+                self._base,
+                self._stroke[0] + 1e-12,
+                self._stroke[1] - 1e-12,
+                self._home_directions,
+                self._min_cosine,
+                self.max_condition_number,
+            )
+        except ValueError:  # as plain Python, math.sin of an infinite rotation
+            legs, inside = x, False
         if inside:
             return legs
         lengths, rates = self.inverse_kinematics(x[:6], x[6:])  # raises, in words

@@ -4,6 +4,9 @@ LAPACK stand in for numpy's), and the systems refuse as the Python path words it
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 
@@ -110,3 +113,31 @@ def test_payload_reading():
             ft_sensor.DevicePayload(*payload), R, w, a[:3], a[3:], t_s, f_s, point
         )
         np.testing.assert_array_equal(wrench, by_law)
+
+
+def test_a_changed_helper_recompiles_a_cached_kernel(tmp_path):
+    """numba's cache knows the kernel's file only: a helper changed in another
+    file must not leave the cached machine code of the old one."""
+    (tmp_path / "helper_mod.py").write_text("def h(x):\n    return x + 1.0\n")
+    (tmp_path / "kernel_mod.py").write_text(
+        "from helper_mod import h\n\n\ndef k(x):\n    return 2.0 * h(x)\n"
+    )
+    script = (
+        "import sys\n"
+        f"sys.path.insert(0, {str(tmp_path)!r})\n"
+        "from hybridtable.laws.compiled import compiled_kernel\n"
+        "from helper_mod import h\n"
+        "from kernel_mod import k\n"
+        "print(compiled_kernel(k, (h,))(1.0))\n"
+    )
+
+    def run() -> str:
+        done = subprocess.run(
+            [sys.executable, "-c", script], capture_output=True, text=True, check=True
+        )
+        return done.stdout.strip()
+
+    assert run() == "4.0"
+    assert list((tmp_path / "__pycache__").glob("kernel_mod.k-*.nbi"))  # cached
+    (tmp_path / "helper_mod.py").write_text("def h(x):\n    return x + 2.0\n")
+    assert run() == "6.0"
