@@ -45,6 +45,7 @@ __all__ = [
     "docking_inputs",
     "docking_params",
     "check_docking_value",
+    "check_devices",
     "read_base_scenario",
     "holds_frequency",
     "simulate_docking",
@@ -240,6 +241,30 @@ def docking_params(base, values: dict[str, Any], seed: int, holds: bool = False)
     if ratio is not None:
         changes["compensator_stiffness_n_per_m"] = float(ratio) * float(stiffness)
     return base.with_(**changes)
+
+
+def check_devices(base, geometries: set[str], where: dict[str, str]) -> None:
+    """Refuse an input of the devices no run of the campaign docks with (the
+    pads' with only a drogue, the drogue's with only the plate): it would
+    vary nothing. ``geometries``: the values the spec gives ``geometry``
+    (none: the base scenario's); ``where``: each input's table in the spec.
+
+    Raises
+    ------
+    ParameterError
+        Naming the input, its table and the geometry that reads it.
+    """
+    from hybridtable.six_dof.contact import DEVICE_FIELDS
+
+    used = set(geometries) or {base.contact.geometry}
+    for geometry, fields in DEVICE_FIELDS.items():
+        for name in fields:
+            if geometry not in used and name in where:
+                raise ParameterError(
+                    f"{name} (in {where[name]}) belongs to the {geometry}'s devices, and every "
+                    f"run of this campaign docks with geometry {' or '.join(sorted(used))}: it "
+                    "would vary nothing (give geometry as an input, or leave it out)"
+                )
 
 
 def holds_frequency(raw: dict[str, Any]) -> bool:

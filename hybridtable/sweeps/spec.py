@@ -260,6 +260,9 @@ def _parse(raw: Mapping[str, Any], source: str, folder: Path) -> SweepSpec:
             "split the campaign"
         )
     if loop == "six_dof":
+        from hybridtable.sweeps.docking import check_devices
+
+        check_devices(docking_base[0], _values_of(spec, "geometry"), where)
         return spec
     _check_effects(where)
     effects = any("." in n for n in where)

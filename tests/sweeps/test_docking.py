@@ -107,6 +107,8 @@ def test_the_contact_frequency_sets_the_mass_and_a_scenario_holding_it_keeps_it(
         ("[base]\ncompensator = 'polynomial'", "compensator must be one of"),
         ("[grid]\ngeometry = ['cone', 'funnel']", "grid.geometry[1]"),
         ("[base]\ngeometry = 'cone'\nprobe_radius_m = 0.2", "base.probe_radius_m"),
+        ("[grid]\nprobe_radius_m = [0.04, 0.05]", "probe_radius_m (in grid) belongs to the cone"),
+        ("[base]\ngeometry = 'cone'\n[grid]\npad_count = [4, 8]", "pad_count (in grid) belongs"),
         (
             "[base]\nspacecraft_mass_kg = 1000.0\n[grid]\ncontact_frequency_hz = [1.0]",
             "set the same quantity",
@@ -118,6 +120,13 @@ def test_a_wrong_6dof_spec_is_one_line_naming_the_key(text, words):
         _spec(text)
     assert words in str(err.value)
     assert "\n" not in str(err.value)
+
+
+def test_both_devices_inputs_with_both_geometries():
+    spec = _spec(
+        "[grid]\ngeometry = ['plate', 'cone']\npad_count = [4, 8]\nprobe_radius_m = [0.05]"
+    )
+    assert spec.n_runs == 4
 
 
 def test_a_missing_scenario_names_the_file(tmp_path):
