@@ -293,11 +293,6 @@ class PoseKinematics:
         )
 
     # -- kinematics -----------------------------------------------------
-    def leg_vectors(self, position_m: np.ndarray, R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Leg vectors (6, 3) and the plate's arms ``R t_i`` (6, 3) (world, m)."""
-        arm = self._top @ R.T
-        return position_m + arm - self._base, arm
-
     def leg_lengths(self, q: np.ndarray, check: bool = True) -> np.ndarray:
         """The six leg lengths (m) with the port at ``q`` (W).
 
