@@ -46,6 +46,12 @@ def _plate_of_port(
     return world_origin_m + q[0:3] - R @ port_in_plate_m, R
 
 
+def _plate_twist_of_port(R: np.ndarray, qd: np.ndarray, port_in_plate_m: np.ndarray) -> np.ndarray:
+    """``[v; omega]`` of the plate origin from the port's ``qd = [v_P; omega]``."""
+    omega = qd[3:6]
+    return np.concatenate((qd[0:3] - cross(omega, R @ port_in_plate_m), omega))
+
+
 def _legs(
     q: np.ndarray,
     qd: np.ndarray,
@@ -67,9 +73,7 @@ def _legs(
     J[:, 3] = arm[:, 1] * u[:, 2] - arm[:, 2] * u[:, 1]
     J[:, 4] = arm[:, 2] * u[:, 0] - arm[:, 0] * u[:, 2]
     J[:, 5] = arm[:, 0] * u[:, 1] - arm[:, 1] * u[:, 0]
-    omega = qd[3:6]
-    twist = np.concatenate((qd[0:3] - cross(omega, R @ port_in_plate_m), omega))
-    return lengths, J @ twist, J, position, legs, u
+    return lengths, J @ _plate_twist_of_port(R, qd, port_in_plate_m), J, position, legs, u
 
 
 def _inside(
@@ -218,6 +222,7 @@ _HELPERS = (
     rotation_log,
     rotation_from_quaternion,
     _plate_of_port,
+    _plate_twist_of_port,
     _legs,
     _frobenius,
     _inverse_frobenius,
@@ -266,8 +271,9 @@ class PoseKinematics:
 
     def plate_twist_of_port(self, R: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """``[v; omega]`` of the plate origin from the port's ``qd = [v_P; omega]``."""
-        omega = np.asarray(qd[3:6], dtype=float)
-        return np.concatenate([qd[:3] - cross(omega, R @ self.port_in_plate_m), omega])
+        return _plate_twist_of_port(
+            np.asarray(R, dtype=float), np.asarray(qd, dtype=float), self.port_in_plate_m
+        )
 
     def port_state(
         self, position_m: np.ndarray, R: np.ndarray, v: np.ndarray, w: np.ndarray
