@@ -414,7 +414,7 @@ class DockingContact:
         the plate's flat face is Drake's point pair in closed form, the same
         numbers to round-off, tested; without Drake's query, at 1/15 of its cost).
 
-        **Pads** (:func:`~hybridtable.six_dof.pads.pad_jacobians`). Each
+        **Pads** (:func:`~hybridtable.six_dof.pads.pad_stiffness`). Each
         touching pad is a sphere of radius ``r`` pressed ``x`` into the
         plate's face (normal ``n`` out of the plate), with Drake's point-contact
         law: normal force ``k x (1 + d xdot)``, ``k`` the pad pair's stiffness,

@@ -8,12 +8,11 @@ dissipation and regularized Coulomb friction. :func:`register_pads` adds both
 devices to a plant. :func:`pad_stiffness` is the closed form of the contact's
 6x6 stiffness and damping at a pose: the touching pads from the geometry
 (:func:`_pad_contacts`, Drake's point pairs in closed form) and their
-derivatives (:func:`pad_jacobians`), one compiled call.
+derivatives (:func:`_pad_jacobians`), one compiled call.
 """
 
 from __future__ import annotations
 
-import functools
 import math
 
 import numpy as np
@@ -21,10 +20,10 @@ from pydrake.geometry import AddContactMaterial, Box, ProximityProperties, Spher
 from pydrake.math import RigidTransform
 from pydrake.multibody.plant import CoulombFriction
 
-from hybridtable.laws.compiled import compiled_available, compiled_kernel, njit_cached
+from hybridtable.laws.compiled import compiled_kernel
 from hybridtable.six_dof.pose import rotation_exp, rotation_jacobian, skew
 
-__all__ = ["STICTION_TOLERANCE_M_PER_S", "register_pads", "pad_jacobians", "pad_stiffness"]
+__all__ = ["STICTION_TOLERANCE_M_PER_S", "register_pads", "pad_stiffness"]
 
 
 #: Drake's stiction tolerance of a continuous plant (m/s), stated on the plant:
@@ -210,12 +209,6 @@ def pad_stiffness():
         _pad_stiffness,
         (skew, rotation_exp, rotation_jacobian, _pad_contacts, _pad_jacobians),
     )
-
-
-@functools.cache
-def pad_jacobians():
-    """:func:`_pad_jacobians`, compiled by numba if it is importable."""
-    return njit_cached(_pad_jacobians) if compiled_available() else _pad_jacobians
 
 
 #: Half the side of the passive plate's collision box (m): large enough that
