@@ -158,13 +158,14 @@ def _held_in_socket(params: DockingLoopParams, data: np.ndarray, ticks: int) -> 
     turning point, still, is pressed hard). It may rattle across the socket."""
     if data.shape[1] < ticks:
         return False
-    window = data[:, -ticks:]
+    window = _split(data[:, -ticks:])
     ratio = CAPTURE_SPEED_RATIO
-    if np.max(np.abs(window[8])) > ratio * params.approach.initial_velocity_m_per_s:
+    axial_speed = window["commanded_state"][:, 8]
+    if np.max(np.abs(axial_speed)) > ratio * params.approach.initial_velocity_m_per_s:
         return False
-    if np.max(np.abs(window[29])) > ratio * _peak_force_n(params):
+    if np.max(np.abs(window["contact_wrench"][:, 5])) > ratio * _peak_force_n(params):
         return False
-    centres = probe_centres_m(params, window[12:24].T)
+    centres = probe_centres_m(params, window["table_state"])
     return bool(np.all(centres[:, 2] > throat_depth_m(params.contact)))
 
 
@@ -305,8 +306,12 @@ def simulate6(
         except SimulationError as err:
             if not rule.started:
                 raise
-            data = log.data()[:, -quiet_ticks:]
-            drifting = cone and not np.any(data[27:30]) and not np.any(data[36:42])
+            last = _split(log.data()[:, -quiet_ticks:])
+            drifting = (
+                cone
+                and not np.any(last["contact_wrench"][:, 3:])
+                and not np.any(last["compensated_wrench"])
+            )
             # A probe drifting through the drogue untouched at the bound has
             # ended its contact: only its slow way out is left.
             unended = None if drifting else err
