@@ -23,7 +23,9 @@ def register(sub) -> None:
         description="Read recorded runs (hybridtable-run/1 CSV + JSON pairs, or folders of "
         "them), replay each recorded command through the model's table, contact and force "
         "sensor, re-run the whole loop, and report the errors against the noise floor, by "
-        "phase, with whiteness tests and force-deflection loops. Any defect of an input "
+        "phase, with whiteness tests and force-deflection loops. 6-DoF runs "
+        "(hybridtable-run6/1, docs/run6-format.md) are compared with the scenario's closed "
+        "loop, component by component. Any defect of an input "
         "file is reported in one line (exit code 2).",
     )
     add_run_arguments(p, report="write report.md with PNG figures into this folder")
@@ -71,7 +73,12 @@ def run(args: argparse.Namespace) -> int:
         pool_noise_floors,
     )
     from hybridtable.reports.compare import format_table, format_whiteness, verdict, write_report
+    from hybridtable.six_dof.run6 import is_run6
 
+    if is_run6(args.runs):
+        from hybridtable.commands._compare6 import compare6
+
+        return compare6(args)
     load_plugins(args)
     added = parse_added(args)  # a malformed --add before any work
     base = load_model_arg(args)

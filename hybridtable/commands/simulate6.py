@@ -9,6 +9,8 @@ __all__ = ["register", "run"]
 
 
 def register(sub) -> None:
+    from hybridtable.commands._common import number_type
+
     p = sub.add_parser(
         "simulate6",
         help="simulate one 6-DoF docking contact from a scenario file",
@@ -46,6 +48,32 @@ def register(sub) -> None:
         action="store_true",
         help="skip the ideal rig's run (no delay, ideal table) the verdict compares with",
     )
+    g = p.add_argument_group(
+        "recording a run (--record DIR): a hybridtable-run6/1 run (docs/run6-format.md) as the "
+        "rig's data logger would write it"
+    )
+    g.add_argument(
+        "--record",
+        metavar="DIR",
+        help="write run1.csv and run1.json into DIR: the simulated run with the scenario's F/T "
+        "noise ([rig] force_noise_n, moment_noise_n_m, seed: in the loop) and the pose noise "
+        "below (on the log); existing files are replaced only with --force",
+    )
+    g.add_argument(
+        "--noise-position-m",
+        type=number_type("0..1", "m"),
+        metavar="METRES",
+        default=0.0,
+        help="white noise on the measured table position, std per axis [m], 0 to 1 (default: 0)",
+    )
+    g.add_argument(
+        "--noise-attitude-rad",
+        type=number_type("0..0.1", "rad"),
+        metavar="RADIANS",
+        default=0.0,
+        help="white noise on the measured table attitude, a rotation of this std about each "
+        "axis [rad], 0 to 0.1 (default: 0)",
+    )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
@@ -82,7 +110,10 @@ def run(args: argparse.Namespace) -> int:
     overrides = {} if args.compensator is None else {"compensator": args.compensator}
     params = load_scenario(args.scenario, **overrides)
     check_outputs(
-        args, [args.scenario], files={"--json": args.json, "--plot": args.plot, "--html": args.html}
+        args,
+        [args.scenario],
+        files={"--json": args.json, "--plot": args.plot, "--html": args.html},
+        folders={"--record": args.record},
     )
     if args.plot:
         check_suffix("--plot", args.plot, figure_suffixes())
@@ -173,6 +204,47 @@ def run(args: argparse.Namespace) -> int:
                 f"wrote {args.html} (motion magnified x{drawn['magnify']:g}, force arrow "
                 f"1 m per {drawn['force_scale_n_per_m']:g} N)"
             )
+    if args.record:
+        out["record"] = _record(args, result)
+        if not quiet:
+            print(f"wrote {out['record']['csv']} and {out['record']['json']}")
     if args.json:
         write_json(args.json, out, args)
     return 0
+
+
+def _record(args: argparse.Namespace, result) -> dict:
+    """Write the run of ``--record`` (the scenario file's content, with the
+    command line's compensator, as its JSON)."""
+    import json
+    from pathlib import Path
+
+    from hybridtable._files import staged_folder, write_text_atomic
+    from hybridtable.loop.scenario import read_scenario
+    from hybridtable.six_dof.run6 import run6_csv_text, run6_json, run6_of_docking
+
+    scenario = read_scenario(args.scenario)
+    if args.compensator is not None:
+        scenario.setdefault("compensator", {})["name"] = result.params.compensator
+    run_id = f"{Path(args.scenario).stem}-{result.params.compensator}"
+    run = run6_of_docking(
+        result,
+        run_id,
+        scenario,
+        args.noise_position_m,
+        args.noise_attitude_rad,
+        result.params.rig.noise.seed,
+    )
+    folder = Path(args.record)
+    with staged_folder(folder) as stage:
+        write_text_atomic(stage.path / "run1.csv", run6_csv_text(run))
+        write_text_atomic(stage.path / "run1.json", json.dumps(run6_json(run), indent=2) + "\n")
+    return {
+        "folder": str(folder),
+        "csv": str(folder / "run1.csv"),
+        "json": str(folder / "run1.json"),
+        "run_id": run_id,
+        "ticks": run.n,
+        "noise_position_m": args.noise_position_m,
+        "noise_attitude_rad": args.noise_attitude_rad,
+    }

@@ -43,6 +43,10 @@ UNITS: Mapping[str, Mapping[str, float]] = MappingProxyType(
         "m": MappingProxyType({"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6}),
         "N": MappingProxyType({"N": 1.0, "kN": 1e3, "mN": 1e-3}),
         "m/s": MappingProxyType({"m/s": 1.0, "cm/s": 1e-2, "mm/s": 1e-3}),
+        # The 6-DoF format's (hybridtable.six_dof.run6).
+        "1": MappingProxyType({"1": 1.0}),
+        "rad/s": MappingProxyType({"rad/s": 1.0, "deg/s": math.pi / 180.0}),
+        "N m": MappingProxyType({"N m": 1.0, "kN m": 1e3, "N mm": 1e-3}),
     }
 )
 
@@ -54,8 +58,8 @@ _DELIMITER_WORDS = {"\\t": "\t", "tab": "\t", "space": " ", "comma": ",", "semic
 _KEYS = ("delimiter", "decimal", "comment", "ignore", "columns")
 
 
-def _units_of(column: str) -> Mapping[str, float]:
-    return UNITS[RUN_COLUMNS[column]]
+def _units_of(column: str, format_columns: Mapping[str, str] = RUN_COLUMNS) -> Mapping[str, float]:
+    return UNITS[format_columns[column]]
 
 
 @dataclass(frozen=True)
@@ -81,7 +85,7 @@ class ColumnSource:
     @property
     def plain(self) -> bool:
         """True if the value is read as it stands (SI, scale 1)."""
-        return self.scale == 1.0 and self.unit in ("s", "m", "N", "m/s")
+        return self.scale == 1.0 and self.unit in UNITS
 
 
 def _over(
@@ -104,8 +108,8 @@ def _over(
     return out
 
 
-def _default_columns() -> Mapping[str, ColumnSource]:
-    return MappingProxyType({c: ColumnSource(c, u) for c, u in RUN_COLUMNS.items()})
+def _default_columns(format_columns: Mapping[str, str] = RUN_COLUMNS) -> Mapping[str, ColumnSource]:
+    return MappingProxyType({c: ColumnSource(c, u) for c, u in format_columns.items()})
 
 
 @dataclass(frozen=True)
@@ -127,27 +131,33 @@ class LogLayout:
         Log columns never read (one that would collide with a format column's name).
     source : str
         Where the mapping was given, for messages (``rig-b.toml``, or the flags).
+    format_columns : mapping
+        The format's columns and their SI units (default: the 1-D format's
+        :data:`~hybridtable.measurement.run_format.RUN_COLUMNS`; the 6-DoF
+        format's are :data:`hybridtable.six_dof.run6.RUN6_COLUMNS`).
     """
 
-    columns: Mapping[str, ColumnSource] = field(default_factory=_default_columns)
+    columns: Mapping[str, ColumnSource] = field(default_factory=dict)
     delimiter: str = ","
     decimal: str = "."
     comment: str | None = None
     ignore: tuple[str, ...] = ()
     source: str = "the flags"
+    format_columns: Mapping[str, str] = field(default_factory=lambda: RUN_COLUMNS)
 
     def __post_init__(self) -> None:
-        cols = dict(_default_columns())
+        known = self.format_columns
+        cols = dict(_default_columns(known))
         for name, src in dict(self.columns).items():
-            if name not in RUN_COLUMNS:
+            if name not in known:
                 raise MeasurementError(
                     f"{self.source}: {name!r} is not a column of the format "
-                    f"(one of {', '.join(RUN_COLUMNS)})"
+                    f"(one of {', '.join(known)})"
                 )
-            if src.unit not in _units_of(name):
+            if src.unit not in _units_of(name, known):
                 raise MeasurementError(
                     f"{self.source}: unknown unit {src.unit!r} for {name} "
-                    f"(one of {', '.join(_units_of(name))})"
+                    f"(one of {', '.join(_units_of(name, known))})"
                 )
             if not math.isfinite(src.scale) or src.scale == 0.0:
                 raise MeasurementError(
@@ -193,7 +203,7 @@ class LogLayout:
     def factor(self, column: str) -> float:
         """The factor from the log's number to SI for format ``column``."""
         src = self.columns[column]
-        return _units_of(column)[src.unit] * src.scale
+        return _units_of(column, self.format_columns)[src.unit] * src.scale
 
     @property
     def plain(self) -> bool:

@@ -15,20 +15,24 @@ from hybridtable.measurement.run_format import FORMAT
 __all__ = ["find_run_files"]
 
 
-def _looks_like_run(path: Path) -> bool:
-    """True if ``path`` is a JSON object with the format's ``format`` value."""
+def _looks_like_run(path: Path, formats: Sequence[str]) -> bool:
+    """True if ``path`` is a JSON object with one of ``formats`` as its ``format``."""
     if regular_file_problem(path):
         return False
     try:
         raw = json.loads(path.read_text(encoding="utf-8-sig"))
     except (OSError, ValueError, RecursionError):
         return False
-    return isinstance(raw, dict) and raw.get("format") == FORMAT
+    return isinstance(raw, dict) and raw.get("format") in formats
 
 
-def find_run_files(paths: Sequence[str | Path]) -> list[tuple[Path, Path]]:
+def find_run_files(
+    paths: Sequence[str | Path], formats: Sequence[str] = (FORMAT,)
+) -> list[tuple[Path, Path]]:
     """The ``(csv, json)`` pairs named by ``paths``: a CSV or JSON file names its
-    pair, a folder every pair in it (sorted by name, not recursive).
+    pair, a folder every pair in it (sorted by name, not recursive). A JSON
+    file alone in a folder is a run without its CSV if its ``format`` is one of
+    ``formats``, else another file (skipped).
 
     Raises
     ------
@@ -58,7 +62,7 @@ def find_run_files(paths: Sequence[str | Path]) -> list[tuple[Path, Path]]:
                     if problem and problem != "no such file":
                         raise MeasurementError(f"{q}: {problem}")
                 if not c.is_file():
-                    if not _looks_like_run(j):
+                    if not _looks_like_run(j, formats):
                         continue  # another JSON file (e.g. results of compare)
                     raise MeasurementError(f"{j}: no {c.name} beside it")
                 if not j.is_file():

@@ -2,9 +2,9 @@
 
 :func:`format_names` renames the log's columns by a
 :class:`~hybridtable.measurement.log_layout.LogLayout` and checks that the
-header holds every column of
-:data:`~hybridtable.measurement.run_format.RUN_COLUMNS` once (other columns are
-skipped); a missing column's message names the log's columns and proposes the
+header holds every column of the layout's format once (the 1-D format's
+:data:`~hybridtable.measurement.run_format.RUN_COLUMNS` unless the layout
+names another; other columns are skipped); a missing column's message names the log's columns and proposes the
 ``--column-map`` that reads it, by name and by the usual other names of each
 column (:data:`_ALIASES`), or names the delimiter or comment prefix the
 header shows.
@@ -17,7 +17,6 @@ from pathlib import Path
 
 from hybridtable.errors import MeasurementError
 from hybridtable.measurement.log_layout import LogLayout
-from hybridtable.measurement.run_format import RUN_COLUMNS
 
 __all__ = ["format_names", "shown"]
 
@@ -95,7 +94,7 @@ def _layout_hint(header: list[str], layout: LogLayout) -> str:
             )
     joined = layout.delimiter.join(header)
     for d, word in ((";", ";"), ("\t", "\\t"), ("|", "|"), (",", ",")):
-        if d != layout.delimiter and joined.count(d) >= len(RUN_COLUMNS) - 1:
+        if d != layout.delimiter and joined.count(d) >= len(layout.format_columns) - 1:
             return (
                 f"the format's columns are missing and the header ({shown(joined)!r}) looks "
                 f"separated by '{word}': give --delimiter '{word}' "
@@ -149,7 +148,7 @@ def format_names(
         for fmt, src in layout.columns.items()
         if src.column != fmt and src.column not in header
     ]
-    missing = [c for c in RUN_COLUMNS if c not in names]
+    missing = [c for c in layout.format_columns if c not in names]
     if (mapped or missing) and (hint := _layout_hint(header, layout)):
         raise MeasurementError(f"{path} line {header_line}: {hint}")
     if mapped:

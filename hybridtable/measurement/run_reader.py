@@ -43,7 +43,6 @@ from hybridtable.measurement.run_files import find_run_files
 from hybridtable.measurement.run_format import (
     FORMAT,
     MIN_ROWS,
-    RUN_COLUMNS,
     RUN_KEYS,
     SAMPLE_RATE_TOLERANCE,
     Run,
@@ -57,6 +56,8 @@ __all__ = [
     "read_run",
     "run_info_from_dict",
     "read_runs",
+    "read_series",
+    "check_time",
     "find_run_files",
 ]
 
@@ -251,7 +252,7 @@ def _decimal_hint(cell: str, layout: LogLayout) -> str:
     return ""
 
 
-def _read_series(
+def read_series(
     path: Path, layout: LogLayout
 ) -> tuple[dict[str, np.ndarray], Sequence[int], tuple[str, ...]]:
     """Columns by format name, in SI (the layout's units), the file line
@@ -268,11 +269,11 @@ def _read_series(
         (cols, skipped), lines = fast, _RowLines(path, layout)
     else:
         cols, lines, skipped = _read_series_python(path, layout)
-    for name in RUN_COLUMNS:
+    for name in layout.format_columns:
         factor = layout.factor(name)
         if factor != 1.0:
             cols[name] = cols[name] * factor
-    return {name: cols[name] for name in RUN_COLUMNS}, lines, skipped
+    return {name: cols[name] for name in layout.format_columns}, lines, skipped
 
 
 def _read_series_python(
@@ -317,14 +318,17 @@ def _read_series_python(
     return cols, line_of_row, skipped
 
 
-def _check_time(
+def check_time(
     path: Path,
     json_path: Path,
     t: np.ndarray,
     lines: Sequence[int],
     info: RunInfo,
     layout: LogLayout = DEFAULT_LAYOUT,
-):
+) -> None:
+    """Refuse a ``time_s`` that is not the ticks ``k / sample_rate_hz`` from 0
+    (``info`` is anything with ``sample_rate_hz`` and ``sample_period_s``: a
+    run's JSON, a 6-DoF run's scenario), naming the file line."""
     h = info.sample_period_s
     dt = np.diff(t)
     bad = np.flatnonzero(dt <= 0.0)
@@ -400,8 +404,8 @@ def read_run(
         if problem:
             raise MeasurementError(f"{p}: {problem}")
     info = _read_info(json_path)
-    cols, lines, skipped = _read_series(csv_path, layout)
-    _check_time(csv_path, json_path, cols["time_s"], lines, info, layout)
+    cols, lines, skipped = read_series(csv_path, layout)
+    check_time(csv_path, json_path, cols["time_s"], lines, info, layout)
     return Run(info=info, csv_path=csv_path, json_path=json_path, skipped_columns=skipped, **cols)
 
 

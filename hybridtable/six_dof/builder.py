@@ -40,6 +40,7 @@ __all__ = [
     "add_docking_loop",
     "build_docking_loop",
     "initial_port_state",
+    "table_backend",
 ]
 
 #: Blocks of the loop's log, in order: name -> size.
@@ -132,7 +133,8 @@ def _stiffness_model(params: DockingLoopParams):
     return model.stiffness
 
 
-def _backend(params: DockingLoopParams) -> System:
+def table_backend(params: DockingLoopParams) -> System:
+    """The table back-end of ``params.table`` (the table model or the Stewart platform)."""
     if params.table == "stewart":
         from hybridtable.six_dof.stewart_backend import StewartPoseBackend
 
@@ -162,7 +164,7 @@ def add_docking_loop(
     """
     h = params.sample_period_s
     spacecraft = builder.AddNamedSystem("spacecraft", RigidSpacecraft(params.spacecraft, h))
-    backend = builder.AddNamedSystem("table_backend", backend or _backend(params))
+    backend = builder.AddNamedSystem("table_backend", backend or table_backend(params))
     sensor_in, sensor_out = add_wrench_sensor(builder, params.rig.sensor, h, params.rig.noise)
     compensator = builder.AddNamedSystem(
         "compensator", compensator or make_wrench_compensator(params, _stiffness_model(params))

@@ -16,7 +16,15 @@ import numpy as np
 
 from hybridtable.stewart.geometry import rotation_exp, skew
 
-__all__ = ["skew", "rotation_exp", "rotation_jacobian", "rotation_log", "pose_coordinates"]
+__all__ = [
+    "skew",
+    "rotation_exp",
+    "rotation_jacobian",
+    "rotation_log",
+    "pose_coordinates",
+    "quaternions_of_rotation_vectors",
+    "rotation_vectors_of_quaternions",
+]
 
 
 def rotation_jacobian(theta: np.ndarray) -> np.ndarray:
@@ -44,3 +52,30 @@ def rotation_log(R: np.ndarray) -> np.ndarray:
 def pose_coordinates(position_m: np.ndarray, rotation: np.ndarray) -> np.ndarray:
     """``q = [p; theta]`` (6) of a position and a rotation matrix."""
     return np.concatenate([np.asarray(position_m, dtype=float), rotation_log(rotation)])
+
+
+def quaternions_of_rotation_vectors(theta: np.ndarray) -> np.ndarray:
+    """Unit quaternions ``(w, x, y, z)`` (N, 4; Hamilton) of rotation vectors
+    (N, 3; rad, angle below pi), so ``w >= 0``:
+    ``(cos(a/2), sin(a/2) theta / a)`` with ``a = |theta|``."""
+    theta = np.atleast_2d(np.asarray(theta, dtype=float))
+    a = np.linalg.norm(theta, axis=1)
+    # sin(a/2)/a, its series below 1e-4 rad (exact to double precision there)
+    ratio = np.where(a < 1e-4, 0.5 - a * a / 48.0, np.sin(0.5 * a) / np.where(a > 0, a, 1.0))
+    return np.column_stack([np.cos(0.5 * a), ratio[:, None] * theta])
+
+
+def rotation_vectors_of_quaternions(quaternion: np.ndarray) -> np.ndarray:
+    """Rotation vectors (N, 3; rad) of unit quaternions ``(w, x, y, z)`` (N, 4),
+    either sign: ``2 atan2(|v|, w) v / |v|``, with ``q`` turned to ``w >= 0``
+    first so the angle is below pi (inverse of
+    :func:`quaternions_of_rotation_vectors`)."""
+    q = np.atleast_2d(np.asarray(quaternion, dtype=float))
+    q = q * np.where(q[:, :1] < 0.0, -1.0, 1.0)
+    w, v = q[:, 0], q[:, 1:]
+    s = np.linalg.norm(v, axis=1)
+    # 2 atan2(s, w) / s, its series below 1e-8 (w ~ 1 there)
+    ratio = np.where(
+        s < 1e-8, 2.0 / np.where(w > 0, w, 1.0), 2.0 * np.arctan2(s, w) / np.where(s > 0, s, 1.0)
+    )
+    return ratio[:, None] * v

@@ -24,6 +24,7 @@ __all__ = [
     "simulate6",
     "contact_potential_j",
     "expected_end_s",
+    "peak_force_n",
     "captured_in_drogue",
     "probe_centres_m",
 ]
@@ -139,7 +140,7 @@ def captured_in_drogue(params: DockingLoopParams, table_state: np.ndarray) -> bo
     return bool(np.any(probe_centres_m(params, table_state)[:, 2] > depth))
 
 
-def _peak_force_n(params: DockingLoopParams) -> float:
+def peak_force_n(params: DockingLoopParams) -> float:
     """The undamped head-on peak force (N): the pads' ``k v0 / omega``, the
     probe's force at its peak press."""
     c = params.contact
@@ -163,7 +164,7 @@ def _held_in_socket(params: DockingLoopParams, data: np.ndarray, ticks: int) -> 
     axial_speed = window["commanded_state"][:, 8]
     if np.max(np.abs(axial_speed)) > ratio * params.approach.initial_velocity_m_per_s:
         return False
-    if np.max(np.abs(window["contact_wrench"][:, 5])) > ratio * _peak_force_n(params):
+    if np.max(np.abs(window["contact_wrench"][:, 5])) > ratio * peak_force_n(params):
         return False
     centres = probe_centres_m(params, window["table_state"])
     return bool(np.all(centres[:, 2] > throat_depth_m(params.contact)))
@@ -252,7 +253,7 @@ def simulate6(
         t_end,
         settle_s=(quiet_ticks - 0.5) * h,  # the contact has ended after quiet_ticks quiet ticks
         check_interval_s=_CHUNK_S,
-        peak_force_n=_peak_force_n(params),
+        peak_force_n=peak_force_n(params),
         stop_at_separation=separating,
         end_tolerance_s=0.5 * h,
     )

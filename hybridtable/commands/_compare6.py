@@ -1,0 +1,82 @@
+"""``hybridtable compare`` on 6-DoF runs (``hybridtable-run6/1``): the model's
+replay and closed loop against each run, component by component
+(:mod:`hybridtable.six_dof.compare6`)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from hybridtable.errors import CommandError
+
+__all__ = ["compare6"]
+
+#: compare's options that act on the 1-D runs only, with their defaults.
+_ONE_D_ONLY = {
+    "add": [],
+    "model": None,
+    "save_model": None,
+    "report": None,
+    "max_lag_s": None,
+    "plugin": [],
+    "log_map": None,
+}
+
+
+def compare6(args: argparse.Namespace) -> int:
+    """Read every 6-DoF run, compare each with the model's replay and closed
+    loop, print the verdicts and a table of the components' errors."""
+    from hybridtable.commands._common import check_outputs, write_json
+    from hybridtable.six_dof.compare6 import compare_run6
+    from hybridtable.six_dof.run6 import read_runs6
+
+    for name, default in _ONE_D_ONLY.items():
+        if getattr(args, name, default) not in (default, (), []):
+            flag = "--" + name.replace("_", "-")
+            raise CommandError(
+                f"{flag} is not available for 6-DoF runs (hybridtable-run6/1) yet: compare "
+                "runs them against the scenario's replay and closed loop"
+            )
+    runs = read_runs6(args.runs)  # every defect before any work
+    inputs = [p.resolve() for r in runs for p in (r.csv_path, r.json_path) if p is not None]
+    check_outputs(args, inputs, files={"--json": args.json})
+    quiet = args.json == "-"
+    iterator = runs
+    if len(runs) > 1 and not args.no_progress and not quiet:
+        from tqdm import tqdm
+
+        iterator = tqdm(runs, desc="compare", unit="run", file=sys.stderr, leave=False)
+    results = [compare_run6(r) for r in iterator]
+    if not quiet:
+        for c in results:
+            print(c.verdict())
+        for c in results:
+            print(
+                f"\n{c.run_id} ({c.n_ticks} ticks): RMS error per component in noise levels, "
+                "replay (the recorded commands through the model's table, contact and sensor) "
+                "and closed loop"
+            )
+            print(
+                f"  {'component':<12} {'noise':>11} {'replay':>9} {'closed loop':>12}  replay's worst"
+            )
+            for e, loop in zip(c.components, c.closed_loop, strict=True):
+                print(
+                    f"  {e.name:<12} {e.noise:>11.4g} {e.error_sigma:>9.3g} "
+                    f"{loop.error_sigma:>12.3g}  {e.worst_phase} at {e.worst_time_s:.4g} s "
+                    f"(noise in {e.unit})"
+                )
+            print(
+                f"  energy ratio {c.energy_ratio_measured:.4f} measured, "
+                f"{c.energy_ratio_model:.4f} modelled"
+            )
+            for note in c.notes:
+                print(f"  note: {note}")
+    if args.json:
+        out = {
+            "format": "hybridtable-run6/1",
+            "explained": all(c.explained for c in results),
+            "verdicts": [c.verdict() for c in results],
+            "runs": [c.to_dict() for c in results],
+        }
+        write_json(args.json, out, args)
+    return 0

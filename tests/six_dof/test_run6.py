@@ -1,0 +1,215 @@
+"""The 6-DoF run format: written from a simulated run, read back exactly, its
+defects refused, replayed exactly, and compared (hybridtable.six_dof.run6,
+replay6, compare6). The independent generator's runs are in test_run6_cli.py."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from hybridtable.errors import MeasurementError
+from hybridtable.six_dof.compare6 import EXPLAINED_SIGMA, compare_run6
+from hybridtable.six_dof.pose import (
+    quaternions_of_rotation_vectors,
+    rotation_exp,
+    rotation_vectors_of_quaternions,
+)
+from hybridtable.six_dof.replay6 import replay_run6
+from hybridtable.six_dof.run6 import (
+    RUN6_COLUMNS,
+    quaternion_product,
+    read_run6,
+    read_runs6,
+    run6_csv_text,
+    run6_json,
+    run6_of_docking,
+)
+from hybridtable.six_dof.simulation import simulate6
+from tests.six_dof.conftest import docking_params
+
+#: A scenario's document as the run's JSON holds it (the conftest's rig).
+SCENARIO = {
+    "spacecraft": {
+        "contact_frequency_hz": 1.0,
+        "inertia_kg_m2": [1689.0, 1689.0, 1689.0],
+        "port_distance_m": 1.5,
+        "lateral_offset_m": [0.01, 0.0],
+    },
+    "contact": {"contact_stiffness_n_per_m": 1.0e5},
+    "approach": {
+        "initial_velocity_m_per_s": 0.1,
+        "initial_gap_m": 0.001,
+        "misalignment_deg": [0.0, 2.0],
+    },
+    "rig": {"sample_rate_hz": 1000.0, "sensor_delay_s": 0.005},
+    "table": {"response_hz": 25.0, "damping_ratio": 0.8},
+    "compensator": {"name": "SDMDC"},
+}
+
+
+@pytest.fixture(scope="module")
+def recorded():
+    """The scenario's run (SDMDC, offset and tilt), as the format's rows."""
+    params = docking_params(
+        offset_m=0.01,
+        pitch_deg=2.0,
+        compensator="SDMDC",
+        sensor_delay_s=0.005,
+        table_response_hz=25.0,
+        table_damping_ratio=0.8,
+    )
+    return run6_of_docking(simulate6(params), "offset", SCENARIO)
+
+
+def _write(folder, run, stem="run1", csv=None, doc=None):
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / f"{stem}.csv").write_text(csv if csv is not None else run6_csv_text(run))
+    (folder / f"{stem}.json").write_text(json.dumps(doc if doc is not None else run6_json(run)))
+    return folder / f"{stem}.csv"
+
+
+def test_quaternions_are_the_rotation_vectors_rotations():
+    rng = np.random.default_rng(3)
+    theta = rng.normal(size=(400, 3)) * rng.choice([1e-9, 1e-5, 1e-2, 0.5], size=(400, 1))
+    q = quaternions_of_rotation_vectors(theta)
+    assert np.allclose(np.linalg.norm(q, axis=1), 1.0, atol=1e-15)
+    assert np.all(q[:, 0] >= 0.0)
+    back = rotation_vectors_of_quaternions(-q)  # either sign
+    assert np.max(np.abs(back - theta) / np.linalg.norm(theta, axis=1)[:, None]) < 1e-14
+    # q r q* rotates r as exp([theta]x) does
+    r = np.array([0.3, -0.2, 0.9])
+    for t, qq in zip(theta[:20], q[:20], strict=True):
+        pure = np.array([[0.0, *r]])
+        turned = quaternion_product(quaternion_product(qq[None], pure), qq[None] * [1, -1, -1, -1])
+        assert np.allclose(turned[0, 1:], rotation_exp(t) @ r, atol=1e-14)
+
+
+def test_a_run_reads_back_exactly_and_its_rows_are_the_rig_computers_ticks(recorded, tmp_path):
+    csv = _write(tmp_path / "a", recorded)
+    header = csv.read_text().splitlines()[0].split(",")
+    assert header == list(RUN6_COLUMNS) and len(header) == 33
+    back = read_run6(csv)
+    assert back.run_id == "offset" and back.params.compensator == "SDMDC"
+    for name, block in recorded.blocks.items():
+        assert np.array_equal(back.blocks[name], block), name
+    h = back.params.sample_period_s
+    # step 3 of the format: the model's port velocity moves the command by h v
+    # (to the lever arm's turn), and the attitude turns by exp(h w) exactly
+    step = np.diff(back.blocks["p_des"], axis=0)
+    assert np.max(np.abs(step - h * back.blocks["v_des"][1:])) < 1e-4 * h * 0.1
+    R = [rotation_exp(t) for t in back.pose("des")[:, 3:]]
+    for k in (1, 200, 400):
+        assert np.allclose(R[k], rotation_exp(h * back.blocks["w_des"][k]) @ R[k - 1], atol=1e-12)
+    # the compensated force is what moved the model: m dv = h f at the centre of mass
+    body = back.params.spacecraft
+    arm = np.array([r @ body.port_position_m for r in R])
+    v_com = back.blocks["v_des"] - np.cross(back.blocks["w_des"], arm)
+    dv = np.diff(v_com, axis=0)
+    f = back.blocks["f_comp"][1:]
+    assert np.max(np.abs(body.mass_kg * dv - h * f)) < 1e-9 * np.max(np.abs(h * f))
+    # a head-on press pushes the spacecraft back
+    assert back.blocks["f_mea"][:, 2].min() < -1000.0 and back.blocks["f_mea"][:, 2].max() <= 0.0
+
+
+def test_the_replay_of_a_noise_free_run_is_the_run(recorded):
+    replay = replay_run6(recorded)
+    # the command is read back through its quaternion: round-off only
+    w = recorded.wrench("mea")
+    assert np.max(np.abs(replay.measured_wrench - w)) < 1e-9 * np.max(np.abs(w))
+    assert np.max(np.abs(replay.table_state[:, :6] - recorded.pose("act"))) < 1e-15
+
+
+def test_compare_explains_its_own_run_and_names_a_stiffer_contact(recorded, tmp_path):
+    c = compare_run6(recorded)
+    assert c.explained and c.worst.error_sigma < 1e-9
+    assert math.isclose(c.cor_measured, c.cor_model, rel_tol=1e-12)
+    # the rig's contact is 30 % stiffer than the scenario says
+    stiff = docking_params(
+        offset_m=0.01,
+        pitch_deg=2.0,
+        compensator="SDMDC",
+        sensor_delay_s=0.005,
+        table_response_hz=25.0,
+        table_damping_ratio=0.8,
+    )
+    stiff = stiff.with_(contact_stiffness_n_per_m=1.3e5)
+    run = run6_of_docking(simulate6(stiff), "stiff", SCENARIO)
+    c = compare_run6(run)
+    assert not c.explained
+    assert c.worst.name == "fz_mea" and c.worst.worst_phase == "contact"
+    assert c.worst.error_sigma > 10 * EXPLAINED_SIGMA
+    assert "misses" in c.verdict()
+
+
+def _broken(recorded, tmp_path, column, change):
+    text = run6_csv_text(recorded).splitlines()
+    header = text[0].split(",")
+    j = header.index(column)
+    rows = [line.split(",") for line in text[1:]]
+    change(rows, j)
+    body = "\n".join([text[0]] + [",".join(r) for r in rows]) + "\n"
+    return _write(tmp_path / column, recorded, csv=body)
+
+
+@pytest.mark.parametrize(
+    ("column", "change", "words"),
+    [
+        (
+            "qw_act",
+            lambda rows, j: rows[100].__setitem__(j, str(1.2 * float(rows[100][j]))),
+            "not a unit quaternion",
+        ),
+        (
+            "qy_des",
+            lambda rows, j: [
+                r.__setitem__(j + k, repr(-float(r[j + k])))
+                for r in rows[300:]
+                for k in (-2, -1, 0, 1)
+            ],
+            "changes sign",
+        ),
+        (
+            "wy_des_rad_per_s",
+            lambda rows, j: [
+                r.__setitem__(j + k, repr(math.degrees(float(r[j + k]))))
+                for r in rows
+                for k in (-1, 0, 1)
+            ],
+            "degrees per second",
+        ),
+        (
+            "vz_des_m_per_s",
+            lambda rows, j: [r.__setitem__(j, repr(-float(r[j]))) for r in rows],
+            "sign-flipped or mislabelled velocity",
+        ),
+        ("fx_mea_n", lambda rows, j: rows[50].__setitem__(j, "nan"), "not finite"),
+    ],
+)
+def test_a_broken_log_is_one_line_naming_it(recorded, tmp_path, column, change, words):
+    csv = _broken(recorded, tmp_path, column, change)
+    with pytest.raises(MeasurementError, match=words) as err:
+        read_run6(csv)
+    assert "\n" not in str(err.value)
+
+
+def test_the_json_and_the_set_are_checked(recorded, tmp_path):
+    doc = run6_json(recorded)
+    bad = dict(doc, format="hybridtable-run6/2")
+    with pytest.raises(MeasurementError, match="format"):
+        read_run6(_write(tmp_path / "f", recorded, doc=bad))
+    bad = json.loads(json.dumps(doc))
+    bad["scenario"]["contact"]["contact_stiffness_n_per_m"] = -1.0
+    with pytest.raises(MeasurementError, match="contact_stiffness_n_per_m"):
+        read_run6(_write(tmp_path / "k", recorded, doc=bad))
+    _write(tmp_path / "two", recorded, "run1")
+    _write(tmp_path / "two", recorded, "run2")
+    with pytest.raises(MeasurementError, match="run_id 'offset' is also"):
+        read_runs6([tmp_path / "two"])
+    # a record without a contact
+    text = run6_csv_text(recorded).splitlines()
+    short = "\n".join(text[:8]) + "\n"
+    with pytest.raises(MeasurementError, match="no contact"):
+        read_run6(_write(tmp_path / "short", recorded, csv=short))
