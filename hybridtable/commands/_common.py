@@ -178,12 +178,15 @@ def log_map_entry(layout, runs) -> dict | None:
     return {**layout.to_dict(), "skipped_columns": skipped}
 
 
-def log_layout_of(args: argparse.Namespace):
-    """How the logs of ``RUN...`` map to the format: the ``--log-map`` file and
-    the flags over it (:func:`hybridtable.measurement.log_layout.log_layout`)."""
+def log_layout_of(args: argparse.Namespace, format_columns=None):
+    """How the logs of ``RUN...`` map to the format (the 1-D format's, else
+    the one of ``format_columns``): the ``--log-map`` file and the flags over
+    it (:func:`hybridtable.measurement.log_layout.log_layout`)."""
     from hybridtable.measurement.log_layout import log_layout
+    from hybridtable.measurement.run_format import RUN_COLUMNS
 
     return log_layout(
+        format_columns=RUN_COLUMNS if format_columns is None else format_columns,
         log_map=args.log_map,
         column_map=args.column_map,
         units=args.unit,

@@ -19,16 +19,15 @@ _ONE_D_ONLY = {
     "report": None,
     "max_lag_s": None,
     "plugin": [],
-    "log_map": None,
 }
 
 
 def compare6(args: argparse.Namespace) -> int:
     """Read every 6-DoF run, compare each with the model's replay and closed
     loop, print the verdicts and a table of the components' errors."""
-    from hybridtable.commands._common import check_outputs, write_json
+    from hybridtable.commands._common import check_outputs, log_layout_of, log_map_entry, write_json
     from hybridtable.six_dof.compare6 import compare_run6
-    from hybridtable.six_dof.run6 import read_runs6
+    from hybridtable.six_dof.run6 import RUN6_COLUMNS, read_runs6
 
     for name, default in _ONE_D_ONLY.items():
         if getattr(args, name, default) not in (default, (), []):
@@ -37,7 +36,8 @@ def compare6(args: argparse.Namespace) -> int:
                 f"{flag} is not available for 6-DoF runs (hybridtable-run6/1) yet: compare "
                 "runs them against the scenario's replay and closed loop"
             )
-    runs = read_runs6(args.runs)  # every defect before any work
+    layout = log_layout_of(args, RUN6_COLUMNS)
+    runs = read_runs6(args.runs, layout)  # every defect before any work
     inputs = [p.resolve() for r in runs for p in (r.csv_path, r.json_path) if p is not None]
     check_outputs(args, inputs, files={"--json": args.json})
     quiet = args.json == "-"
@@ -77,6 +77,7 @@ def compare6(args: argparse.Namespace) -> int:
             "explained": all(c.explained for c in results),
             "verdicts": [c.verdict() for c in results],
             "runs": [c.to_dict() for c in results],
+            "log_map": log_map_entry(layout, runs),
         }
         write_json(args.json, out, args)
     return 0

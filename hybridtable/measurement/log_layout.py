@@ -92,6 +92,7 @@ def _over(
     columns: Mapping[str, ColumnSource],
     names: Mapping[str, str] | None = None,
     units: Mapping[str, str] | None = None,
+    format_columns: Mapping[str, str] = RUN_COLUMNS,
 ) -> dict[str, ColumnSource]:
     """``columns`` (format column -> source; a column not there is read from
     its own name in SI) with the log names ``names`` and the units ``units``
@@ -99,11 +100,11 @@ def _over(
     out = dict(columns)
     for changes, field_name in ((names, "column"), (units, "unit")):
         for fmt, value in (changes or {}).items():
-            if fmt not in RUN_COLUMNS:
+            if fmt not in format_columns:
                 raise MeasurementError(
-                    f"{fmt!r} is not a column of the format (one of {', '.join(RUN_COLUMNS)})"
+                    f"{fmt!r} is not a column of the format (one of {', '.join(format_columns)})"
                 )
-            old = out.get(fmt, ColumnSource(fmt, RUN_COLUMNS[fmt]))
+            old = out.get(fmt, ColumnSource(fmt, format_columns[fmt]))
             out[fmt] = replace(old, **{field_name: value})
     return out
 
@@ -237,7 +238,11 @@ class LogLayout:
     ) -> LogLayout:
         """This layout with the log names ``names`` (format column -> log
         column) over its own, said to come from ``source``."""
-        return replace(self, columns=_over(self.columns, names), source=source or self.source)
+        return replace(
+            self,
+            columns=_over(self.columns, names, format_columns=self.format_columns),
+            source=source or self.source,
+        )
 
     def to_dict(self) -> dict:
         """The mapping as the JSON outputs list it (``comment`` only if given)."""
@@ -266,12 +271,14 @@ def _delimiter(text: str, where: str) -> str:
     return d
 
 
-def _source(name: str, value: object, where: str) -> ColumnSource:
-    if name not in RUN_COLUMNS:
+def _source(
+    name: str, value: object, where: str, format_columns: Mapping[str, str] = RUN_COLUMNS
+) -> ColumnSource:
+    if name not in format_columns:
         raise MeasurementError(
-            f"{where}: {name!r} is not a column of the format (one of {', '.join(RUN_COLUMNS)})"
+            f"{where}: {name!r} is not a column of the format (one of {', '.join(format_columns)})"
         )
-    si = RUN_COLUMNS[name]
+    si = format_columns[name]
     if isinstance(value, str):
         return ColumnSource(value.strip(), si)
     if not isinstance(value, dict):
@@ -295,9 +302,10 @@ def _source(name: str, value: object, where: str) -> ColumnSource:
     return ColumnSource(column.strip(), unit.strip(), float(scale))
 
 
-def read_log_map(path: str | Path) -> dict:
+def read_log_map(path: str | Path, format_columns: Mapping[str, str] = RUN_COLUMNS) -> dict:
     """The entries of a log-map TOML file (checked key by key; see the module)
-    as keyword arguments of :class:`LogLayout`.
+    as keyword arguments of :class:`LogLayout`, for the format of
+    ``format_columns``.
 
     Raises
     ------
@@ -325,11 +333,16 @@ def read_log_map(path: str | Path) -> dict:
     columns = raw.get("columns", {})
     if not isinstance(columns, dict):
         raise MeasurementError(f"{where}: columns must be a table (format column = log column)")
-    out["columns"] = {name: _source(name, v, where) for name, v in columns.items()}
+    out["columns"] = {name: _source(name, v, where, format_columns) for name, v in columns.items()}
     return out
 
 
-def parse_pairs(items: Iterable[str] | None, flag: str, value: str) -> dict[str, str]:
+def parse_pairs(
+    items: Iterable[str] | None,
+    flag: str,
+    value: str,
+    format_columns: Mapping[str, str] = RUN_COLUMNS,
+) -> dict[str, str]:
     """``FORMAT=VALUE`` items of ``flag`` (each may hold several, comma
     separated) as ``{format_column: value}``.
 
@@ -347,12 +360,13 @@ def parse_pairs(items: Iterable[str] | None, flag: str, value: str) -> dict[str,
             if "=" not in part:
                 raise MeasurementError(
                     f"{flag} item {part!r} must be FORMAT_COLUMN={value} "
-                    f"(format columns: {', '.join(RUN_COLUMNS)})"
+                    f"(format columns: {', '.join(format_columns)})"
                 )
             fmt, given = (s.strip() for s in part.split("=", 1))
-            if fmt not in RUN_COLUMNS:
+            if fmt not in format_columns:
                 raise MeasurementError(
-                    f"{flag}: {fmt!r} is not a column of the format (one of {', '.join(RUN_COLUMNS)})"
+                    f"{flag}: {fmt!r} is not a column of the format "
+                    f"(one of {', '.join(format_columns)})"
                 )
             if not given:
                 raise MeasurementError(f"{flag}: empty {value.lower().replace('_', ' ')} for {fmt}")
@@ -370,11 +384,13 @@ def log_layout(
     decimal: str | None = None,
     comment: str | None = None,
     ignore: Iterable[str] | None = None,
+    format_columns: Mapping[str, str] = RUN_COLUMNS,
 ) -> LogLayout:
     """The layout of a log from a ``--log-map`` file and the flags that
     override its entries (``--column-map FORMAT=LOG``, ``--unit FORMAT=UNIT``,
     ``--delimiter``, ``--decimal``, ``--comment``, ``--ignore-column``); with
-    none of them, the format's own CSV (:data:`DEFAULT_LAYOUT`).
+    none of them, the format's own CSV (:data:`DEFAULT_LAYOUT` for the 1-D
+    format; ``format_columns`` names another's columns and units).
 
     Raises
     ------
@@ -382,16 +398,20 @@ def log_layout(
         One line naming the file or flag and the entry at fault.
     """
     if log_map is None and not any((column_map, units, delimiter, decimal, comment, ignore)):
-        return DEFAULT_LAYOUT
-    kwargs = read_log_map(log_map) if log_map is not None else {}
+        if format_columns is RUN_COLUMNS:
+            return DEFAULT_LAYOUT
+        return LogLayout(source="the format", format_columns=format_columns)
+    kwargs = read_log_map(log_map, format_columns) if log_map is not None else {}
     columns: dict[str, ColumnSource] = dict(kwargs.get("columns", {}))
     names = column_map if isinstance(column_map, Mapping) else None
     names = (
-        dict(names) if names is not None else parse_pairs(column_map, "--column-map", "LOG_COLUMN")
+        dict(names)
+        if names is not None
+        else parse_pairs(column_map, "--column-map", "LOG_COLUMN", format_columns)
     )
     given_units = units if isinstance(units, Mapping) else None
     if given_units is None:
-        given_units = parse_pairs(units, "--unit", "UNIT")
+        given_units = parse_pairs(units, "--unit", "UNIT", format_columns)
     flags = [
         f
         for f, v in (
@@ -406,11 +426,13 @@ def log_layout(
     ]
     where = " and ".join([str(log_map)] * (log_map is not None) + flags) or "the format"
     for fmt, unit in given_units.items():
-        if unit not in _units_of(fmt):
+        known = _units_of(fmt, format_columns)
+        if unit not in known:
             raise MeasurementError(
-                f"--unit: unknown unit {unit!r} for {fmt} (one of {', '.join(_units_of(fmt))})"
+                f"--unit: unknown unit {unit!r} for {fmt} (one of {', '.join(known)})"
             )
-    kwargs["columns"] = _over(columns, names, given_units)
+    kwargs["columns"] = _over(columns, names, given_units, format_columns)
+    kwargs["format_columns"] = format_columns
     kwargs["source"] = where
     if delimiter is not None:
         kwargs["delimiter"] = _delimiter(delimiter, "--delimiter")

@@ -40,7 +40,8 @@ def _similarity(column: str, log_name: str) -> float:
 
     log = log_name.strip().lower()
     return max(
-        difflib.SequenceMatcher(None, name, log).ratio() for name in (column, *_ALIASES[column])
+        difflib.SequenceMatcher(None, name, log).ratio()
+        for name in (column, *_ALIASES.get(column, ()))  # the 1-D format's usual other names
     )
 
 

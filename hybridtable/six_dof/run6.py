@@ -276,9 +276,13 @@ def _read_json(path: Path) -> tuple[str, DockingLoopParams, dict]:
     return raw["run_id"], params, raw["scenario"]
 
 
-def read_run6(csv_path: str | Path, json_path: str | Path | None = None) -> Run6:
+def read_run6(
+    csv_path: str | Path, json_path: str | Path | None = None, layout: LogLayout | None = None
+) -> Run6:
     """Read and check one 6-DoF run (every check of ``docs/run6-format.md``
-    but the set's unique run ids).
+    but the set's unique run ids); ``layout`` says how a rig's own log maps to
+    the format (:func:`~hybridtable.measurement.log_layout.log_layout` with
+    :data:`RUN6_COLUMNS`; default: the format's own CSV).
 
     Raises
     ------
@@ -292,28 +296,32 @@ def read_run6(csv_path: str | Path, json_path: str | Path | None = None) -> Run6
         if problem:
             raise MeasurementError(f"{p}: {problem}")
     run_id, params, scenario = _read_json(json_path)
-    cols, lines, skipped = read_series(csv_path, LAYOUT6)
-    check_time(csv_path, json_path, cols["time_s"], lines, params, LAYOUT6)
+    layout = LAYOUT6 if layout is None else layout
+    if layout.format_columns is not RUN6_COLUMNS:
+        raise ValueError("read_run6: the layout must map to RUN6_COLUMNS")
+    cols, lines, skipped = read_series(csv_path, layout)
+    check_time(csv_path, json_path, cols["time_s"], lines, params, layout)
     blocks = {name: np.column_stack([cols[c] for c in spec[0]]) for name, spec in BLOCKS.items()}
     run = Run6(run_id, params, scenario, cols["time_s"], blocks, csv_path, json_path, skipped)
     _check_ranges(run, lines)
     for which in ("des", "act"):
         _check_quaternions(run, which, lines)
-    _check_rates(run)
+    _check_rates(run, layout)
     _check_contact(run)
     return run
 
 
-def read_runs6(paths: Sequence[str | Path]) -> list[Run6]:
-    """Read and check every 6-DoF run ``paths`` name (files or folders); all
-    are read before any is returned, and their run ids must differ.
+def read_runs6(paths: Sequence[str | Path], layout: LogLayout | None = None) -> list[Run6]:
+    """Read and check every 6-DoF run ``paths`` name (files or folders,
+    through ``layout``: see :func:`read_run6`); all are read before any is
+    returned, and their run ids must differ.
 
     Raises
     ------
     MeasurementError
         For any defect (:func:`read_run6`, and the pairs' own).
     """
-    runs = [read_run6(c, j) for c, j in find_run_files(paths, formats=(FORMAT6,))]
+    runs = [read_run6(c, j, layout) for c, j in find_run_files(paths, formats=(FORMAT6,))]
     ids: dict[str, Path | None] = {}
     for r in runs:
         if r.run_id in ids:
@@ -388,7 +396,7 @@ def _slope(measured: np.ndarray, reference: np.ndarray) -> float:
 _TURNING_RAD_PER_S = 1e-6
 
 
-def _check_rates(run: Run6) -> None:
+def _check_rates(run: Run6, layout: LogLayout = LAYOUT6) -> None:
     """The model's twist against the commanded pose's change from tick to
     tick: the attitude's change is ``exp(h w_des[k]) R[k-1]`` exactly (the
     rig computer's step), the position's about ``h v_des[k]``."""
@@ -400,10 +408,11 @@ def _check_rates(run: Run6) -> None:
     if math.sqrt(float(np.mean(np.sum(turn * turn, axis=1)))) > _TURNING_RAD_PER_S:
         s = _slope(w, turn)
         if abs(s / math.degrees(1.0) - 1.0) < 0.1:
+            columns = BLOCKS["w_des"][0]
             raise MeasurementError(
-                f"{run.csv_path}: w_des (wx/wy/wz_des_rad_per_s) is {s:.4g} times the "
-                "commanded attitude's rate of turn: it looks logged in degrees per second where "
-                "the format has radians per second"
+                f"{run.csv_path}: w_des (wx/wy/wz_des_rad_per_s) is {s:.4g} times the commanded "
+                "attitude's rate of turn: logged in degrees per second where radians per second "
+                f"are due; {layout.unit_advice({c: 'deg/s' for c in columns})}"
             )
         if not 0.8 < s < 1.25:
             raise MeasurementError(

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -29,6 +30,8 @@ from hybridtable.six_dof.run6 import (
 )
 from hybridtable.six_dof.simulation import simulate6
 from tests.six_dof.conftest import docking_params
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "six_dof"
 
 #: A scenario's document as the run's JSON holds it (the conftest's rig).
 SCENARIO = {
@@ -213,3 +216,62 @@ def test_the_json_and_the_set_are_checked(recorded, tmp_path):
     short = "\n".join(text[:8]) + "\n"
     with pytest.raises(MeasurementError, match="no contact"):
         read_run6(_write(tmp_path / "short", recorded, csv=short))
+
+
+def test_simulate6_records_a_run_that_compare_reads_through_a_rigs_own_log(tmp_path, capsys):
+    from hybridtable.cli import main
+
+    scenario = EXAMPLES / "offset.toml"
+    folder = tmp_path / "rec"
+    argv = ["simulate6", str(scenario), "--compensator", "SDC", "--no-reference"]
+    argv += ["--record", str(folder), "--noise-position-m", "1e-5", "--no-progress"]
+    assert main([*argv, "--json", str(tmp_path / "s.json")]) == 0
+    record = json.loads((tmp_path / "s.json").read_text())["record"]
+    assert record["run_id"] == "offset-SDC" and record["ticks"] > 500
+    doc = json.loads((folder / "run1.json").read_text())
+    assert doc["format"] == "hybridtable-run6/1" and doc["scenario"]["compensator"]["name"] == "SDC"
+    capsys.readouterr()
+    assert main([*argv]) == 2  # the run is not written over without --force
+    assert "--force" in capsys.readouterr().err
+    assert main(["compare", str(folder), "--json", "-"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["explained"] and result["runs"][0]["cor_error"] == pytest.approx(0.0, abs=1e-12)
+    # the same run as a rig logs it: its own names, ';', time in ms, rates in deg/s
+    lines = (folder / "run1.csv").read_text().splitlines()
+    header = lines[0].split(",")
+    own = tmp_path / "own"
+    own.mkdir()
+    rows = []
+    for line in lines[1:]:
+        cells = [float(c) for c in line.split(",")]
+        for j, name in enumerate(header):
+            if name == "time_s":
+                cells[j] *= 1e3
+            elif name.startswith("w") and name.endswith("_rad_per_s"):
+                cells[j] = math.degrees(cells[j])
+        rows.append(";".join(repr(c) for c in cells))
+    (own / "a.csv").write_text(";".join(f"log_{n}" for n in header) + "\n" + "\n".join(rows))
+    (own / "a.json").write_text((folder / "run1.json").read_text())
+    mapping = ['delimiter = ";"', "[columns]"]
+    for name in header:
+        unit = "ms" if name == "time_s" else "deg/s" if name.endswith("_rad_per_s") else None
+        mapping.append(
+            f'{name} = {{ column = "log_{name}"' + (f', unit = "{unit}"' if unit else "") + " }"
+        )
+    (tmp_path / "map.toml").write_text("\n".join(mapping) + "\n")
+    assert main(["compare", str(own), "--log-map", str(tmp_path / "map.toml"), "--json", "-"]) == 0
+    again = json.loads(capsys.readouterr().out)
+    sigmas = [[c["error_sigma"] for c in r["runs"][0]["components"]] for r in (again, result)]
+    assert sigmas[0] == pytest.approx(sigmas[1], abs=1e-6)
+    assert again["log_map"]["columns"]["time_s"] == {
+        "column": "log_time_s",
+        "unit": "ms",
+        "scale": 1.0,
+    }
+    # without the rates' unit: one line naming the --unit that reads them
+    plain = "\n".join(line for line in mapping if "deg/s" not in line)
+    plain += "\n" + "\n".join(f'{n} = "log_{n}"' for n in header if n.endswith("_rad_per_s"))
+    (tmp_path / "plain.toml").write_text(plain + "\n")
+    assert main(["compare", str(own), "--log-map", str(tmp_path / "plain.toml")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "degrees per second" in err and "wx_des_rad_per_s=deg/s" in err and "\n" not in err
