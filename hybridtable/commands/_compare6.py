@@ -13,20 +13,22 @@ __all__ = ["compare6"]
 
 #: compare's options that act on the 1-D runs only, with their defaults.
 _ONE_D_ONLY = {
-    "add": [],
     "model": None,
     "save_model": None,
     "report": None,
     "max_lag_s": None,
-    "plugin": [],
 }
 
 
 def compare6(args: argparse.Namespace) -> int:
     """Read every 6-DoF run, compare each with the model's replay and closed
-    loop, print the verdicts and a table of the components' errors."""
+    loop, print the verdicts and a table of the components' errors; with
+    ``--add``, fit the effects to the runs' replays and compare again (the
+    error falls, or does not)."""
     from hybridtable.commands._common import check_outputs, log_layout_of, log_map_entry, write_json
+    from hybridtable.commands._model_options import load_plugins, parse_added
     from hybridtable.six_dof.compare6 import compare_run6
+    from hybridtable.six_dof.fit6 import fit_runs6
     from hybridtable.six_dof.run6 import RUN6_COLUMNS, read_runs6
 
     for name, default in _ONE_D_ONLY.items():
@@ -35,6 +37,14 @@ def compare6(args: argparse.Namespace) -> int:
             raise CommandError(
                 f"{flag} is not available for 6-DoF runs (hybridtable-run6/1) yet: compare "
                 "runs them against the scenario's replay and closed loop"
+            )
+    load_plugins(args)
+    added = parse_added(args)  # a malformed --add before any work
+    for effect, _ in added:
+        if effect.apply6 is None:
+            raise CommandError(
+                f"--add {effect.name}: the effect acts on the 1-D loop only (hybridtable "
+                "effects, column loops, lists those of a six-axis rig)"
             )
     layout = log_layout_of(args, RUN6_COLUMNS)
     runs = read_runs6(args.runs, layout)  # every defect before any work
@@ -47,9 +57,15 @@ def compare6(args: argparse.Namespace) -> int:
 
         iterator = tqdm(runs, desc="compare", unit="run", file=sys.stderr, leave=False)
     results = [compare_run6(r) for r in iterator]
+    fit = fitted = None
+    if added:
+        fit = fit_runs6(runs, added)
+        fitted = [compare_run6(r, fit.physics) for r in runs]
     if not quiet:
         for c in results:
             print(c.verdict())
+        if fit is not None:
+            _print_fit(fit, added, results, fitted)
         for c in results:
             print(
                 f"\n{c.run_id} ({c.n_ticks} ticks): RMS error per component in noise levels, "
@@ -78,6 +94,47 @@ def compare6(args: argparse.Namespace) -> int:
             "verdicts": [c.verdict() for c in results],
             "runs": [c.to_dict() for c in results],
             "log_map": log_map_entry(layout, runs),
+            **(
+                {}
+                if fit is None
+                else {
+                    "added": {
+                        "effects": [e.name for e, _ in added],
+                        "fit": fit.to_dict(),
+                        "explained": all(c.explained for c in fitted),
+                        "verdicts": [c.verdict() for c in fitted],
+                        "runs": [c.to_dict() for c in fitted],
+                    }
+                }
+            ),
         }
         write_json(args.json, out, args)
     return 0
+
+
+def _print_fit(fit, added, before, after) -> None:
+    """The fitted values and how the replay's error fell."""
+    units = {e.name: {p.name: p.unit for p in e.parameters} for e, _ in added}
+    print(f"\nwith {' + '.join(e.name for e, _ in added)} (fitted to the replays):")
+    for name, values in fit.values.items():
+        parts = []
+        for k, v in values.items():
+            s = fit.std[name].get(k)
+            err = (
+                f" +- {s:.3g}"
+                if s is not None
+                else (" (given)" if k not in fit.fitted[name] else "")
+            )
+            parts.append(f"{k} = {v:.5g}{err} {units[name][k]}")
+        print(f"  {name}: {', '.join(parts)}")
+    print(
+        f"  replay chi2 {fit.chi2_before:.4g} -> {fit.chi2_after:.4g} over {fit.n_residuals} "
+        f"residuals ({fit.evaluations} replays{'' if fit.success else '; a polish did not converge'})"
+    )
+    for b, a in zip(before, after, strict=True):
+        print(f"  {a.verdict()}")
+        print(
+            f"    the replay's worst component {b.worst.name}: {b.worst.error_sigma:.3g} -> "
+            f"{next(c for c in a.components if c.name == b.worst.name).error_sigma:.3g} noise "
+            f"levels; worst now {a.worst.name} {a.worst.error_sigma:.3g}"
+        )

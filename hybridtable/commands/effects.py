@@ -110,7 +110,8 @@ def effect_json(effect, source: str, scale, where: str) -> dict:
         "parameters": params,
         "stage": effect.stage,
         "default_for": list(effect.default_for),
-        "cor_engine": cor_engine(effect, scale),
+        "loops": list(effect.loops),
+        "cor_engine": cor_engine(effect, scale) if effect.apply is not None else "6-DoF only",
         "signature": {
             "channels": list(sig.channels),
             "phases": list(sig.phases),
@@ -179,17 +180,18 @@ def format_effects(items: list[dict]) -> str:
         )
     lines.append("")
     header = (
-        f"{'effect':<28}{'source':<12}{'stage':<12}{'tried by':<18}{'CoR by':<15}description\n"
+        f"{'effect':<28}{'source':<12}{'stage':<12}{'tried by':<18}{'CoR by':<15}"
+        f"{'loops':<13}description\n"
         f"  {'parameter':<30}{'unit':<8}{'lower':>12}{'upper':>12}{'typical':>12}"
         f"{'null':>12}  description"
     )
     lines.append(header)
-    lines.append("-" * 104)
+    lines.append("-" * 117)
     for e in items:
         tried = ", ".join(e["default_for"]) or "when named"
         lines.append(
             f"{e['name']:<28}{e['source']:<12}{e['stage']:<12}{tried:<18}{e['cor_engine']:<15}"
-            f"{e['description']}"
+            f"{', '.join(e['loops']):<13}{e['description']}"
         )
         for p in e["parameters"]:
             rig = set(p["rig_dependent"])
@@ -205,7 +207,9 @@ def format_effects(items: list[dict]) -> str:
         "typical: the fit's unit step; null: the value at which the effect vanishes "
         "(- : none). tried by: the commands that try the effect unless told which "
         "(diagnose --effects, explain --effects name any effect); CoR by: how explain runs "
-        "the loop with it. Use an effect with --add NAME[:param=value,...]."
+        "the loop with it; loops: the 1-D loop's runs and tables, 6-DoF runs (simulate6 "
+        "--record, compare of hybridtable-run6/1 runs). Use an effect with "
+        "--add NAME[:param=value,...]."
     )
     return "\n".join(lines)
 

@@ -10,6 +10,7 @@ __all__ = ["register", "run"]
 
 def register(sub) -> None:
     from hybridtable.commands._common import number_type
+    from hybridtable.commands._model_options import add_effect_argument, add_plugin_argument
 
     p = sub.add_parser(
         "simulate6",
@@ -74,6 +75,14 @@ def register(sub) -> None:
         help="white noise on the measured table attitude, a rotation of this std about each "
         "axis [rad], 0 to 0.1 (default: 0)",
     )
+    add_effect_argument(
+        p,
+        ": the rig's physical part has it (a six-axis rig's effect or one of the 1-D loop's "
+        "along the normal: hybridtable effects, column loops), the rig computer does not know "
+        "it; every parameter given; with --record, the run's JSON states the scenario and "
+        "truth.json what was hidden",
+    )
+    add_plugin_argument(p)
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
@@ -109,6 +118,7 @@ def run(args: argparse.Namespace) -> int:
 
     overrides = {} if args.compensator is None else {"compensator": args.compensator}
     params = load_scenario(args.scenario, **overrides)
+    physics, hidden = _hidden_physics(args, params)
     check_outputs(
         args,
         [args.scenario],
@@ -125,7 +135,7 @@ def run(args: argparse.Namespace) -> int:
     quiet = args.json == "-"
     update, close = _progress(not args.no_progress and not quiet)
     try:
-        result = simulate6(params, progress=update)
+        result = simulate6(params, progress=update, physics=physics)
     finally:
         close()
     reference = None
@@ -153,6 +163,8 @@ def run(args: argparse.Namespace) -> int:
         "simulated_s": sim_s,
         "wall_time_s": result.wall_time_s,
     }
+    if hidden:
+        out["hidden"] = {"effects": hidden, "physics": physics.to_dict()}
     identified = result.extra.get("identified_stiffness_n_per_m")
     if identified is not None:
         out["identified_stiffness_n_per_m"] = identified
@@ -204,8 +216,17 @@ def run(args: argparse.Namespace) -> int:
                 f"wrote {args.html} (motion magnified x{drawn['magnify']:g}, force arrow "
                 f"1 m per {drawn['force_scale_n_per_m']:g} N)"
             )
+    if hidden and not quiet:
+        print(
+            "the rig's physical part had "
+            + "; ".join(
+                f"{e['name']} ({', '.join(f'{k} = {v:g}' for k, v in e['values'].items())})"
+                for e in hidden
+            )
+            + ", which the rig computer did not know"
+        )
     if args.record:
-        out["record"] = _record(args, result)
+        out["record"] = _record(args, result, hidden, physics)
         if not quiet:
             print(f"wrote {out['record']['csv']} and {out['record']['json']}")
     if args.json:
@@ -213,9 +234,41 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _record(args: argparse.Namespace, result) -> dict:
+def _hidden_physics(args: argparse.Namespace, params):
+    """The rig's physical part with ``--add``'s effects (every parameter
+    given, within its bounds at the scenario), and the effects as JSON."""
+    from hybridtable.commands._model_options import load_plugins, parse_added
+    from hybridtable.errors import CommandError
+    from hybridtable.six_dof.physics6 import physics_with, rig_scale
+
+    load_plugins(args)
+    added = parse_added(args)
+    scale = rig_scale(params)
+    checked = []
+    for effect, values in added:
+        missing = [p for p in effect.parameter_names if p not in values]
+        if missing:
+            raise CommandError(
+                f"--add {effect.name}: give {', '.join(f'{p}=...' for p in missing)} "
+                "(the rig's hidden value: nothing to fit it to here)"
+            )
+        checked.append((effect, effect.check_values(values, scale)))
+    physics = physics_with(checked, scale)
+    hidden = [
+        {
+            "name": e.name,
+            "values": dict(v),
+            "units": {p.name: p.unit for p in e.parameters},
+        }
+        for e, v in checked
+    ]
+    return (physics if hidden else None), hidden
+
+
+def _record(args: argparse.Namespace, result, hidden: list, physics) -> dict:
     """Write the run of ``--record`` (the scenario file's content, with the
-    command line's compensator, as its JSON)."""
+    command line's compensator, as its JSON) and, with hidden effects,
+    ``truth.json``."""
     import json
     from pathlib import Path
 
@@ -239,6 +292,17 @@ def _record(args: argparse.Namespace, result) -> dict:
     with staged_folder(folder) as stage:
         write_text_atomic(stage.path / "run1.csv", run6_csv_text(run))
         write_text_atomic(stage.path / "run1.json", json.dumps(run6_json(run), indent=2) + "\n")
+        if hidden:
+            from hybridtable.commands._record import TRUTH_FORMAT
+            from hybridtable.diagnosis.model_file import tool_version
+
+            truth = {
+                "format": TRUTH_FORMAT,
+                "tool_version": tool_version(),
+                "hidden": {"effects": hidden, "physics": physics.to_dict()},
+                "runs": [{"run_id": run_id, "csv": "run1.csv", "json": "run1.json"}],
+            }
+            write_text_atomic(stage.path / "truth.json", json.dumps(truth, indent=2) + "\n")
     return {
         "folder": str(folder),
         "csv": str(folder / "run1.csv"),

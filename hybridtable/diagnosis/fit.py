@@ -14,7 +14,12 @@ from hybridtable.diagnosis.evaluate import Evaluation, Evaluator, RunData, prepa
 from hybridtable.diagnosis.settings import CHANNELS, FIT_ACCURACY
 from hybridtable.effects import selection
 from hybridtable.effects.effect import Effect
-from hybridtable.effects.fitting import Coordinates, LeastSquares, fit_values, standard_errors
+from hybridtable.effects.fitting import (
+    REPLAY_LEAST_SQUARES,
+    Coordinates,
+    fit_values,
+    standard_errors,
+)
 from hybridtable.effects.registry import build_spec, get_effect
 from hybridtable.effects.spec import ModelSpec, RigScale
 from hybridtable.errors import ParameterError
@@ -66,13 +71,6 @@ def model_spec(
 ) -> ModelSpec:
     """The model with the effects ``names`` at ``values`` (effect -> parameter -> value, SI units)."""
     return build_spec([(get_effect(n), values[n]) for n in names], scale)
-
-
-#: The optimizer's settings for replays of recorded runs (each evaluation replays
-#: every run: few, coarse steps).
-REPLAY_LEAST_SQUARES = LeastSquares(
-    method="dogbox", diff_step=1e-2, ftol=1e-5, xtol=1e-4, gtol=1e-8, max_nfev=20
-)
 
 
 def _key(values: Mapping[str, Mapping[str, float]]) -> tuple:

@@ -12,7 +12,14 @@ front ends use the same effect:
 - ``explain`` fits it to a table of CoRs: each row's loop is run through one
   contact under the spec (:meth:`~hybridtable.effects.spec.ModelSpec.realize`:
   the fast engine where every change is a loop parameter, the Drake diagram
-  otherwise).
+  otherwise);
+- on 6-DoF runs (``simulate6 --record --add``, ``compare --add`` of a
+  ``hybridtable-run6/1`` run), its ``apply6`` changes the six-axis rig's
+  physical part (:class:`~hybridtable.six_dof.physics6.DockingPhysics`): the
+  same law where it acts along the contact's normal (a stiffer contact, a
+  longer delay), and the effects only a six-axis rig has (friction across the
+  face, a turned sensor frame, the table's axes turned). An effect has
+  ``apply``, ``apply6`` or both (:attr:`Effect.loops`).
 
 The built-in library is :mod:`hybridtable.effects.library` (one module per
 effect); :mod:`hybridtable.effects.registry` holds it and the users' effects.
@@ -26,6 +33,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -187,6 +195,9 @@ class Signature:
 
 
 Apply = Callable[[ModelSpec, Mapping[str, float], RigScale], ModelSpec]
+#: ``apply6(physics, values, scale) -> physics`` on a
+#: :class:`~hybridtable.six_dof.physics6.DockingPhysics`.
+Apply6 = Callable[[Any, Mapping[str, float], RigScale], Any]
 
 
 Starts = Callable[[RigScale, Sequence[Mapping[str, np.ndarray]]], list[dict[str, float]]]
@@ -203,9 +214,10 @@ class Effect:
     parameters : tuple of EffectParameter
         One or two (the fits stay cheap and identifiable).
     signature : Signature
-    apply : callable
-        ``apply(spec, values, scale) -> spec``: the model with the effect at
-        the parameter values ``values`` (a mapping name -> value).
+    apply : callable or None
+        ``apply(spec, values, scale) -> spec``: the 1-D model with the effect at
+        the parameter values ``values`` (a mapping name -> value); None for an
+        effect only a six-axis rig has.
     stage : {"replay", "closed_loop"}
         Where the effect is seen (and fitted).
     touches : tuple of str
@@ -220,18 +232,23 @@ class Effect:
     default_for : tuple of str
         The front ends (:data:`FRONT_ENDS`) that try the effect when the user
         names none; any front end fits it when named.
+    apply6 : callable or None
+        ``apply6(physics, values, scale) -> physics``: the six-axis rig's
+        physical part with the effect (:mod:`hybridtable.six_dof.physics6`);
+        None for an effect of the 1-D loop only.
     """
 
     name: str
     description: str
     parameters: tuple[EffectParameter, ...]
     signature: Signature
-    apply: Apply
+    apply: Apply | None = None
     stage: str = "replay"
     touches: tuple[str, ...] = ()
     starts: Starts | None = None
     separation_hint: str = ""
     default_for: tuple[str, ...] = FRONT_ENDS
+    apply6: Apply6 | None = None
 
     def __post_init__(self) -> None:
         if not self.name or not self.name.replace("_", "").isalnum():
@@ -240,6 +257,12 @@ class Effect:
             raise ParameterError(f"effect {self.name}: stage must be one of {', '.join(STAGES)}")
         if not self.parameters:
             raise ParameterError(f"effect {self.name}: needs at least one parameter")
+        if self.apply is None and self.apply6 is None:
+            raise ParameterError(f"effect {self.name}: needs apply (1-D), apply6 (6-DoF) or both")
+        if self.apply is None and self.default_for:
+            raise ParameterError(
+                f"effect {self.name}: default_for names 1-D front ends, but it has no apply"
+            )
         names = [p.name for p in self.parameters]
         if len(set(names)) != len(names):
             raise ParameterError(f"effect {self.name}: duplicate parameter names")
@@ -250,6 +273,11 @@ class Effect:
                 f"effect {self.name}: default_for must name {' or '.join(FRONT_ENDS)} "
                 f"(got {', '.join(sorted(unknown))})"
             )
+
+    @property
+    def loops(self) -> tuple[str, ...]:
+        """Where it can be used: ``"1-D"`` (``apply``), ``"6-DoF"`` (``apply6``)."""
+        return ("1-D",) * (self.apply is not None) + ("6-DoF",) * (self.apply6 is not None)
 
     @property
     def parameter_names(self) -> tuple[str, ...]:

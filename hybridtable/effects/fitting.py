@@ -41,6 +41,7 @@ from hybridtable.effects.spec import RigScale
 __all__ = [
     "Values",
     "LeastSquares",
+    "REPLAY_LEAST_SQUARES",
     "Coordinates",
     "Solution",
     "fit_values",
@@ -87,6 +88,13 @@ class LeastSquares:
 
     def nfev(self, n_free: int) -> int:
         return self.max_nfev * n_free if self.per_parameter else self.max_nfev
+
+
+#: The optimizer's settings for replays of recorded runs, 1-D and 6-DoF (each
+#: evaluation replays every run: few, coarse steps).
+REPLAY_LEAST_SQUARES = LeastSquares(
+    method="dogbox", diff_step=1e-2, ftol=1e-5, xtol=1e-4, gtol=1e-8, max_nfev=20
+)
 
 
 @dataclass(frozen=True)

@@ -387,8 +387,17 @@ def guarded(effect: Effect, who: str) -> Effect:
         for p in effect.parameters
     )
     starts = effect.starts and Guarded(effect.starts, f"{who} starts", _finite_starts)
-    apply = _GuardedApply(effect.apply, who)
-    return replace(effect, apply=apply, starts=starts, parameters=parameters)
+    apply = effect.apply and _GuardedApply(effect.apply, who)
+    apply6 = effect.apply6 and Guarded(effect.apply6, f"{who} apply6", _physics6)
+    return replace(effect, apply=apply, apply6=apply6, starts=starts, parameters=parameters)
+
+
+def _physics6(who: str, physics):
+    # the six-axis rig's DockingPhysics (hybridtable.six_dof.physics6, which
+    # builds on this package: known here by its parts, not imported)
+    if not all(hasattr(physics, a) for a in ("changes", "sensor_gain", "table_gain", "apply")):
+        raise PluginError(f"{who} returned {type(physics).__name__}, not a DockingPhysics")
+    return physics
 
 
 class _GuardedApply:
@@ -445,6 +454,11 @@ def build_spec(
     """The model with ``effects`` applied in order to ``base`` (default nominal)."""
     spec = base or ModelSpec()
     for effect, values in effects:
+        if effect.apply is None:
+            raise ParameterError(
+                f"effect {effect.name} acts on a six-axis rig only (6-DoF runs: simulate6 "
+                "--record --add, compare of hybridtable-run6/1 runs)"
+            )
         spec = effect.apply(spec, values, scale)
     return spec
 

@@ -22,11 +22,12 @@ from dataclasses import dataclass
 
 import numpy as np
 from pydrake.systems.framework import Diagram, DiagramBuilder, System
-from pydrake.systems.primitives import LogVectorOutput, Multiplexer, VectorLogSink
+from pydrake.systems.primitives import LogVectorOutput, MatrixGain, Multiplexer, VectorLogSink
 
 from hybridtable.six_dof.compensator import constant_stiffness
 from hybridtable.six_dof.contact import DockingContact, DockingContactSystem, port_start_z_m
 from hybridtable.six_dof.params import DockingLoopParams
+from hybridtable.six_dof.physics6 import DockingPhysics
 from hybridtable.six_dof.registry import make_wrench_compensator
 from hybridtable.six_dof.sensor import add_wrench_sensor
 from hybridtable.six_dof.spacecraft import BODY_STATE_SIZE, RigidSpacecraft, port_state
@@ -41,6 +42,8 @@ __all__ = [
     "build_docking_loop",
     "initial_port_state",
     "table_backend",
+    "set_initial_table",
+    "add_physics_gains",
 ]
 
 #: Blocks of the loop's log, in order: name -> size.
@@ -94,17 +97,61 @@ class DockingLoop:
     compensator: System
     logger: VectorLogSink | None = None
     diagram: Diagram | None = None
+    #: The rig's physical part (None: the scenario's own).
+    physics: DockingPhysics | None = None
 
     def set_initial_conditions(self, root_context) -> None:
         """Write the approach of :attr:`params` into a root context."""
         command, body = initial_port_state(self.params, self.spacecraft)
         sc = self.spacecraft.GetMyMutableContextFromRoot(root_context)
         self.spacecraft.set_state(sc, body)
-        table_state = command.copy()
-        # Steady tracking of the approach ramp (the 1-D "tracking" start).
-        table_state[:6] -= self.params.plant.table.response.ramp_lag_s * command[6:]
-        bc = self.backend.GetMyMutableContextFromRoot(root_context)
-        self.backend.set_initial_state(bc, table_state, command)
+        set_initial_table(self.backend, root_context, self.params, command, self.physics)
+
+
+def set_initial_table(
+    backend: System,
+    root_context,
+    params: DockingLoopParams,
+    command: np.ndarray,
+    physics: DockingPhysics | None = None,
+) -> None:
+    """Start ``backend`` tracking the approach's ramp (the 1-D "tracking"
+    start): at the command it sees (through the physics' table gain), behind
+    it by the table's lag (the rig's table's, with the physics' changes)."""
+    seen = np.asarray(command, dtype=float).copy()
+    if physics is not None and physics.table_gain is not None:
+        seen = _table_matrix(physics) @ seen
+    true = physics.apply(params) if physics is not None else params
+    table_state = seen.copy()
+    table_state[:6] -= true.plant.table.response.ramp_lag_s * seen[6:]
+    context = backend.GetMyMutableContextFromRoot(root_context)
+    backend.set_initial_state(context, table_state, seen)
+
+
+def _table_matrix(physics: DockingPhysics) -> np.ndarray:
+    """The table gain on ``[q; qd]`` (12x12)."""
+    T = np.array(physics.table_gain)
+    return np.block([[T, np.zeros((6, 6))], [np.zeros((6, 6)), T]])
+
+
+def add_physics_gains(
+    builder: DiagramBuilder, physics: DockingPhysics | None, command, backend: System
+):
+    """Connect ``command`` (an output port: ``[q; qd]``) to ``backend``'s
+    ``commanded_state`` through the physics' table gain, and return the port
+    the F/T sensor reads: ``backend``'s ``contact_wrench`` through its sensor
+    gain (Drake's ``MatrixGain``; plain connections where there is none)."""
+    if physics is not None and physics.table_gain is not None:
+        gain = builder.AddNamedSystem("table_gain", MatrixGain(_table_matrix(physics)))
+        builder.Connect(command, gain.get_input_port())
+        command = gain.get_output_port()
+    builder.Connect(command, backend.GetInputPort("commanded_state"))
+    wrench = backend.GetOutputPort("contact_wrench")
+    if physics is not None and physics.sensor_gain is not None:
+        gain = builder.AddNamedSystem("sensor_gain", MatrixGain(np.array(physics.sensor_gain)))
+        builder.Connect(wrench, gain.get_input_port())
+        wrench = gain.get_output_port()
+    return wrench
 
 
 def initial_port_state(
@@ -148,6 +195,7 @@ def add_docking_loop(
     backend: System | None = None,
     compensator: System | None = None,
     log: bool = True,
+    physics: DockingPhysics | None = None,
 ) -> DockingLoop:
     """Add the 6-DoF docking loop to ``builder``, wire it, and return its handles.
 
@@ -161,17 +209,23 @@ def add_docking_loop(
         A wrench compensator (default: the registered ``params.compensator``).
     log : bool
         Log every block of :data:`LOG_LAYOUT` at each tick.
+    physics : DockingPhysics, optional
+        The rig's physical part where it differs from ``params`` (the contact,
+        the table and the sensor are built from :meth:`DockingPhysics.apply`;
+        the spacecraft and the compensator are the rig computer's, from
+        ``params``).
     """
     h = params.sample_period_s
+    true = physics.apply(params) if physics is not None else params
     spacecraft = builder.AddNamedSystem("spacecraft", RigidSpacecraft(params.spacecraft, h))
-    backend = builder.AddNamedSystem("table_backend", backend or table_backend(params))
-    sensor_in, sensor_out = add_wrench_sensor(builder, params.rig.sensor, h, params.rig.noise)
+    backend = builder.AddNamedSystem("table_backend", backend or table_backend(true))
+    sensor_in, sensor_out = add_wrench_sensor(builder, true.rig.sensor, h, true.rig.noise)
     compensator = builder.AddNamedSystem(
         "compensator", compensator or make_wrench_compensator(params, _stiffness_model(params))
     )
     command = spacecraft.GetOutputPort("commanded_state")
-    builder.Connect(command, backend.GetInputPort("commanded_state"))
-    builder.Connect(backend.GetOutputPort("contact_wrench"), sensor_in.get_input_port(0))
+    wrench = add_physics_gains(builder, physics, command, backend)
+    builder.Connect(wrench, sensor_in.get_input_port(0))
     measured = sensor_out.get_output_port(0)
     builder.Connect(measured, compensator.GetInputPort("measured_wrench"))
     builder.Connect(backend.GetOutputPort("table_state"), compensator.GetInputPort("table_state"))
@@ -180,7 +234,7 @@ def add_docking_loop(
         compensator.GetOutputPort("compensated_wrench"),
         spacecraft.GetInputPort("compensated_wrench"),
     )
-    loop = DockingLoop(params, spacecraft, backend, compensator)
+    loop = DockingLoop(params, spacecraft, backend, compensator, physics=physics)
     if log:
         ports = [
             command,

@@ -28,12 +28,20 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from hybridtable.six_dof.physics6 import DockingPhysics
 from hybridtable.six_dof.pose import rotation_vectors_of_quaternions
 from hybridtable.six_dof.replay6 import replay_run6
 from hybridtable.six_dof.run6 import Run6, noise_levels, run6_of_docking
 from hybridtable.six_dof.simulation import peak_force_n, simulate6
 
-__all__ = ["EXPLAINED_SIGMA", "COMPONENTS", "ComponentError", "Comparison6", "compare_run6"]
+__all__ = [
+    "EXPLAINED_SIGMA",
+    "COMPONENTS",
+    "ComponentError",
+    "Comparison6",
+    "compare_run6",
+    "replay_residuals",
+]
 
 #: The largest RMS error (in noise levels) of a component the model explains.
 EXPLAINED_SIGMA = 3.0
@@ -208,8 +216,30 @@ def _errors(run: Run6, predicted: dict[str, np.ndarray], phase: np.ndarray) -> l
     return out
 
 
-def compare_run6(run: Run6) -> Comparison6:
-    """The run against the model's replay and closed loop (see the module).
+def _replayed(run: Run6, physics: DockingPhysics | None) -> dict[str, np.ndarray]:
+    replay = replay_run6(run, physics)
+    return {
+        "f_mea": replay.measured_wrench[:, 3:],
+        "m_mea": replay.measured_wrench[:, :3],
+        "p_act": replay.table_state[:, :3],
+        "theta_act": replay.table_state[:, 3:6],
+    }
+
+
+def replay_residuals(run: Run6, physics: DockingPhysics | None = None) -> np.ndarray:
+    """Every component's replay residual at every tick, in its noise levels,
+    one component after the other (:data:`COMPONENTS`; the fit's residual)."""
+    predicted = _replayed(run, physics)
+    out = []
+    for _, block, j, _ in COMPONENTS:
+        sigma = float(noise_level(run, block)[j])
+        out.append((_block(run, block)[:, j] - predicted[block][: run.n, j]) / sigma)
+    return np.concatenate(out)
+
+
+def compare_run6(run: Run6, physics: DockingPhysics | None = None) -> Comparison6:
+    """The run against the model's replay and closed loop (see the module),
+    the rig's physical part the scenario's or ``physics`` (with effects).
 
     Raises
     ------
@@ -220,15 +250,9 @@ def compare_run6(run: Run6) -> Comparison6:
     params = run.params
     h = params.sample_period_s
     phase, contact = _phases(run)
-    replay = replay_run6(run)
-    replayed = {
-        "f_mea": replay.measured_wrench[:, 3:],
-        "m_mea": replay.measured_wrench[:, :3],
-        "p_act": replay.table_state[:, :3],
-        "theta_act": replay.table_state[:, 3:6],
-    }
+    replayed = _replayed(run, physics)
     model_params = params.with_(force_noise_n=0.0, moment_noise_n_m=0.0, duration_s=run.n * h)
-    simulated = simulate6(model_params)
+    simulated = simulate6(model_params, physics=physics)
     model = run6_of_docking(simulated, f"{run.run_id}-model", run.scenario)
     looped = {b: _block(model, b) for b in ("f_mea", "m_mea", "p_act")}
     looped["theta_act"] = rotation_vectors_of_quaternions(model.blocks["q_act"])

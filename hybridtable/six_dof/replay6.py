@@ -29,7 +29,13 @@ from pydrake.systems.framework import BasicVector, DiagramBuilder, LeafSystem
 from pydrake.systems.primitives import LogVectorOutput, Multiplexer
 
 from hybridtable._plugins import simulation_failure
-from hybridtable.six_dof.builder import initial_port_state, table_backend
+from hybridtable.six_dof.builder import (
+    add_physics_gains,
+    initial_port_state,
+    set_initial_table,
+    table_backend,
+)
+from hybridtable.six_dof.physics6 import DockingPhysics
 from hybridtable.six_dof.run6 import Run6
 from hybridtable.six_dof.sensor import add_wrench_sensor
 from hybridtable.six_dof.spacecraft import RigidSpacecraft
@@ -81,8 +87,9 @@ def _commands(run: Run6) -> np.ndarray:
     return np.hstack([run.pose("des"), run.blocks["v_des"], run.blocks["w_des"]])
 
 
-def replay_run6(run: Run6) -> Replay6:
-    """Replay the run's commands (see the module).
+def replay_run6(run: Run6, physics: DockingPhysics | None = None) -> Replay6:
+    """Replay the run's commands (see the module) through the scenario's
+    physical part, or through ``physics`` (the scenario with effects).
 
     Raises
     ------
@@ -90,15 +97,16 @@ def replay_run6(run: Run6) -> Replay6:
         If Drake's simulation fails (e.g. the Stewart platform leaves its workspace).
     """
     params = run.params
+    true = physics.apply(params) if physics is not None else params
     h = params.sample_period_s
     commands = _commands(run)
     start, _ = initial_port_state(params, RigidSpacecraft(params.spacecraft, h))
     builder = DiagramBuilder()
     playback = builder.AddNamedSystem("playback", CommandPlayback(commands, h, start))
-    backend = builder.AddNamedSystem("table_backend", table_backend(params))
-    sensor_in, sensor_out = add_wrench_sensor(builder, params.rig.sensor, h, None)
-    builder.Connect(playback.get_output_port(), backend.GetInputPort("commanded_state"))
-    builder.Connect(backend.GetOutputPort("contact_wrench"), sensor_in.get_input_port(0))
+    backend = builder.AddNamedSystem("table_backend", table_backend(true))
+    sensor_in, sensor_out = add_wrench_sensor(builder, true.rig.sensor, h, None)
+    wrench = add_physics_gains(builder, physics, playback.get_output_port(), backend)
+    builder.Connect(wrench, sensor_in.get_input_port(0))
     ports = [backend.GetOutputPort("table_state"), sensor_out.get_output_port(0)]
     mux = builder.AddNamedSystem("log_mux", Multiplexer([p.size() for p in ports]))
     for i, port in enumerate(ports):
@@ -107,9 +115,7 @@ def replay_run6(run: Run6) -> Replay6:
     diagram = builder.Build()
     simulator = Simulator(diagram)
     context = simulator.get_mutable_context()
-    table_state = start.copy()
-    table_state[:6] -= params.plant.table.response.ramp_lag_s * start[6:]
-    backend.set_initial_state(backend.GetMyMutableContextFromRoot(context), table_state, start)
+    set_initial_table(backend, context, params, start, physics)
     simulator.Initialize()
     try:
         simulator.AdvanceTo((run.n - 1) * h)

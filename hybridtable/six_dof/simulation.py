@@ -16,6 +16,7 @@ from hybridtable.six_dof.builder import LOG_LAYOUT, DockingLoop, build_docking_l
 from hybridtable.six_dof.drogue import floor_depth_m, probe_force_n, throat_depth_m
 from hybridtable.six_dof.metrics import CAPTURE_SPEED_RATIO, DockingMetrics, docking_metrics
 from hybridtable.six_dof.params import DockingLoopParams
+from hybridtable.six_dof.physics6 import DockingPhysics
 from hybridtable.six_dof.pose import rotation_exp
 
 __all__ = [
@@ -183,6 +184,7 @@ def simulate6(
     loop: DockingLoop | None = None,
     progress: Callable[[float, float], None] | None = None,
     on_loop: Callable[[DockingLoop], None] | None = None,
+    physics: DockingPhysics | None = None,
 ) -> DockingRun:
     """Simulate the 6-DoF loop through its first contact.
 
@@ -204,6 +206,10 @@ def simulate6(
         ``progress(t_s, t_end_s)`` after each chunk of simulated time.
     on_loop : callable, optional
         Called with the loop before the simulation starts.
+    physics : DockingPhysics, optional
+        The rig's physical part where it differs from ``params`` (hidden
+        effects: :mod:`~hybridtable.six_dof.physics6`); ``params`` stay the
+        rig computer's.
 
     Raises
     ------
@@ -234,7 +240,7 @@ def simulate6(
             f"{params.sample_rate_hz:g} Hz); at most {MAX_TICKS:g} (a lower sample_rate_hz or "
             "a shorter duration_s)"
         )
-    loop = loop or build_docking_loop(params)
+    loop = loop or build_docking_loop(params, physics=physics)
     if loop.diagram is None:
         raise ValueError(
             "simulate6: loop.diagram is None: the loop was added to a builder of yours; "

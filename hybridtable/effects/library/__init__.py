@@ -32,14 +32,17 @@ from hybridtable.effects.library import (
     coulomb_friction,
     extra_delay,
     force_bias,
+    friction_across_face,
     hunt_crossley,
     lead_time_error,
     mass_error,
     nonlinear_stiffness,
     sensor_filter,
+    sensor_misalignment,
     series_compliance,
     stiffness_error,
     table_damping,
+    table_misalignment,
     table_resonance,
     table_response,
 )
@@ -66,6 +69,10 @@ BUILTIN_EFFECTS: tuple[Effect, ...] = (
     table_damping.EFFECT,
     compensator_stiffness_error.EFFECT,
     contact_damping_ratio.EFFECT,
+    # a six-axis rig's only (6-DoF runs)
+    friction_across_face.EFFECT,
+    sensor_misalignment.EFFECT,
+    table_misalignment.EFFECT,
 )
 
 

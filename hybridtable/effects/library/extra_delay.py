@@ -48,4 +48,5 @@ EFFECT = Effect(
     starts=delay_starts,
     separation_hint="a faster or shorter contact (a larger approach velocity or a "
     "smaller spacecraft mass)",
+    apply6=lambda physics, v, s: physics.plus(sensor_delay_s=v["extra_delay_s"]),
 )

@@ -34,4 +34,8 @@ EFFECT = Effect(
     "contact point's position (a series compliance and a softer contact act as "
     "the same effective stiffness)",
     default_for=("diagnose",),  # a CoR table tries it when named (--effects)
+    # on a six-axis rig: the pads' total stiffness
+    apply6=lambda physics, v, s: physics.with_(
+        contact_stiffness_n_per_m=v["contact_stiffness_n_per_m"]
+    ),
 )

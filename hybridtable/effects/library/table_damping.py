@@ -37,4 +37,5 @@ EFFECT = Effect(
     scale_loop_field("table_damping_ratio", "table_damping_factor"),
     touches=("table.damping",),
     default_for=("explain",),
+    apply6=lambda physics, v, s: physics.times(table_damping_ratio=v["table_damping_factor"]),
 )

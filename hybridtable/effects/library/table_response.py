@@ -43,4 +43,5 @@ EFFECT = Effect(
     scale_loop_field("table_response_hz", "table_response_ratio"),
     touches=("table.response",),
     default_for=("explain",),
+    apply6=lambda physics, v, s: physics.times(table_response_hz=v["table_response_ratio"]),
 )

@@ -1,0 +1,145 @@
+"""Fit 6-DoF effects to recorded 6-DoF runs: ``compare --add`` on
+``hybridtable-run6/1`` runs.
+
+The residual is the replay's (:func:`~hybridtable.six_dof.replay6.replay_run6`
+through the effects' :class:`~hybridtable.six_dof.physics6.DockingPhysics`):
+every compared component (:data:`~hybridtable.six_dof.compare6.COMPONENTS`)
+of every tick of every run, in that component's noise levels. The fit is the
+effect core's (:func:`~hybridtable.effects.fitting.fit_values`, with the 1-D
+replay's settings, :data:`~hybridtable.effects.fitting.REPLAY_LEAST_SQUARES`),
+in each parameter's coordinate; standard errors from the same core. The
+effects' bounds are taken at the first run's scenario
+(:func:`~hybridtable.six_dof.physics6.rig_scale`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from hybridtable.effects.effect import Effect
+from hybridtable.effects.fitting import (
+    REPLAY_LEAST_SQUARES,
+    Coordinates,
+    Values,
+    fit_values,
+    standard_errors,
+)
+from hybridtable.errors import ParameterError
+from hybridtable.six_dof.compare6 import replay_residuals
+from hybridtable.six_dof.physics6 import DockingPhysics, physics_with, rig_scale
+from hybridtable.six_dof.run6 import Run6
+
+__all__ = ["Fit6", "fit_runs6"]
+
+
+@dataclass
+class Fit6:
+    """Effects fitted to 6-DoF runs.
+
+    Attributes
+    ----------
+    values : dict
+        Effect -> parameter -> value (SI units; the given ones too).
+    std : dict
+        Effect -> parameter -> standard error (None: given, or not identifiable).
+    fitted : dict
+        Effect -> the parameters fitted (the others were given).
+    chi2_before, chi2_after : float
+        Sum of squared replay residuals (noise levels) without and with the effects.
+    n_residuals : int
+    evaluations : int
+        Replays of every run the fit took.
+    success : bool
+        Every least-squares polish converged.
+    physics : DockingPhysics
+        The rig's physical part with the fitted effects.
+    """
+
+    values: Values
+    std: dict[str, dict[str, float | None]]
+    fitted: dict[str, tuple[str, ...]]
+    chi2_before: float
+    chi2_after: float
+    n_residuals: int
+    evaluations: int
+    success: bool
+    physics: DockingPhysics
+
+    def to_dict(self) -> dict:
+        return {
+            "values": self.values,
+            "std": self.std,
+            "fitted": {k: list(v) for k, v in self.fitted.items()},
+            "chi2_before": self.chi2_before,
+            "chi2_after": self.chi2_after,
+            "n_residuals": self.n_residuals,
+            "evaluations": self.evaluations,
+            "success": self.success,
+            "physics": self.physics.to_dict(),
+        }
+
+
+def fit_runs6(runs: Sequence[Run6], effects: Sequence[tuple[Effect, Mapping[str, float]]]) -> Fit6:
+    """Fit the parameters of ``effects`` not given (each ``(effect, given
+    values)``) to ``runs`` (see the module).
+
+    Raises
+    ------
+    ParameterError
+        For an effect without ``apply6`` (the 1-D loop's only), or two effects
+        of one name.
+    SimulationError
+        If a replay fails.
+    """
+    if not runs:
+        raise ParameterError("no runs to fit to")
+    names = [e.name for e, _ in effects]
+    if len(set(names)) != len(names):
+        raise ParameterError(f"an effect is named twice: {', '.join(names)}")
+    for effect, _ in effects:
+        if effect.apply6 is None:
+            raise ParameterError(
+                f"effect {effect.name} acts on the 1-D loop only (it has no apply6 for a "
+                "six-axis rig)"
+            )
+    scale = rig_scale(runs[0].params)
+    by_name = {e.name: e for e, _ in effects}
+    given: Values = {}
+    for effect, values in effects:
+        checked = effect.check_values(values, scale)  # bounds, names
+        given[effect.name] = {k: checked[k] for k in values}
+    origin: Values = {}
+    for effect, _ in effects:
+        origin[effect.name] = {
+            p.name: given[effect.name].get(p.name, p.at(scale).null) for p in effect.parameters
+        }
+    free = tuple(
+        (e.name, p) for e, _ in effects for p in e.parameters if p.name not in given[e.name]
+    )
+    evaluations = 0
+
+    def residual(values: Values) -> np.ndarray:
+        nonlocal evaluations
+        evaluations += 1
+        physics = physics_with([(by_name[n], values[n]) for n in names], scale)
+        return np.concatenate([replay_residuals(r, physics) for r in runs])
+
+    r0 = np.concatenate([replay_residuals(r) for r in runs])
+    space = Coordinates(free, scale, origin)
+    solution = fit_values(residual, space, settings=REPLAY_LEAST_SQUARES, held=given)
+    r1 = residual(solution.values)
+    std = standard_errors(residual, solution.coordinates, r1, REPLAY_LEAST_SQUARES.diff_step)
+    return Fit6(
+        values=solution.values,
+        std=std,
+        fitted={n: tuple(p.name for m, p in free if m == n) for n in names},
+        chi2_before=float(r0 @ r0),
+        chi2_after=float(r1 @ r1),
+        n_residuals=int(r1.size),
+        evaluations=evaluations,
+        success=solution.success,
+        physics=physics_with([(by_name[n], solution.values[n]) for n in names], scale),
+    )

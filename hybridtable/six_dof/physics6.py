@@ -1,0 +1,187 @@
+"""What a six-axis rig's physical part does differently from its scenario:
+the 6-DoF counterpart of the 1-D :class:`~hybridtable.measurement.rig.RigPhysics`.
+
+A :class:`DockingPhysics` is what the 6-DoF effects change
+(:attr:`~hybridtable.effects.effect.Effect.apply6`):
+
+- ``changes``: quantities of the scenario by flat name
+  (:data:`~hybridtable.six_dof.params.DockingLoopParams.FIELDS`) that the real
+  contact, table or sensor has otherwise: a stiffer contact, a longer sensor
+  delay; ``offsets`` and ``factors`` change one relative to the scenario's
+  value (friction across the face added to the stated coefficient, the
+  table's damping ratio times a factor). The rig computer keeps the
+  scenario's (its compensator believes them, its spacecraft is the
+  scenario's);
+- ``sensor_gain`` (6x6): the F/T sensor reads ``G w`` where the contact
+  applies ``w = [moment; force]`` (W, about the port): a sensor frame turned
+  by ``R`` is ``G = diag(R, R)``, cross-talk between channels an off-diagonal
+  ``G``;
+- ``table_gain`` (6x6): the table reaches ``T q`` where it is commanded to
+  pose ``q = [p; theta]`` (and ``T qd`` for the twist): its axes turned or
+  coupled.
+
+Both gains are Drake's ``MatrixGain`` in the diagram (the closed loop,
+:func:`~hybridtable.six_dof.builder.add_docking_loop`, and the replay,
+:func:`~hybridtable.six_dof.replay6.replay_run6`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+
+from hybridtable.effects.effect import Effect
+from hybridtable.effects.spec import RigScale
+from hybridtable.errors import ParameterError
+from hybridtable.six_dof.params import DockingLoopParams
+from hybridtable.six_dof.pose import rotation_exp
+
+__all__ = ["DockingPhysics", "NOMINAL_PHYSICS", "PHYSICAL_FIELDS", "physics_with", "rig_scale"]
+
+#: The scenario's own quantities an effect may change (the rig computer's
+#: beliefs, the approach and the spacecraft are the scenario's, never the rig's).
+PHYSICAL_FIELDS: tuple[str, ...] = (
+    "contact_stiffness_n_per_m",
+    "contact_dissipation_s_per_m",
+    "friction_coefficient",
+    "sensor_delay_s",
+    "table_response_hz",
+    "table_damping_ratio",
+)
+
+
+def _matrix(name: str, value: Any) -> tuple[tuple[float, ...], ...] | None:
+    if value is None:
+        return None
+    m = np.asarray(value, dtype=float)
+    if m.shape != (6, 6) or not np.all(np.isfinite(m)):
+        raise ParameterError(f"{name} must be a finite 6x6 matrix (got shape {m.shape})")
+    return tuple(tuple(float(x) for x in row) for row in m)
+
+
+@dataclass(frozen=True)
+class DockingPhysics:
+    """The rig's physical part as it is (see the module); the default is the
+    scenario's own."""
+
+    changes: Mapping[str, Any] = field(default_factory=dict)
+    sensor_gain: tuple[tuple[float, ...], ...] | None = None
+    table_gain: tuple[tuple[float, ...], ...] | None = None
+    offsets: Mapping[str, float] = field(default_factory=dict)
+    factors: Mapping[str, float] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        for name in ("changes", "offsets", "factors"):
+            given = dict(getattr(self, name))
+            unknown = [k for k in given if k not in PHYSICAL_FIELDS]
+            if unknown:
+                raise ParameterError(
+                    f"a 6-DoF effect may change {', '.join(PHYSICAL_FIELDS)} (got {unknown[0]!r})"
+                )
+            object.__setattr__(self, name, MappingProxyType(given))
+        object.__setattr__(self, "sensor_gain", _matrix("sensor_gain", self.sensor_gain))
+        object.__setattr__(self, "table_gain", _matrix("table_gain", self.table_gain))
+
+    @property
+    def nominal(self) -> bool:
+        return not (self.changes or self.offsets or self.factors) and (
+            self.sensor_gain is None and self.table_gain is None
+        )
+
+    def with_(self, **changes: Any) -> DockingPhysics:
+        """These quantities changed (by flat name)."""
+        return replace(self, changes={**self.changes, **changes})
+
+    def plus(self, **offsets: float) -> DockingPhysics:
+        """These quantities the scenario's plus an offset (added to earlier ones)."""
+        total = {k: self.offsets.get(k, 0.0) + float(v) for k, v in offsets.items()}
+        return replace(self, offsets={**self.offsets, **total})
+
+    def times(self, **factors: float) -> DockingPhysics:
+        """These quantities the scenario's times a factor (times earlier ones)."""
+        total = {k: self.factors.get(k, 1.0) * float(v) for k, v in factors.items()}
+        return replace(self, factors={**self.factors, **total})
+
+    def times_sensor(self, gain: np.ndarray) -> DockingPhysics:
+        """The sensor reading ``gain`` times what it read."""
+        old = np.eye(6) if self.sensor_gain is None else np.array(self.sensor_gain)
+        return replace(self, sensor_gain=np.asarray(gain) @ old)
+
+    def times_table(self, gain: np.ndarray) -> DockingPhysics:
+        """The table reaching ``gain`` times what it reached."""
+        old = np.eye(6) if self.table_gain is None else np.array(self.table_gain)
+        return replace(self, table_gain=np.asarray(gain) @ old)
+
+    def turn_sensor(self, rotation_vector_rad: Any) -> DockingPhysics:
+        """The F/T sensor's frame turned by ``exp(theta)``: it reads
+        ``[R m; R f]`` of the wrench ``[m; f]``."""
+        R = rotation_exp(np.asarray(rotation_vector_rad, dtype=float))
+        return self.times_sensor(np.block([[R, np.zeros((3, 3))], [np.zeros((3, 3)), R]]))
+
+    def turn_table(self, rotation_vector_rad: Any) -> DockingPhysics:
+        """The table's axes turned by ``exp(theta)``: commanded to ``[p;
+        theta]`` it reaches ``[R p; R theta]`` (the rotation vector turned to
+        first order)."""
+        R = rotation_exp(np.asarray(rotation_vector_rad, dtype=float))
+        return self.times_table(np.block([[R, np.zeros((3, 3))], [np.zeros((3, 3)), R]]))
+
+    def apply(self, params: DockingLoopParams) -> DockingLoopParams:
+        """The loop's parameters of the rig's physical part (the contact, the
+        table, the sensor): ``params`` with :attr:`changes`, then the
+        :attr:`offsets` and :attr:`factors` on their values (a friction or a
+        delay below 0 is 0)."""
+        values: dict[str, Any] = dict(self.changes)
+        for name, delta in self.offsets.items():
+            values[name] = max(0.0, float(values.get(name, getattr(params, name))) + delta)
+        for name, factor in self.factors.items():
+            values[name] = float(values.get(name, getattr(params, name))) * factor
+        return params.with_(**values) if values else params
+
+    def to_dict(self) -> dict:
+        return {
+            "changes": dict(self.changes),
+            "offsets": dict(self.offsets),
+            "factors": dict(self.factors),
+            "sensor_gain": None
+            if self.sensor_gain is None
+            else [list(r) for r in self.sensor_gain],
+            "table_gain": None if self.table_gain is None else [list(r) for r in self.table_gain],
+        }
+
+
+#: The scenario's own physics.
+NOMINAL_PHYSICS = DockingPhysics()
+
+
+def rig_scale(params: DockingLoopParams) -> RigScale:
+    """The magnitudes an effect's bounds are taken at: the scenario's contact
+    stiffness, spacecraft mass, tick, delay, approach speed and table."""
+    return RigScale.from_params(params, params.sample_period_s)
+
+
+def physics_with(
+    effects: Sequence[tuple[Effect, Mapping[str, float]]],
+    scale: RigScale,
+    base: DockingPhysics = NOMINAL_PHYSICS,
+) -> DockingPhysics:
+    """The rig's physical part with ``effects`` (each with its values) applied
+    in order to ``base`` (:attr:`~hybridtable.effects.effect.Effect.apply6`).
+
+    Raises
+    ------
+    ParameterError
+        For an effect of the 1-D loop only.
+    """
+    physics = base
+    for effect, values in effects:
+        if effect.apply6 is None:
+            raise ParameterError(
+                f"effect {effect.name} acts on the 1-D loop only (it has no apply6 for a "
+                "six-axis rig)"
+            )
+        physics = effect.apply6(physics, values, scale)
+    return physics
