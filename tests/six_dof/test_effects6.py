@@ -1,0 +1,122 @@
+"""Effects on a six-axis rig (Effect.apply6, six_dof/physics6.py, fit6.py):
+each vanishes at its null values, acts as its law says, and a fit to the
+replays of a noisy run finds the hidden values."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from hybridtable.effects.registry import build_spec, effect_names, get_effect
+from hybridtable.effects.spec import RigScale
+from hybridtable.errors import ParameterError
+from hybridtable.six_dof.fit6 import fit_runs6
+from hybridtable.six_dof.physics6 import DockingPhysics, physics_with, rig_scale
+from hybridtable.six_dof.pose import rotation_exp
+from hybridtable.six_dof.replay6 import replay_run6
+from hybridtable.six_dof.run6 import run6_of_docking
+from hybridtable.six_dof.simulation import simulate6
+from tests.six_dof.test_run6 import SCENARIO
+
+SIX = [n for n in effect_names() if get_effect(n).apply6 is not None]
+
+
+def _params(**kwargs):
+    from hybridtable.six_dof.scenario import parse_scenario
+
+    return parse_scenario(SCENARIO).with_(**kwargs)
+
+
+@pytest.fixture(scope="module")
+def nominal():
+    """The scenario's own run (friction 0.3 stated, so the friction's offset
+    is seen), and its replay."""
+    scenario = {**SCENARIO, "contact": {**SCENARIO["contact"], "friction_coefficient": 0.3}}
+    params = _params(friction_coefficient=0.3)
+    run = run6_of_docking(simulate6(params), "nominal", scenario)
+    return run, replay_run6(run)
+
+
+def test_the_six_axis_effects_are_listed_and_refused_by_the_1d_loop():
+    assert {"friction_across_face", "sensor_misalignment", "table_misalignment"} <= set(SIX)
+    assert {"stiffness_error", "extra_delay", "table_response", "table_damping"} <= set(SIX)
+    face = get_effect("friction_across_face")
+    assert face.loops == ("6-DoF",) and face.default_for == ()
+    scale = RigScale(1e5, 2533.0, 1e-3, 5e-3, 0.1, 25.0)
+    with pytest.raises(ParameterError, match="six-axis rig only"):
+        build_spec([(face, {"extra_friction_coefficient": 0.1})], scale)
+    with pytest.raises(ParameterError, match="1-D loop only"):
+        physics_with([(get_effect("hunt_crossley"), {})], scale)
+
+
+@pytest.mark.parametrize("name", SIX)
+def test_each_effect_vanishes_at_its_null_values_and_acts_away_from_them(nominal, name):
+    run, replay = nominal
+    effect = get_effect(name)
+    scale = rig_scale(run.params)
+    null = effect.null_values(scale)
+    at_null = replay_run6(run, physics_with([(effect, null)], scale))
+    np.testing.assert_array_equal(at_null.measured_wrench, replay.measured_wrench)
+    np.testing.assert_array_equal(at_null.table_state, replay.table_state)
+    away = {
+        p.name: min(null[p.name] + 5.0 * p.typical(scale), p.bounds(scale)[1])
+        for p in effect.parameters
+    }
+    moved = replay_run6(run, physics_with([(effect, away)], scale))
+    assert np.max(np.abs(moved.measured_wrench - replay.measured_wrench)) > 1.0  # N or N m
+
+
+def test_a_turned_sensor_reads_the_turned_wrench_and_a_turned_table_reaches_the_turned_pose(
+    nominal,
+):
+    run, replay = nominal
+    theta = np.array([0.01, -0.02, 0.005])
+    R = rotation_exp(theta)
+    turned = replay_run6(run, DockingPhysics().turn_sensor(theta))
+    w = replay.measured_wrench
+    expected = np.hstack([w[:, :3] @ R.T, w[:, 3:] @ R.T])
+    np.testing.assert_allclose(turned.measured_wrench, expected, rtol=0, atol=1e-9)
+    # an ideal table reaches the command it sees: R times the commanded pose
+    ideal = run.params.with_(table_response_hz=float("inf"))
+    run_ideal = run6_of_docking(simulate6(ideal), "ideal", {**SCENARIO, "table": {}})
+    table = replay_run6(run_ideal, DockingPhysics().turn_table(theta)).table_state
+    q = run_ideal.pose("des")
+    np.testing.assert_allclose(table[1:, :3], q[:-1, :3] @ R.T, rtol=0, atol=1e-12)
+
+
+def test_a_fit_to_a_noisy_run_finds_the_hidden_values():
+    """Hidden: a turned sensor and friction across the face; F/T noise in the
+    loop, pose noise on the log."""
+    scenario = {
+        **SCENARIO,
+        "rig": {**SCENARIO["rig"], "force_noise_n": 2.0, "moment_noise_n_m": 0.5},
+        "compensator": {"name": "SDMDC", "force_deadband_n": 12.0},
+    }
+    from hybridtable.six_dof.scenario import parse_scenario
+
+    params = parse_scenario(scenario)
+    truth = {"sensor_roll_rad": 0.01, "sensor_pitch_rad": -0.02, "sensor_yaw_rad": 0.005}
+    friction = {"extra_friction_coefficient": 0.2}
+    hidden = physics_with(
+        [
+            (get_effect("sensor_misalignment"), truth),
+            (get_effect("friction_across_face"), friction),
+        ],
+        rig_scale(params),
+    )
+    run = run6_of_docking(simulate6(params, physics=hidden), "hidden", scenario, 2e-6, 1e-6)
+    fit = fit_runs6(
+        [run], [(get_effect("sensor_misalignment"), {}), (get_effect("friction_across_face"), {})]
+    )
+    assert fit.chi2_after < 0.01 * fit.chi2_before
+    assert fit.chi2_after / fit.n_residuals < 1.5  # down to the noise
+    for name, values in (("sensor_misalignment", truth), ("friction_across_face", friction)):
+        for k, v in values.items():
+            std = fit.std[name][k]
+            assert std is not None and abs(fit.values[name][k] - v) < 4.0 * std + 1e-9, (k, std)
+    # a given value is held
+    held = fit_runs6(
+        [run], [(get_effect("friction_across_face"), {"extra_friction_coefficient": 0.2})]
+    )
+    assert held.values["friction_across_face"]["extra_friction_coefficient"] == 0.2
+    assert held.fitted["friction_across_face"] == ()
