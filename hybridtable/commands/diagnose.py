@@ -45,7 +45,9 @@ def register(sub) -> None:
         "is 'none', the effect(s) named, or 'unexplained'. Built-in effects: "
         + ", ".join(BUILTIN_EFFECT_NAMES)
         + " (plus registered plug-ins). The console opens with one sentence; --json "
-        "gives every figure.",
+        "gives every figure. 6-DoF runs (hybridtable-run6/1) are diagnosed on their "
+        "replays, every component in noise levels, over the effects of a six-axis rig "
+        "(docs/run6-format.md).",
     )
     add_run_arguments(p, report="write report.md with PNG figures into this folder")
     p.add_argument(
@@ -104,7 +106,12 @@ def run(args: argparse.Namespace) -> int:
         summary_sentence,
         write_report,
     )
+    from hybridtable.six_dof.run6 import is_run6
 
+    if is_run6(args.runs):
+        from hybridtable.commands._diagnose6 import diagnose6
+
+        return diagnose6(args)
     load_plugins(args)
     effects = None
     if args.effects is not None:  # given, even empty (--effects=)

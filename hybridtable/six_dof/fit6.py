@@ -27,12 +27,13 @@ from hybridtable.effects.fitting import (
     fit_values,
     standard_errors,
 )
+from hybridtable.effects.selection import Block
 from hybridtable.errors import ParameterError
-from hybridtable.six_dof.compare6 import replay_residuals
+from hybridtable.six_dof.compare6 import COMPONENTS, replay_residuals
 from hybridtable.six_dof.physics6 import DockingPhysics, physics_with, rig_scale
 from hybridtable.six_dof.run6 import Run6
 
-__all__ = ["Fit6", "fit_runs6"]
+__all__ = ["Fit6", "fit_runs6", "blocks", "BLOCK_FLOOR"]
 
 
 @dataclass
@@ -56,6 +57,9 @@ class Fit6:
         Every least-squares polish converged.
     physics : DockingPhysics
         The rig's physical part with the fitted effects.
+    residuals : ndarray
+        The replay residuals with them (noise levels; run after run, each
+        component's ticks in turn: :func:`blocks`).
     """
 
     values: Values
@@ -67,6 +71,7 @@ class Fit6:
     evaluations: int
     success: bool
     physics: DockingPhysics
+    residuals: np.ndarray
 
     def to_dict(self) -> dict:
         return {
@@ -82,9 +87,33 @@ class Fit6:
         }
 
 
-def fit_runs6(runs: Sequence[Run6], effects: Sequence[tuple[Effect, Mapping[str, float]]]) -> Fit6:
+def blocks(runs: Sequence[Run6], residuals: np.ndarray) -> list[Block]:
+    """The residuals (:func:`~hybridtable.six_dof.compare6.replay_residuals`
+    of each run in turn) as one block per run and component, for the
+    information criterion (:mod:`hybridtable.effects.selection`; their
+    variance estimated, never below :data:`BLOCK_FLOOR`)."""
+    out, start = [], 0
+    for run in runs:
+        for _ in COMPONENTS:
+            part = residuals[start : start + run.n]
+            out.append(Block(float(part @ part), run.n, BLOCK_FLOOR))
+            start += run.n
+    return out
+
+
+#: The smallest variance (noise levels squared) a block is credited with: a
+#: model is not better for errors under a hundredth of the noise.
+BLOCK_FLOOR = 1e-4
+
+
+def fit_runs6(
+    runs: Sequence[Run6],
+    effects: Sequence[tuple[Effect, Mapping[str, float]]],
+    start: Mapping[str, Mapping[str, float]] | None = None,
+) -> Fit6:
     """Fit the parameters of ``effects`` not given (each ``(effect, given
-    values)``) to ``runs`` (see the module).
+    values)``) to ``runs`` (see the module); ``start``: an informed start
+    (effect -> parameter -> value, e.g. an earlier fit's), besides the null.
 
     Raises
     ------
@@ -129,7 +158,8 @@ def fit_runs6(runs: Sequence[Run6], effects: Sequence[tuple[Effect, Mapping[str,
 
     r0 = np.concatenate([replay_residuals(r) for r in runs])
     space = Coordinates(free, scale, origin)
-    solution = fit_values(residual, space, settings=REPLAY_LEAST_SQUARES, held=given)
+    starts = [start] if start else []
+    solution = fit_values(residual, space, starts, REPLAY_LEAST_SQUARES, held=given)
     r1 = residual(solution.values)
     std = standard_errors(residual, solution.coordinates, r1, REPLAY_LEAST_SQUARES.diff_step)
     return Fit6(
@@ -142,4 +172,5 @@ def fit_runs6(runs: Sequence[Run6], effects: Sequence[tuple[Effect, Mapping[str,
         evaluations=evaluations,
         success=solution.success,
         physics=physics_with([(by_name[n], solution.values[n]) for n in names], scale),
+        residuals=r1,
     )

@@ -29,7 +29,6 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
-from types import MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -82,7 +81,7 @@ class DockingPhysics:
                 raise ParameterError(
                     f"a 6-DoF effect may change {', '.join(PHYSICAL_FIELDS)} (got {unknown[0]!r})"
                 )
-            object.__setattr__(self, name, MappingProxyType(given))
+            object.__setattr__(self, name, given)  # a copy (picklable for workers)
         object.__setattr__(self, "sensor_gain", _matrix("sensor_gain", self.sensor_gain))
         object.__setattr__(self, "table_gain", _matrix("table_gain", self.table_gain))
 

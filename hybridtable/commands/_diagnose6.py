@@ -1,0 +1,76 @@
+"""``hybridtable diagnose`` on 6-DoF runs (``hybridtable-run6/1``): which
+effect the six-axis rig's model misses (:mod:`hybridtable.six_dof.diagnose6`)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from hybridtable.errors import CommandError
+
+__all__ = ["diagnose6"]
+
+#: diagnose's options that act on the 1-D runs only, with their defaults.
+_ONE_D_ONLY = {"report": None, "save_model": None}
+
+
+def diagnose6(args: argparse.Namespace) -> int:
+    """Read every 6-DoF run, run the forward selection, print the verdict,
+    the components' errors before and after and each round's ranking."""
+    from hybridtable.commands._common import check_outputs, log_layout_of, log_map_entry, write_json
+    from hybridtable.commands._model_options import load_plugins
+    from hybridtable.effects.registry import get_effect
+    from hybridtable.effects.workers import worker_count
+    from hybridtable.six_dof.diagnose6 import diagnose_runs6
+    from hybridtable.six_dof.run6 import RUN6_COLUMNS, read_runs6
+
+    for name, default in _ONE_D_ONLY.items():
+        if getattr(args, name, default) != default:
+            flag = "--" + name.replace("_", "-")
+            raise CommandError(f"{flag} is not available for 6-DoF runs (hybridtable-run6/1) yet")
+    load_plugins(args)
+    effects = None
+    if args.effects is not None:
+        effects = [e.strip() for e in args.effects.split(",") if e.strip()]
+        if not effects:
+            raise CommandError("--effects names no effect")
+        for e in effects:
+            if get_effect(e).apply6 is None:
+                raise CommandError(
+                    f"--effects {e}: the effect acts on the 1-D loop only (hybridtable effects, "
+                    "column loops, lists those of a six-axis rig)"
+                )
+    layout = log_layout_of(args, RUN6_COLUMNS)
+    runs = read_runs6(args.runs, layout)  # every defect before any work
+    inputs = [p.resolve() for r in runs for p in (r.csv_path, r.json_path) if p is not None]
+    check_outputs(args, inputs, files={"--json": args.json})
+    quiet = args.json == "-"
+    result = diagnose_runs6(
+        runs,
+        effects,
+        workers=worker_count(args.workers),
+        progress=not args.no_progress and not quiet and sys.stderr.isatty(),
+        max_effects=args.max_effects,
+    )
+    if not quiet:
+        print(result.sentence())
+        print(
+            f"\nRMS replay error per component, noise levels ({len(runs)} run(s), "
+            f"{result.fits} fits)"
+        )
+        print(f"  {'component':<12}{'nominal':>10}{'model':>10}")
+        for name, e0 in result.nominal_errors.items():
+            print(f"  {name:<12}{e0:>10.3g}{result.final_errors[name]:>10.3g}")
+        for i, step in enumerate(result.steps, 1):
+            ranked = sorted(
+                (r for r in step.ranking if "delta_bic" in r),
+                key=lambda r: r["delta_bic"],
+                reverse=True,
+            )
+            listed = ", ".join(f"{r['effect']} {r['delta_bic']:.4g}" for r in ranked[:4])
+            print(f"round {i}: {step.why} (delta BIC: {listed})")
+    if args.json:
+        out = {"format": "hybridtable-run6/1", **result.to_dict()}
+        out["log_map"] = log_map_entry(layout, runs)
+        write_json(args.json, out, args)
+    return 0

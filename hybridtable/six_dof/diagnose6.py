@@ -1,0 +1,293 @@
+"""Which physical effect a six-axis rig's model is missing: ``diagnose`` on
+6-DoF runs (``hybridtable-run6/1``), on the one effect core.
+
+The data are the runs' replays (:func:`~hybridtable.six_dof.compare6.replay_residuals`:
+every component of every tick in its noise levels). Forward selection over
+the candidates (every registered effect with ``apply6``, or those named):
+
+1. the nominal model's error: each component's RMS replay error in noise
+   levels; the model *explains* the runs when the largest is at most
+   :data:`~hybridtable.diagnosis.settings.EXPLAINED_MAX_ERROR`;
+2. each round fits every candidate that touches nothing already selected,
+   jointly with the selected effects (started at their fitted values; the
+   effect core's fit, :func:`~hybridtable.six_dof.fit6.fit_runs6`), in forked
+   workers, and scores it by the information criterion over the blocks (one a
+   run and component, the variance of each estimated:
+   :func:`~hybridtable.effects.selection.delta_bic`);
+3. the best enters when it is significant (``delta_bic`` above
+   :data:`~hybridtable.diagnosis.settings.BIC_THRESHOLD`) and relevant: it
+   removes at least :data:`~hybridtable.diagnosis.settings.MIN_EXCESS_REMOVED`
+   of the worst component's error above the noise (a significant effect that
+   leaves the error where it was explains nothing); candidates within
+   :data:`~hybridtable.diagnosis.settings.INDISTINGUISHABLE_BIC` of it are its
+   look-alikes, which the data cannot tell apart;
+4. it stops when the model explains the runs, when no candidate enters, or
+   after ``max_effects`` (:data:`MAX_EFFECTS`).
+
+The verdict is one of: nothing is missing (the nominal model explains the
+runs), the effects found (with their values, standard errors and the error
+falling), or that the runs are not explained (the best the library does, and
+where the misfit still sits: an effect outside the library).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from hybridtable.diagnosis.settings import (
+    BIC_THRESHOLD,
+    EXPLAINED_MAX_ERROR,
+    INDISTINGUISHABLE_BIC,
+    MIN_EXCESS_REMOVED,
+)
+from hybridtable.effects.registry import effect_names, get_effect
+from hybridtable.effects.selection import delta_bic
+from hybridtable.effects.workers import pool_map
+from hybridtable.errors import ParameterError, SimulationError
+from hybridtable.six_dof.compare6 import COMPONENTS, replay_residuals
+from hybridtable.six_dof.fit6 import Fit6, blocks, fit_runs6
+from hybridtable.six_dof.run6 import Run6
+
+__all__ = ["MAX_EFFECTS", "Diagnosis6", "diagnose_runs6", "component_errors"]
+
+#: The most effects forward selection adds.
+MAX_EFFECTS = 3
+
+
+def component_errors(runs: Sequence[Run6], residuals: np.ndarray) -> dict[str, float]:
+    """Each component's RMS replay error over the runs, in noise levels."""
+    sums = dict.fromkeys((c[0] for c in COMPONENTS), 0.0)
+    counts = dict.fromkeys(sums, 0)
+    start = 0
+    for run in runs:
+        for name, *_ in COMPONENTS:
+            part = residuals[start : start + run.n]
+            sums[name] += float(part @ part)
+            counts[name] += run.n
+            start += run.n
+    return {k: math.sqrt(sums[k] / counts[k]) for k in sums}
+
+
+@dataclass
+class Step6:
+    """One round of forward selection: every candidate's score, the chosen one."""
+
+    ranking: list[dict]
+    chosen: str | None
+    why: str
+
+
+@dataclass
+class Diagnosis6:
+    """The result of :func:`diagnose_runs6` (see the module)."""
+
+    run_ids: list[str]
+    candidates: list[str]
+    nominal_errors: dict[str, float]
+    selected: list[str] = field(default_factory=list)
+    fit: Fit6 | None = None
+    final_errors: dict[str, float] = field(default_factory=dict)
+    lookalikes: list[str] = field(default_factory=list)
+    steps: list[Step6] = field(default_factory=list)
+    fits: int = 0
+
+    @property
+    def explained(self) -> bool:
+        return max(self.final_errors.values()) <= EXPLAINED_MAX_ERROR
+
+    @property
+    def verdict(self) -> str:
+        """``nothing missing``, ``found`` or ``not explained``."""
+        if not self.selected and self.explained:
+            return "nothing missing"
+        return "found" if self.explained else "not explained"
+
+    def sentence(self) -> str:
+        """The one-line verdict, with its evidence."""
+        worst0 = max(self.nominal_errors, key=self.nominal_errors.__getitem__)
+        e0 = self.nominal_errors[worst0]
+        worst = max(self.final_errors, key=self.final_errors.__getitem__)
+        e1 = self.final_errors[worst]
+        if self.verdict == "nothing missing":
+            return (
+                f"nothing is missing: the nominal model explains the runs (every component's "
+                f"replay error within {EXPLAINED_MAX_ERROR:g} noise levels; largest {worst0} "
+                f"{e0:.3g}), and no candidate is significant"
+            )
+        named = " + ".join(self.selected) if self.selected else "no candidate"
+        values = self._values()
+        if self.verdict == "found":
+            alike = f"; look-alikes: {', '.join(self.lookalikes)}" if self.lookalikes else ""
+            return (
+                f"found {named} ({values}): the worst component {worst0} falls from {e0:.3g} to "
+                f"{self.final_errors[worst0]:.3g} noise levels, every component now within "
+                f"{EXPLAINED_MAX_ERROR:g}{alike}"
+            )
+        return (
+            f"not explained: {named} is the best the library does ({values or 'no effect'}), "
+            f"but {worst} is still {e1:.3g} noise levels off (from {e0:.3g} for {worst0}): "
+            "an effect outside the candidates, or a rig unlike its scenario"
+        )
+
+    def _values(self) -> str:
+        if self.fit is None:
+            return ""
+        parts = []
+        for name, values in self.fit.values.items():
+            for k, v in values.items():
+                s = self.fit.std[name].get(k)
+                parts.append(f"{k} = {v:.4g}" + (f" +- {s:.2g}" if s is not None else ""))
+        return ", ".join(parts)
+
+    def to_dict(self) -> dict:
+        return {
+            "verdict": self.verdict,
+            "explained": self.explained,
+            "sentence": self.sentence(),
+            "runs": self.run_ids,
+            "candidates": self.candidates,
+            "selected": self.selected,
+            "fit": None if self.fit is None else self.fit.to_dict(),
+            "nominal_errors": self.nominal_errors,
+            "final_errors": self.final_errors,
+            "error_unit": "RMS replay error / noise level, per component, over the runs",
+            "lookalikes": self.lookalikes,
+            "rounds": [
+                {"ranking": s.ranking, "chosen": s.chosen, "why": s.why} for s in self.steps
+            ],
+            "fits": self.fits,
+            "thresholds": {
+                "bic": BIC_THRESHOLD,
+                "explained_max_error": EXPLAINED_MAX_ERROR,
+                "min_excess_removed": MIN_EXCESS_REMOVED,
+                "indistinguishable_bic": INDISTINGUISHABLE_BIC,
+            },
+        }
+
+
+def _fit_job(shared, job) -> Fit6 | str:
+    runs, selected, start = shared
+    try:
+        return fit_runs6(runs, [(get_effect(n), {}) for n in (*selected, job)], start)
+    except (SimulationError, ParameterError) as err:
+        return f"{type(err).__name__}: {err}"
+
+
+def _touches(name: str) -> set[str]:
+    return set(get_effect(name).touches)
+
+
+def diagnose_runs6(
+    runs: Sequence[Run6],
+    effects: Sequence[str] | None = None,
+    workers: int = 1,
+    progress: bool = False,
+    max_effects: int = MAX_EFFECTS,
+) -> Diagnosis6:
+    """Forward selection of the effects the runs' model misses (see the module).
+
+    Parameters
+    ----------
+    runs : sequence of Run6
+    effects : sequence of str, optional
+        The candidates (default: every registered effect with ``apply6``).
+    workers : int
+        Processes for the candidates' fits.
+    max_effects : int
+        The most effects the model gains.
+
+    Raises
+    ------
+    ParameterError
+        For a named effect without ``apply6``.
+    """
+    if effects is None:
+        effects = [n for n in effect_names() if get_effect(n).apply6 is not None]
+    for name in effects:
+        if get_effect(name).apply6 is None:
+            raise ParameterError(
+                f"effect {name} acts on the 1-D loop only (hybridtable effects, column loops, "
+                "lists those of a six-axis rig)"
+            )
+    r0 = np.concatenate([replay_residuals(r) for r in runs])
+    out = Diagnosis6([r.run_id for r in runs], list(effects), component_errors(runs, r0))
+    out.final_errors = dict(out.nominal_errors)
+    current = blocks(runs, r0)
+    fit: Fit6 | None = None
+    while len(out.selected) < max_effects and not out.explained:
+        taken = set().union(*(_touches(n) for n in out.selected)) if out.selected else set()
+        jobs = [n for n in effects if n not in out.selected and not (_touches(n) & taken)]
+        if not jobs:
+            break
+        start = None if fit is None else fit.values
+        results = pool_map(
+            _fit_job,
+            jobs,
+            workers,
+            progress=progress,
+            label=f"round {len(out.steps) + 1}",
+            shared=(list(runs), tuple(out.selected), start),
+        )
+        out.fits += len(jobs)
+        ranking = []
+        for name, result in zip(jobs, results, strict=True):
+            if isinstance(result, str):
+                ranking.append({"effect": name, "failed": result})
+                continue
+            k = len(get_effect(name).parameters)
+            gain = delta_bic(current, blocks(runs, result.residuals), k, stated=True)
+            errors = component_errors(runs, result.residuals)
+            ranking.append({"effect": name, "delta_bic": gain, "errors": errors, "fit": result})
+        scored = sorted(
+            (r for r in ranking if "delta_bic" in r), key=lambda r: r["delta_bic"], reverse=True
+        )
+        step = Step6([_public(r) for r in ranking], None, "no candidate could be fitted")
+        out.steps.append(step)
+        if not scored:
+            break
+        best = scored[0]
+        worst = max(out.final_errors, key=out.final_errors.__getitem__)
+        excess = out.final_errors[worst] - 1.0
+        removed = (out.final_errors[worst] - best["errors"][worst]) / excess if excess > 0 else 0.0
+        if best["delta_bic"] <= BIC_THRESHOLD:
+            step.why = (
+                f"{best['effect']} is the best but not significant (delta BIC "
+                f"{best['delta_bic']:.3g} <= {BIC_THRESHOLD:g})"
+            )
+            break
+        if removed < MIN_EXCESS_REMOVED:
+            step.why = (
+                f"{best['effect']} is significant (delta BIC {best['delta_bic']:.3g}) but removes "
+                f"{100 * removed:.0f} % of {worst}'s error above the noise (at least "
+                f"{100 * MIN_EXCESS_REMOVED:.0f} % needed)"
+            )
+            break
+        step.chosen = best["effect"]
+        step.why = (
+            f"{best['effect']}: delta BIC {best['delta_bic']:.4g}, removes {100 * removed:.0f} % "
+            f"of {worst}'s error above the noise"
+        )
+        out.selected.append(best["effect"])
+        fit = best["fit"]
+        out.fit = fit
+        out.final_errors = best["errors"]
+        current = blocks(runs, fit.residuals)
+        out.lookalikes = [
+            r["effect"]
+            for r in scored[1:]
+            if best["delta_bic"] - r["delta_bic"] < INDISTINGUISHABLE_BIC
+        ]
+    return out
+
+
+def _public(entry: dict) -> dict:
+    """A ranking entry as JSON (the fit's values, not the fit)."""
+    out = {k: v for k, v in entry.items() if k != "fit"}
+    if "fit" in entry:
+        out["values"] = entry["fit"].values
+        out["std"] = entry["fit"].std
+    return out
