@@ -1,0 +1,87 @@
+"""diagnose on 6-DoF runs (six_dof/diagnose6.py): nothing missing on a run of
+the scenario's own rig, the hidden effect found (alone and in a pair), and an
+effect outside the candidates not explained; through the CLI."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from hybridtable.effects.registry import get_effect
+from hybridtable.six_dof.diagnose6 import diagnose_runs6
+from hybridtable.six_dof.physics6 import physics_with, rig_scale
+from hybridtable.six_dof.run6 import run6_csv_text, run6_json, run6_of_docking
+from hybridtable.six_dof.scenario import parse_scenario
+from hybridtable.six_dof.simulation import simulate6
+from tests.six_dof.test_run6 import SCENARIO
+
+#: The conftest's rig with F/T noise in the loop and a dead band above it.
+NOISY = {
+    **SCENARIO,
+    "contact": {**SCENARIO["contact"], "friction_coefficient": 0.3},
+    "rig": {**SCENARIO["rig"], "force_noise_n": 2.0, "moment_noise_n_m": 0.5, "seed": 3},
+    "compensator": {"name": "SDMDC", "force_deadband_n": 12.0},
+}
+
+
+def _run(hidden: dict, run_id: str):
+    params = parse_scenario(NOISY)
+    physics = physics_with([(get_effect(n), v) for n, v in hidden.items()], rig_scale(params))
+    return run6_of_docking(simulate6(params, physics=physics), run_id, NOISY, 2e-6, 1e-6)
+
+
+def test_a_run_of_the_scenarios_own_rig_misses_nothing():
+    d = diagnose_runs6([_run({}, "null")], workers=2)
+    assert d.verdict == "nothing missing" and not d.selected
+    assert max(d.nominal_errors.values()) < 1.3
+    assert d.sentence().startswith("nothing is missing")
+
+
+def test_a_stiffer_contact_is_found_with_its_value():
+    d = diagnose_runs6(
+        [_run({"stiffness_error": {"contact_stiffness_n_per_m": 1.2e5}}, "k")], workers=2
+    )
+    assert d.verdict == "found" and d.selected == ["stiffness_error"]
+    k = d.fit.values["stiffness_error"]["contact_stiffness_n_per_m"]
+    std = d.fit.std["stiffness_error"]["contact_stiffness_n_per_m"]
+    assert abs(k - 1.2e5) < 4.0 * std
+    assert d.nominal_errors["fz_mea"] > 10.0 and d.final_errors["fz_mea"] < 1.3
+
+
+def test_a_pair_is_found_and_an_effect_outside_the_candidates_is_not_explained(tmp_path):
+    hidden = {
+        "sensor_misalignment": {
+            "sensor_roll_rad": 0.01,
+            "sensor_pitch_rad": -0.02,
+            "sensor_yaw_rad": 0.0,
+        },
+        "friction_across_face": {"extra_friction_coefficient": 0.2},
+    }
+    run = _run(hidden, "pair")
+    d = diagnose_runs6([run], workers=2)
+    assert d.verdict == "found"
+    assert set(d.selected) == {"sensor_misalignment", "friction_across_face"}
+    # the same run with the candidates that cannot carry the turned sensor
+    outside = diagnose_runs6(
+        [run], ["stiffness_error", "extra_delay", "table_response", "friction_across_face"], 2
+    )
+    assert outside.verdict == "not explained"
+    assert outside.sentence().startswith("not explained")
+    assert max(outside.final_errors.values()) > 1.3
+    # through the CLI: the run's files, diagnose --json
+    from hybridtable.cli import main
+
+    folder = tmp_path / "pair"
+    folder.mkdir()
+    (folder / "run1.csv").write_text(run6_csv_text(run))
+    (folder / "run1.json").write_text(json.dumps(run6_json(run)))
+    out = tmp_path / "d.json"
+    assert main(["diagnose", str(folder), "--json", str(out), "--no-progress"]) == 0
+    doc = json.loads(out.read_text())
+    assert doc["verdict"] == "found" and doc["format"] == "hybridtable-run6/1"
+    assert set(doc["selected"]) == {"sensor_misalignment", "friction_across_face"}
+    roll = doc["fit"]["values"]["sensor_misalignment"]["sensor_roll_rad"]
+    assert roll == pytest.approx(
+        0.01, abs=4.0 * doc["fit"]["std"]["sensor_misalignment"]["sensor_roll_rad"]
+    )
