@@ -7,8 +7,6 @@ from __future__ import annotations
 import argparse
 import sys
 
-from hybridtable.errors import CommandError
-
 __all__ = ["compare6"]
 
 #: compare's options that act on the 1-D runs only, with their defaults.
@@ -25,31 +23,16 @@ def compare6(args: argparse.Namespace) -> int:
     loop, print the verdicts and a table of the components' errors; with
     ``--add``, fit the effects to the runs' replays and compare again (the
     error falls, or does not)."""
-    from hybridtable.commands._common import check_outputs, log_layout_of, log_map_entry, write_json
-    from hybridtable.commands._model_options import load_plugins, parse_added
+    from hybridtable.commands._common import log_map_entry, write_json
+    from hybridtable.commands._model_options import parse_added
+    from hybridtable.commands._run6 import read_run6_arguments, require_apply6
     from hybridtable.six_dof.compare6 import compare_run6
     from hybridtable.six_dof.fit6 import fit_runs6
-    from hybridtable.six_dof.run6 import RUN6_COLUMNS, read_runs6
 
-    for name, default in _ONE_D_ONLY.items():
-        if getattr(args, name, default) not in (default, (), []):
-            flag = "--" + name.replace("_", "-")
-            raise CommandError(
-                f"{flag} is not available for 6-DoF runs (hybridtable-run6/1) yet: compare "
-                "runs them against the scenario's replay and closed loop"
-            )
-    load_plugins(args)
-    added = parse_added(args)  # a malformed --add before any work
+    runs, layout = read_run6_arguments(args, _ONE_D_ONLY)
+    added = parse_added(args)
     for effect, _ in added:
-        if effect.apply6 is None:
-            raise CommandError(
-                f"--add {effect.name}: the effect acts on the 1-D loop only (hybridtable "
-                "effects, column loops, lists those of a six-axis rig)"
-            )
-    layout = log_layout_of(args, RUN6_COLUMNS)
-    runs = read_runs6(args.runs, layout)  # every defect before any work
-    inputs = [p.resolve() for r in runs for p in (r.csv_path, r.json_path) if p is not None]
-    check_outputs(args, inputs, files={"--json": args.json})
+        require_apply6(effect, "--add")
     quiet = args.json == "-"
     iterator = runs
     if len(runs) > 1 and not args.no_progress and not quiet:

@@ -17,33 +17,20 @@ _ONE_D_ONLY = {"report": None, "save_model": None}
 def diagnose6(args: argparse.Namespace) -> int:
     """Read every 6-DoF run, run the forward selection, print the verdict,
     the components' errors before and after and each round's ranking."""
-    from hybridtable.commands._common import check_outputs, log_layout_of, log_map_entry, write_json
-    from hybridtable.commands._model_options import load_plugins
+    from hybridtable.commands._common import log_map_entry, write_json
+    from hybridtable.commands._run6 import read_run6_arguments, require_apply6
     from hybridtable.effects.registry import get_effect
     from hybridtable.effects.workers import worker_count
     from hybridtable.six_dof.diagnose6 import diagnose_runs6
-    from hybridtable.six_dof.run6 import RUN6_COLUMNS, read_runs6
 
-    for name, default in _ONE_D_ONLY.items():
-        if getattr(args, name, default) != default:
-            flag = "--" + name.replace("_", "-")
-            raise CommandError(f"{flag} is not available for 6-DoF runs (hybridtable-run6/1) yet")
-    load_plugins(args)
+    runs, layout = read_run6_arguments(args, _ONE_D_ONLY)
     effects = None
     if args.effects is not None:
         effects = [e.strip() for e in args.effects.split(",") if e.strip()]
         if not effects:
             raise CommandError("--effects names no effect")
         for e in effects:
-            if get_effect(e).apply6 is None:
-                raise CommandError(
-                    f"--effects {e}: the effect acts on the 1-D loop only (hybridtable effects, "
-                    "column loops, lists those of a six-axis rig)"
-                )
-    layout = log_layout_of(args, RUN6_COLUMNS)
-    runs = read_runs6(args.runs, layout)  # every defect before any work
-    inputs = [p.resolve() for r in runs for p in (r.csv_path, r.json_path) if p is not None]
-    check_outputs(args, inputs, files={"--json": args.json})
+            require_apply6(get_effect(e), "--effects")
     quiet = args.json == "-"
     result = diagnose_runs6(
         runs,

@@ -23,6 +23,7 @@ __all__ = [
     "add_save_model_arguments",
     "load_plugins",
     "parse_added",
+    "parse_added_given",
     "load_model_arg",
     "check_model_output",
     "write_model",
@@ -88,6 +89,20 @@ def parse_added(args: argparse.Namespace):
     from hybridtable.effects.registry import parse_effect_specs
 
     return parse_effect_specs(getattr(args, "add", None) or ())
+
+
+def parse_added_given(args: argparse.Namespace, why: str):
+    """The ``--add`` effects (:func:`parse_added`), each with every parameter
+    given (``why``: the words after the refusal's list, e.g. "(nothing to fit
+    it to here)")."""
+    added = parse_added(args)
+    for effect, values in added:
+        missing = [p for p in effect.parameter_names if p not in values]
+        if missing:
+            raise CommandError(
+                f"--add {effect.name}: give {', '.join(f'{p}=...' for p in missing)} {why}"
+            )
+    return added
 
 
 def load_model_arg(args: argparse.Namespace):

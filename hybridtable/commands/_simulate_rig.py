@@ -172,17 +172,11 @@ def rig_physics(args: argparse.Namespace, model, scale=None):
     :class:`~hybridtable.effects.effect.ModelSpec`, and the effects as
     ``[(name, values), ...]``.
     """
-    from hybridtable.commands._model_options import parse_added
+    from hybridtable.commands._model_options import parse_added_given
     from hybridtable.effects.registry import build_spec
 
-    added = parse_added(args)
-    for effect, values in added:
-        missing = [p for p in effect.parameter_names if p not in values]
-        if missing:
-            raise CommandError(
-                f"--add {effect.name}: give {', '.join(f'{p}=...' for p in missing)} "
-                "(nothing to fit it to here)"
-            )
+    added = parse_added_given(args, "(nothing to fit it to here)")
+    for effect, _ in added:
         if model is not None:
             for e in model.effects:
                 if effect.conflicts_with(e.effect):

@@ -237,22 +237,13 @@ def run(args: argparse.Namespace) -> int:
 def _hidden_physics(args: argparse.Namespace, params):
     """The rig's physical part with ``--add``'s effects (every parameter
     given, within its bounds at the scenario), and the effects as JSON."""
-    from hybridtable.commands._model_options import load_plugins, parse_added
-    from hybridtable.errors import CommandError
+    from hybridtable.commands._model_options import load_plugins, parse_added_given
     from hybridtable.six_dof.physics6 import physics_with, rig_scale
 
     load_plugins(args)
-    added = parse_added(args)
+    added = parse_added_given(args, "(the rig's hidden value: nothing to fit it to here)")
     scale = rig_scale(params)
-    checked = []
-    for effect, values in added:
-        missing = [p for p in effect.parameter_names if p not in values]
-        if missing:
-            raise CommandError(
-                f"--add {effect.name}: give {', '.join(f'{p}=...' for p in missing)} "
-                "(the rig's hidden value: nothing to fit it to here)"
-            )
-        checked.append((effect, effect.check_values(values, scale)))
+    checked = [(effect, effect.check_values(values, scale)) for effect, values in added]
     physics = physics_with(checked, scale)
     hidden = [
         {

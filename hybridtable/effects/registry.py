@@ -40,6 +40,7 @@ __all__ = [
     "parse_effect_spec",
     "parse_effect_specs",
     "build_spec",
+    "apply_in_order",
     "load_plugin",
     "guarded",
     "user_effect",
@@ -452,15 +453,38 @@ def build_spec(
     base: ModelSpec | None = None,
 ) -> ModelSpec:
     """The model with ``effects`` applied in order to ``base`` (default nominal)."""
-    spec = base or ModelSpec()
+    return apply_in_order(effects, scale, base or ModelSpec(), "1-D")
+
+
+#: What an effect of each loop is applied to, and where an effect without it acts.
+_LOOPS = {
+    "1-D": ("apply", "a six-axis rig only (6-DoF runs: simulate6 --add, compare and diagnose "
+            "of hybridtable-run6/1 runs)"),
+    "6-DoF": ("apply6", "the 1-D loop only (it has no apply6 for a six-axis rig)"),
+}  # fmt: skip
+
+
+def apply_in_order(
+    effects: Sequence[tuple[Effect, Mapping[str, float]]], scale: RigScale, base, loop: str
+):
+    """``base`` (a :class:`~hybridtable.effects.spec.ModelSpec` for the
+    ``"1-D"`` loop, a :class:`~hybridtable.six_dof.physics6.DockingPhysics`
+    for ``"6-DoF"``) with ``effects`` applied in order by their ``apply`` or
+    ``apply6``.
+
+    Raises
+    ------
+    ParameterError
+        For an effect that does not act on ``loop``.
+    """
+    attribute, elsewhere = _LOOPS[loop]
+    model = base
     for effect, values in effects:
-        if effect.apply is None:
-            raise ParameterError(
-                f"effect {effect.name} acts on a six-axis rig only (6-DoF runs: simulate6 "
-                "--record --add, compare of hybridtable-run6/1 runs)"
-            )
-        spec = effect.apply(spec, values, scale)
-    return spec
+        apply = getattr(effect, attribute)
+        if apply is None:
+            raise ParameterError(f"effect {effect.name} acts on {elsewhere}")
+        model = apply(model, values, scale)
+    return model
 
 
 for _effect in builtin_effects():

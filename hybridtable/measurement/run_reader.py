@@ -58,6 +58,7 @@ __all__ = [
     "read_runs",
     "read_series",
     "check_time",
+    "check_unique_ids",
     "find_run_files",
 ]
 
@@ -443,6 +444,13 @@ def read_runs(
     for r in runs:
         check_units(r, layout)
         check_channels(r)
+    check_unique_ids(runs)
+    return runs
+
+
+def check_unique_ids(runs: Sequence) -> None:
+    """Refuse two runs of one set with the same ``run_id`` (runs of either
+    format: ``run_id`` and ``json_path``), naming both files."""
     ids: dict[str, Path | None] = {}
     for r in runs:
         if r.run_id in ids:
@@ -450,4 +458,3 @@ def read_runs(
                 f"{r.json_path}: run_id {r.run_id!r} is also the run_id of {ids[r.run_id]}"
             )
         ids[r.run_id] = r.json_path
-    return runs

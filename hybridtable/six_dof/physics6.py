@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 
 from hybridtable.effects.effect import Effect
+from hybridtable.effects.registry import apply_in_order
 from hybridtable.effects.spec import RigScale
 from hybridtable.errors import ParameterError
 from hybridtable.six_dof.params import DockingLoopParams
@@ -175,12 +176,4 @@ def physics_with(
     ParameterError
         For an effect of the 1-D loop only.
     """
-    physics = base
-    for effect, values in effects:
-        if effect.apply6 is None:
-            raise ParameterError(
-                f"effect {effect.name} acts on the 1-D loop only (it has no apply6 for a "
-                "six-axis rig)"
-            )
-        physics = effect.apply6(physics, values, scale)
-    return physics
+    return apply_in_order(effects, scale, base, "6-DoF")

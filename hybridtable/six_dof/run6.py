@@ -35,7 +35,7 @@ from hybridtable._files import read_user_json, regular_file_problem
 from hybridtable.errors import MeasurementError, ParameterError
 from hybridtable.measurement.log_layout import LogLayout
 from hybridtable.measurement.run_files import find_run_files
-from hybridtable.measurement.run_reader import check_time, read_series
+from hybridtable.measurement.run_reader import check_time, check_unique_ids, read_series
 from hybridtable.six_dof.metrics import DockingMetrics, docking_metrics
 from hybridtable.six_dof.params import DockingLoopParams
 from hybridtable.six_dof.pose import (
@@ -322,13 +322,7 @@ def read_runs6(paths: Sequence[str | Path], layout: LogLayout | None = None) -> 
         For any defect (:func:`read_run6`, and the pairs' own).
     """
     runs = [read_run6(c, j, layout) for c, j in find_run_files(paths, formats=(FORMAT6,))]
-    ids: dict[str, Path | None] = {}
-    for r in runs:
-        if r.run_id in ids:
-            raise MeasurementError(
-                f"{r.json_path}: run_id {r.run_id!r} is also the run_id of {ids[r.run_id]}"
-            )
-        ids[r.run_id] = r.json_path
+    check_unique_ids(runs)
     return runs
 
 

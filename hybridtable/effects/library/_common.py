@@ -31,6 +31,9 @@ __all__ = [
     "ratio_parameter",
     "scale_loop_field",
     "critical_damping_n_s_per_m",
+    "ROTATION_AXES",
+    "rotation_parameters",
+    "rotation_vector",
 ]
 
 
@@ -200,3 +203,30 @@ def scale_loop_field(field: str, parameter: str):
         return spec.with_loop(lambda p: p.with_(**{field: getattr(p, field) * ratio}))
 
     return apply
+
+
+#: The three small rotations of a frame: (word, axis).
+ROTATION_AXES: tuple[tuple[str, str], ...] = (("roll", "x"), ("pitch", "y"), ("yaw", "z"))
+
+
+def rotation_parameters(prefix: str, what: str) -> tuple[EffectParameter, ...]:
+    """``{prefix}_roll_rad``, ``_pitch_rad``, ``_yaw_rad``: a frame's small
+    rotation vector (rad, within +-0.1, typical 1 mrad, null 0), ``what``
+    naming the frame."""
+    return tuple(
+        EffectParameter(
+            f"{prefix}_{word}_rad",
+            "rad",
+            f"rotation of {what} about {axis}",
+            lower=-0.1,
+            upper=0.1,
+            scale=1e-3,
+            null=0.0,
+        )
+        for word, axis in ROTATION_AXES
+    )
+
+
+def rotation_vector(prefix: str, values: Mapping[str, float]) -> list[float]:
+    """The rotation vector of :func:`rotation_parameters`' values."""
+    return [values[f"{prefix}_{word}_rad"] for word, _ in ROTATION_AXES]

@@ -15,37 +15,22 @@ proportion (``f_x ~ pitch f_z``, ``f_y ~ -roll f_z``), also on axis.
 
 from __future__ import annotations
 
-from hybridtable.effects.effect import Effect, EffectParameter, Signature
-from hybridtable.effects.library._common import CONTACT
+from hybridtable.effects.effect import Effect, Signature
+from hybridtable.effects.library._common import CONTACT, rotation_parameters, rotation_vector
 
 __all__ = ["EFFECT"]
-
-_AXES = (("roll", "x"), ("pitch", "y"), ("yaw", "z"))
 
 #: The effect ``sensor_misalignment`` (registered by :mod:`hybridtable.effects.registry`).
 EFFECT = Effect(
     name="sensor_misalignment",
     description="the F/T sensor's frame is turned from the assumed one (6-DoF)",
-    parameters=tuple(
-        EffectParameter(
-            f"sensor_{word}_rad",
-            "rad",
-            f"the sensor frame's rotation about {axis}",
-            lower=-0.1,
-            upper=0.1,
-            scale=1e-3,
-            null=0.0,
-        )
-        for word, axis in _AXES
-    ),
+    parameters=rotation_parameters("sensor", "the sensor frame"),
     signature=Signature(
         ("fx_mea", "fy_mea", "mx_mea", "my_mea", "mz_mea"),
         CONTACT,
         "lateral force and moments in proportion to the axial force pulse",
     ),
-    apply6=lambda physics, v, s: physics.turn_sensor(
-        [v[f"sensor_{word}_rad"] for word, _ in _AXES]
-    ),
+    apply6=lambda physics, v, s: physics.turn_sensor(rotation_vector("sensor", v)),
     touches=("sensor.frame",),
     separation_hint="an on-axis run: only a turned sensor reads a lateral force there",
     default_for=(),

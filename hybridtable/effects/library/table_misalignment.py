@@ -16,35 +16,22 @@ wrench that follows.
 
 from __future__ import annotations
 
-from hybridtable.effects.effect import Effect, EffectParameter, Signature
-from hybridtable.effects.library._common import CONTACT
+from hybridtable.effects.effect import Effect, Signature
+from hybridtable.effects.library._common import CONTACT, rotation_parameters, rotation_vector
 
 __all__ = ["EFFECT"]
-
-_AXES = (("roll", "x"), ("pitch", "y"), ("yaw", "z"))
 
 #: The effect ``table_misalignment`` (registered by :mod:`hybridtable.effects.registry`).
 EFFECT = Effect(
     name="table_misalignment",
     description="the table's axes are turned from the target frame: cross-axis coupling (6-DoF)",
-    parameters=tuple(
-        EffectParameter(
-            f"table_{word}_rad",
-            "rad",
-            f"the table axes' rotation about {axis}",
-            lower=-0.1,
-            upper=0.1,
-            scale=1e-3,
-            null=0.0,
-        )
-        for word, axis in _AXES
-    ),
+    parameters=rotation_parameters("table", "the table axes"),
     signature=Signature(
         ("px_act", "py_act", "pz_act", "fx_mea", "fy_mea"),
         ("approach", *CONTACT),
         "the measured position off the command across the axis of motion",
     ),
-    apply6=lambda physics, v, s: physics.turn_table([v[f"table_{word}_rad"] for word, _ in _AXES]),
+    apply6=lambda physics, v, s: physics.turn_table(rotation_vector("table", v)),
     touches=("table.axes",),
     separation_hint="a longer approach (the offset grows with the travel)",
     default_for=(),
