@@ -13,7 +13,6 @@ __all__ = ["compare6"]
 _ONE_D_ONLY = {
     "model": None,
     "save_model": None,
-    "report": None,
     "max_lag_s": None,
 }
 
@@ -29,7 +28,7 @@ def compare6(args: argparse.Namespace) -> int:
     from hybridtable.six_dof.compare6 import compare_run6
     from hybridtable.six_dof.fit6 import fit_runs6
 
-    runs, layout = read_run6_arguments(args, _ONE_D_ONLY)
+    runs, layout = read_run6_arguments(args, _ONE_D_ONLY, {"--report": args.report})
     added = parse_added(args)
     for effect, _ in added:
         require_apply6(effect, "--add")
@@ -44,6 +43,14 @@ def compare6(args: argparse.Namespace) -> int:
     if added:
         fit = fit_runs6(runs, added)
         fitted = [compare_run6(r, fit.physics) for r in runs]
+    report = None
+    if args.report:
+        from hybridtable._files import staged_folder
+        from hybridtable.reports.run6 import write_report6
+
+        with staged_folder(args.report) as stage:
+            files = write_report6(results, stage.path, fitted, _fit_text(fit, added))
+            report = [str(stage.final(f)) for f in files]
     if not quiet:
         for c in results:
             print(c.verdict())
@@ -77,6 +84,7 @@ def compare6(args: argparse.Namespace) -> int:
             "verdicts": [c.verdict() for c in results],
             "runs": [c.to_dict() for c in results],
             "log_map": log_map_entry(layout, runs),
+            "report": report,
             **(
                 {}
                 if fit is None
@@ -95,21 +103,28 @@ def compare6(args: argparse.Namespace) -> int:
     return 0
 
 
-def _print_fit(fit, added, before, after) -> None:
-    """The fitted values and how the replay's error fell."""
+def _fit_text(fit, added) -> str:
+    """The fitted values, one line an effect ("" without a fit)."""
+    if fit is None:
+        return ""
     units = {e.name: {p.name: p.unit for p in e.parameters} for e, _ in added}
-    print(f"\nwith {' + '.join(e.name for e, _ in added)} (fitted to the replays):")
+    lines = []
     for name, values in fit.values.items():
         parts = []
         for k, v in values.items():
             s = fit.std[name].get(k)
-            err = (
-                f" +- {s:.3g}"
-                if s is not None
-                else (" (given)" if k not in fit.fitted[name] else "")
-            )
+            given = " (given)" if k not in fit.fitted[name] else ""
+            err = f" +- {s:.3g}" if s is not None else given
             parts.append(f"{k} = {v:.5g}{err} {units[name][k]}")
-        print(f"  {name}: {', '.join(parts)}")
+        lines.append(f"{name}: {', '.join(parts)}")
+    return "\n".join(lines)
+
+
+def _print_fit(fit, added, before, after) -> None:
+    """The fitted values and how the replay's error fell."""
+    print(f"\nwith {' + '.join(e.name for e, _ in added)} (fitted to the replays):")
+    for line in _fit_text(fit, added).splitlines():
+        print(f"  {line}")
     print(
         f"  replay chi2 {fit.chi2_before:.4g} -> {fit.chi2_after:.4g} over {fit.n_residuals} "
         f"residuals ({fit.evaluations} replays{'' if fit.success else '; a polish did not converge'})"

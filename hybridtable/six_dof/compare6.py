@@ -41,6 +41,9 @@ __all__ = [
     "Comparison6",
     "compare_run6",
     "replay_residuals",
+    "measured_block",
+    "noise_level",
+    "phases",
 ]
 
 #: The largest RMS error (in noise levels) of a component the model explains.
@@ -104,6 +107,9 @@ class Comparison6:
     n_ticks: int
     model_wall_time_s: float
     notes: list[str] = field(default_factory=list)
+    #: The run and the replay's series by block (for figures; not in the JSON).
+    run: Run6 | None = None
+    replayed: dict[str, np.ndarray] | None = None
 
     @property
     def worst(self) -> ComponentError:
@@ -175,13 +181,19 @@ def noise_level(run: Run6, block: str) -> np.ndarray:
     return np.maximum(noise_levels(_block(run, block)), _FLOOR * scale)
 
 
+def measured_block(run: Run6, block: str) -> np.ndarray:
+    """A measured block of :data:`COMPONENTS` (``theta_act``: the rotation
+    vector of the measured attitude)."""
+    return _block(run, block)
+
+
 def _block(run: Run6, block: str) -> np.ndarray:
     if block == "theta_act":
         return run.pose("act")[:, 3:]
     return run.blocks[block]
 
 
-def _phases(run: Run6) -> tuple[np.ndarray, tuple[float, float]]:
+def phases(run: Run6) -> tuple[np.ndarray, tuple[float, float]]:
     """Each tick's phase (0 approach, 1 contact, 2 after) and the contact's
     first and last time, from the measured force (above five noise levels and
     the dead band)."""
@@ -249,7 +261,7 @@ def compare_run6(run: Run6, physics: DockingPhysics | None = None) -> Comparison
     """
     params = run.params
     h = params.sample_period_s
-    phase, contact = _phases(run)
+    phase, contact = phases(run)
     replayed = _replayed(run, physics)
     model_params = params.with_(force_noise_n=0.0, moment_noise_n_m=0.0, duration_s=run.n * h)
     simulated = simulate6(model_params, physics=physics)
@@ -273,4 +285,6 @@ def compare_run6(run: Run6, physics: DockingPhysics | None = None) -> Comparison
         run.n,
         simulated.wall_time_s,
         notes,
+        run,
+        replayed,
     )

@@ -275,3 +275,33 @@ def test_simulate6_records_a_run_that_compare_reads_through_a_rigs_own_log(tmp_p
     assert main(["compare", str(own), "--log-map", str(tmp_path / "plain.toml")]) == 2
     err = capsys.readouterr().err.strip()
     assert "degrees per second" in err and "wx_des_rad_per_s=deg/s" in err and "\n" not in err
+
+
+def test_compare_reports_each_component_with_the_fit(tmp_path, capsys):
+    from hybridtable.cli import main
+
+    folder = tmp_path / "rec"
+    argv = ["simulate6", str(EXAMPLES / "offset.toml"), "--compensator", "SDMDC"]
+    argv += ["--record", str(folder), "--no-reference", "--no-progress"]
+    argv += [
+        "--add",
+        "sensor_misalignment:sensor_roll_rad=0.0,sensor_pitch_rad=0.01,sensor_yaw_rad=0.0",
+    ]
+    assert main(argv) == 0
+    truth = json.loads((folder / "truth.json").read_text())
+    assert truth["hidden"]["effects"][0]["values"]["sensor_pitch_rad"] == 0.01
+    report = tmp_path / "report"
+    out = tmp_path / "c.json"
+    args = ["compare", str(folder), "--add", "sensor_misalignment", "--report", str(report)]
+    assert main([*args, "--json", str(out), "--no-progress"]) == 0
+    doc = json.loads(out.read_text())
+    assert not doc["explained"] and doc["added"]["explained"]
+    pitch = doc["added"]["fit"]["values"]["sensor_misalignment"]["sensor_pitch_rad"]
+    assert pitch == pytest.approx(0.01, abs=1e-6)  # no F/T noise in offset.toml
+    names = sorted(p.name for p in report.iterdir())
+    assert names == ["00_offset-SDMDC_components.png", "00_offset-SDMDC_residuals.png", "report.md"]
+    md = (report / "report.md").read_text()
+    assert "| fx_mea |" in md and "with the fit" in md and "mrad" in md
+    capsys.readouterr()
+    assert main([*args, "--no-progress"]) == 2  # the report is not written over without --force
+    assert "--force" in capsys.readouterr().err
