@@ -22,7 +22,15 @@ from dataclasses import dataclass
 
 import numpy as np
 from pydrake.systems.framework import Diagram, DiagramBuilder, System
-from pydrake.systems.primitives import LogVectorOutput, MatrixGain, Multiplexer, VectorLogSink
+from pydrake.systems.primitives import (
+    Adder,
+    ConstantVectorSource,
+    LinearSystem,
+    LogVectorOutput,
+    MatrixGain,
+    Multiplexer,
+    VectorLogSink,
+)
 
 from hybridtable.six_dof.compensator import constant_stiffness
 from hybridtable.six_dof.contact import DockingContact, DockingContactSystem, port_start_z_m
@@ -33,6 +41,7 @@ from hybridtable.six_dof.sensor import add_wrench_sensor
 from hybridtable.six_dof.spacecraft import BODY_STATE_SIZE, RigidSpacecraft, port_state
 from hybridtable.six_dof.table import PoseTable, add_pose_table
 from hybridtable.stewart.geometry import rotation_from_rpy
+from hybridtable.systems.measurement_chain import first_order_hold_filter
 
 __all__ = [
     "LOG_LAYOUT",
@@ -43,7 +52,7 @@ __all__ = [
     "initial_port_state",
     "table_backend",
     "set_initial_table",
-    "add_physics_gains",
+    "add_rig_part",
 ]
 
 #: Blocks of the loop's log, in order: name -> size.
@@ -134,13 +143,25 @@ def _table_matrix(physics: DockingPhysics) -> np.ndarray:
     return np.block([[T, np.zeros((6, 6))], [np.zeros((6, 6)), T]])
 
 
-def add_physics_gains(
-    builder: DiagramBuilder, physics: DockingPhysics | None, command, backend: System
+def add_rig_part(
+    builder: DiagramBuilder,
+    params: DockingLoopParams,
+    physics: DockingPhysics | None,
+    command,
+    backend: System,
+    noise: bool = True,
 ):
-    """Connect ``command`` (an output port: ``[q; qd]``) to ``backend``'s
-    ``commanded_state`` through the physics' table gain, and return the port
-    the F/T sensor reads: ``backend``'s ``contact_wrench`` through its sensor
-    gain (Drake's ``MatrixGain``; plain connections where there is none)."""
+    """Wire the rig's physical part between the rig computer's command and
+    its reading: ``command`` (an output port, ``[q; qd]``) to ``backend``'s
+    ``commanded_state`` through the physics' table gain, and ``backend``'s
+    ``contact_wrench`` through the sensor's gain and low pass, the F/T
+    sensor's delay (and its noise, if ``noise``) and bias. Returns the
+    measured wrench's output port. Drake primitives (``MatrixGain``, a
+    discrete ``LinearSystem``, ``Adder``); plain connections where ``physics``
+    has none. ``params`` are the rig computer's (:meth:`DockingPhysics.apply`
+    gives the sensor's delay)."""
+    h = params.sample_period_s
+    true = physics.apply(params) if physics is not None else params
     if physics is not None and physics.table_gain is not None:
         gain = builder.AddNamedSystem("table_gain", MatrixGain(_table_matrix(physics)))
         builder.Connect(command, gain.get_input_port())
@@ -151,7 +172,28 @@ def add_physics_gains(
         gain = builder.AddNamedSystem("sensor_gain", MatrixGain(np.array(physics.sensor_gain)))
         builder.Connect(wrench, gain.get_input_port())
         wrench = gain.get_output_port()
-    return wrench
+    if physics is not None and physics.sensor_time_constant_s > 0.0:
+        # the 1-D measurement chain's low pass on each channel (its law)
+        a, b0, b1 = first_order_hold_filter(physics.sensor_time_constant_s, h)
+        eye = np.eye(6)
+        low_pass = builder.AddNamedSystem(
+            "sensor_low_pass",
+            LinearSystem(a * eye, (a * b1 + b0) * eye, eye, b1 * eye, time_period=h),
+        )
+        builder.Connect(wrench, low_pass.get_input_port())
+        wrench = low_pass.get_output_port()
+    sensor_in, sensor_out = add_wrench_sensor(
+        builder, true.rig.sensor, h, true.rig.noise if noise else None
+    )
+    builder.Connect(wrench, sensor_in.get_input_port(0))
+    measured = sensor_out.get_output_port(0)
+    if physics is not None and physics.sensor_bias is not None:
+        bias = builder.AddNamedSystem("sensor_bias", ConstantVectorSource(physics.sensor_bias))
+        adder = builder.AddNamedSystem("add_sensor_bias", Adder(2, 6))
+        builder.Connect(measured, adder.get_input_port(0))
+        builder.Connect(bias.get_output_port(), adder.get_input_port(1))
+        measured = adder.get_output_port()
+    return measured
 
 
 def initial_port_state(
@@ -219,14 +261,11 @@ def add_docking_loop(
     true = physics.apply(params) if physics is not None else params
     spacecraft = builder.AddNamedSystem("spacecraft", RigidSpacecraft(params.spacecraft, h))
     backend = builder.AddNamedSystem("table_backend", backend or table_backend(true))
-    sensor_in, sensor_out = add_wrench_sensor(builder, true.rig.sensor, h, true.rig.noise)
     compensator = builder.AddNamedSystem(
         "compensator", compensator or make_wrench_compensator(params, _stiffness_model(params))
     )
     command = spacecraft.GetOutputPort("commanded_state")
-    wrench = add_physics_gains(builder, physics, command, backend)
-    builder.Connect(wrench, sensor_in.get_input_port(0))
-    measured = sensor_out.get_output_port(0)
+    measured = add_rig_part(builder, params, physics, command, backend)
     builder.Connect(measured, compensator.GetInputPort("measured_wrench"))
     builder.Connect(backend.GetOutputPort("table_state"), compensator.GetInputPort("table_state"))
     builder.Connect(command, compensator.GetInputPort("commanded_state"))

@@ -18,15 +18,21 @@ A :class:`DockingPhysics` is what the 6-DoF effects change
   ``G``;
 - ``table_gain`` (6x6): the table reaches ``T q`` where it is commanded to
   pose ``q = [p; theta]`` (and ``T qd`` for the twist): its axes turned or
-  coupled.
+  coupled;
+- ``sensor_time_constant_s``: the sensor's reading through a first-order low
+  pass on each channel (a compliant mount, a filter; the 1-D measurement
+  chain's law, before the delay), and ``sensor_bias`` (6): an offset of the
+  reading (after it).
 
-Both gains are Drake's ``MatrixGain`` in the diagram (the closed loop,
-:func:`~hybridtable.six_dof.builder.add_docking_loop`, and the replay,
-:func:`~hybridtable.six_dof.replay6.replay_run6`).
+They are Drake primitives in the diagram (``MatrixGain``, a discrete
+``LinearSystem``, ``Adder``: :func:`~hybridtable.six_dof.builder.add_rig_part`),
+in the closed loop (:func:`~hybridtable.six_dof.builder.add_docking_loop`)
+and the replay (:func:`~hybridtable.six_dof.replay6.replay_run6`).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
@@ -73,6 +79,8 @@ class DockingPhysics:
     table_gain: tuple[tuple[float, ...], ...] | None = None
     offsets: Mapping[str, float] = field(default_factory=dict)
     factors: Mapping[str, float] = field(default_factory=dict)
+    sensor_time_constant_s: float = 0.0
+    sensor_bias: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
         for name in ("changes", "offsets", "factors"):
@@ -85,12 +93,34 @@ class DockingPhysics:
             object.__setattr__(self, name, given)  # a copy (picklable for workers)
         object.__setattr__(self, "sensor_gain", _matrix("sensor_gain", self.sensor_gain))
         object.__setattr__(self, "table_gain", _matrix("table_gain", self.table_gain))
+        tau = float(self.sensor_time_constant_s)
+        if not (math.isfinite(tau) and tau >= 0.0):
+            raise ParameterError(f"sensor_time_constant_s must be >= 0 (got {tau!r})")
+        object.__setattr__(self, "sensor_time_constant_s", tau)
+        if self.sensor_bias is not None:
+            bias = np.asarray(self.sensor_bias, dtype=float)
+            if bias.shape != (6,) or not np.all(np.isfinite(bias)):
+                raise ParameterError("sensor_bias must be 6 finite numbers [N m, N]")
+            object.__setattr__(self, "sensor_bias", tuple(float(x) for x in bias))
 
     @property
     def nominal(self) -> bool:
         return not (self.changes or self.offsets or self.factors) and (
-            self.sensor_gain is None and self.table_gain is None
+            self.sensor_gain is None
+            and self.table_gain is None
+            and self.sensor_time_constant_s == 0.0
+            and self.sensor_bias is None
         )
+
+    def low_pass(self, time_constant_s: float) -> DockingPhysics:
+        """The sensor's reading through a first-order low pass of this time
+        constant (s; the 1-D ``sensor_filter``'s law on each channel)."""
+        return replace(self, sensor_time_constant_s=float(time_constant_s))
+
+    def biased(self, bias: Any) -> DockingPhysics:
+        """The sensor's reading offset by ``bias`` (6: N m, N; added to earlier ones)."""
+        old = np.zeros(6) if self.sensor_bias is None else np.array(self.sensor_bias)
+        return replace(self, sensor_bias=old + np.asarray(bias, dtype=float))
 
     def with_(self, **changes: Any) -> DockingPhysics:
         """These quantities changed (by flat name)."""
@@ -150,6 +180,8 @@ class DockingPhysics:
             if self.sensor_gain is None
             else [list(r) for r in self.sensor_gain],
             "table_gain": None if self.table_gain is None else [list(r) for r in self.table_gain],
+            "sensor_time_constant_s": self.sensor_time_constant_s,
+            "sensor_bias": None if self.sensor_bias is None else list(self.sensor_bias),
         }
 
 

@@ -30,14 +30,13 @@ from pydrake.systems.primitives import LogVectorOutput, Multiplexer
 
 from hybridtable._plugins import simulation_failure
 from hybridtable.six_dof.builder import (
-    add_physics_gains,
+    add_rig_part,
     initial_port_state,
     set_initial_table,
     table_backend,
 )
 from hybridtable.six_dof.physics6 import DockingPhysics
 from hybridtable.six_dof.run6 import Run6
-from hybridtable.six_dof.sensor import add_wrench_sensor
 from hybridtable.six_dof.spacecraft import RigidSpacecraft
 
 __all__ = ["CommandPlayback", "Replay6", "replay_run6"]
@@ -104,10 +103,8 @@ def replay_run6(run: Run6, physics: DockingPhysics | None = None) -> Replay6:
     builder = DiagramBuilder()
     playback = builder.AddNamedSystem("playback", CommandPlayback(commands, h, start))
     backend = builder.AddNamedSystem("table_backend", table_backend(true))
-    sensor_in, sensor_out = add_wrench_sensor(builder, true.rig.sensor, h, None)
-    wrench = add_physics_gains(builder, physics, playback.get_output_port(), backend)
-    builder.Connect(wrench, sensor_in.get_input_port(0))
-    ports = [backend.GetOutputPort("table_state"), sensor_out.get_output_port(0)]
+    measured = add_rig_part(builder, params, physics, playback.get_output_port(), backend, False)
+    ports = [backend.GetOutputPort("table_state"), measured]
     mux = builder.AddNamedSystem("log_mux", Multiplexer([p.size() for p in ports]))
     for i, port in enumerate(ports):
         builder.Connect(port, mux.get_input_port(i))

@@ -39,14 +39,16 @@ def nominal():
 
 def test_the_six_axis_effects_are_listed_and_refused_by_the_1d_loop():
     assert {"friction_across_face", "sensor_misalignment", "table_misalignment"} <= set(SIX)
-    assert {"stiffness_error", "extra_delay", "table_response", "table_damping"} <= set(SIX)
+    along_the_normal = {"stiffness_error", "extra_delay", "table_response", "table_damping"}
+    along_the_normal |= {"hunt_crossley", "sensor_filter", "force_bias"}
+    assert along_the_normal <= set(SIX)
     face = get_effect("friction_across_face")
     assert face.loops == ("6-DoF",) and face.default_for == ()
     scale = RigScale(1e5, 2533.0, 1e-3, 5e-3, 0.1, 25.0)
     with pytest.raises(ParameterError, match="six-axis rig only"):
         build_spec([(face, {"extra_friction_coefficient": 0.1})], scale)
     with pytest.raises(ParameterError, match="1-D loop only"):
-        physics_with([(get_effect("hunt_crossley"), {})], scale)
+        physics_with([(get_effect("series_compliance"), {})], scale)
 
 
 @pytest.mark.parametrize("name", SIX)
@@ -120,3 +122,21 @@ def test_a_fit_to_a_noisy_run_finds_the_hidden_values():
     )
     assert held.values["friction_across_face"]["extra_friction_coefficient"] == 0.2
     assert held.fitted["friction_across_face"] == ()
+
+
+def test_a_low_pass_and_a_bias_read_as_the_1d_chains_law(nominal):
+    """The sensor's low pass is the 1-D measurement chain's first-order-hold
+    filter on each channel (it commutes with the whole-tick delay: zero
+    before the contact), the bias an offset of the compression force."""
+    from hybridtable.systems.measurement_chain import first_order_hold_filter
+
+    run, replay = nominal
+    tau = 0.004
+    filtered = replay_run6(run, DockingPhysics().low_pass(tau).biased([0, 0, 0, 0, 0, -5.0]))
+    a, b0, b1 = first_order_hold_filter(tau, run.params.sample_period_s)
+    u = replay.measured_wrench
+    y = np.zeros_like(u)
+    for k in range(len(u)):
+        y[k] = b1 * u[k] + (a * y[k - 1] + b0 * u[k - 1] if k else 0.0)
+    y[:, 5] -= 5.0
+    np.testing.assert_allclose(filtered.measured_wrench, y, rtol=0, atol=1e-9)

@@ -42,4 +42,6 @@ EFFECT = Effect(
     touches=("sensor.bias",),
     separation_hint="a longer record without contact",
     default_for=("diagnose",),  # a CoR table tries it when named (--effects)
+    # on a six-axis rig: along the normal (the compression force is -fz)
+    apply6=lambda physics, v, s: physics.biased([0.0, 0.0, 0.0, 0.0, 0.0, -v["bias_n"]]),
 )

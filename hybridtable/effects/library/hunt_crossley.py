@@ -47,4 +47,8 @@ EFFECT = Effect(
     separation_hint="a faster approach (the touch is steeper: a jump for viscous "
     "damping, none for Hunt-Crossley)",
     default_for=("diagnose",),  # a CoR table tries it when named (--effects)
+    # on a six-axis rig: each pad's Hunt-Crossley factor (Drake's dissipation)
+    apply6=lambda physics, v, s: physics.plus(
+        contact_dissipation_s_per_m=v["damping_factor_s_per_m"]
+    ),
 )

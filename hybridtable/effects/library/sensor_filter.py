@@ -45,4 +45,6 @@ EFFECT = Effect(
     separation_hint="a faster or shorter contact (a larger approach velocity or a "
     "smaller spacecraft mass): a low pass rounds the touch, a delay only shifts it",
     default_for=("diagnose",),  # a CoR table tries it when named (--effects)
+    # on a six-axis rig: each channel of the F/T sensor (a compliant mount, a filter)
+    apply6=lambda physics, v, s: physics.low_pass(v["time_constant_s"]),
 )
