@@ -28,6 +28,7 @@ __all__ = [
     "note_unset",
     "input_paths",
     "read_run_arguments",
+    "add_axial_argument",
     "log_layout_of",
     "log_map_entry",
     "add_run_arguments",
@@ -163,9 +164,39 @@ def read_run_arguments(args: argparse.Namespace, tail_s: float | None = None):
     from hybridtable.measurement.events import split_runs
     from hybridtable.measurement.run_reader import read_runs
 
+    if getattr(args, "axial", False):
+        return _axial_runs(args, tail_s)
     layout = log_layout_of(args)
     runs, splits = split_runs(read_runs(args.runs, layout=layout), tail_s)
     return runs, splits, layout
+
+
+def _axial_runs(args: argparse.Namespace, tail_s: float | None):
+    """``--axial``: 6-DoF runs on the docking axis read as the 1-D runs they
+    are (:func:`hybridtable.six_dof.axial.axial_run`), with the 1-D channels'
+    checks."""
+    from hybridtable.measurement.channels import check_channels
+    from hybridtable.measurement.events import split_runs
+    from hybridtable.six_dof.axial import axial_run
+    from hybridtable.six_dof.run6 import RUN6_COLUMNS, read_runs6
+
+    layout = log_layout_of(args, RUN6_COLUMNS)
+    runs = [axial_run(r) for r in read_runs6(args.runs, layout)]
+    for r in runs:
+        check_channels(r)
+    runs, splits = split_runs(runs, tail_s)
+    return runs, splits, layout
+
+
+def add_axial_argument(parser: argparse.ArgumentParser) -> None:
+    """``--axial``: read 6-DoF runs on the docking axis as 1-D runs."""
+    parser.add_argument(
+        "--axial",
+        action="store_true",
+        help="6-DoF runs (hybridtable-run6/1) on the docking axis, read as the 1-D runs they "
+        "are (the z components: p = pz, f = -fz), for the 1-D tools (default: off; a run off "
+        "the axis is refused)",
+    )
 
 
 def log_map_entry(layout, runs) -> dict | None:

@@ -9,7 +9,7 @@ __all__ = ["register", "run"]
 
 
 def register(sub) -> None:
-    from hybridtable.commands._common import add_run_arguments, number_type
+    from hybridtable.commands._common import add_axial_argument, add_run_arguments, number_type
     from hybridtable.commands._model_options import (
         add_effect_argument,
         add_model_argument,
@@ -29,6 +29,7 @@ def register(sub) -> None:
         "file is reported in one line (exit code 2).",
     )
     add_run_arguments(p, report="write report.md with PNG figures into this folder")
+    add_axial_argument(p)
     p.add_argument(
         "--max-lag-s",
         type=number_type("0.001..1000", "s"),
@@ -75,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
     from hybridtable.reports.compare import format_table, format_whiteness, verdict, write_report
     from hybridtable.six_dof.run6 import is_run6
 
-    if is_run6(args.runs):
+    if is_run6(args.runs) and not args.axial:
         from hybridtable.commands._compare6 import compare6
 
         return compare6(args)

@@ -25,7 +25,7 @@ BUILTIN_EFFECT_NAMES: tuple[str, ...] = (
 
 
 def register(sub) -> None:
-    from hybridtable.commands._common import add_run_arguments, integer_type
+    from hybridtable.commands._common import add_axial_argument, add_run_arguments, integer_type
     from hybridtable.commands._model_options import (
         add_plugin_argument,
         add_save_model_arguments,
@@ -50,6 +50,7 @@ def register(sub) -> None:
         "(docs/run6-format.md).",
     )
     add_run_arguments(p, report="write report.md with PNG figures into this folder")
+    add_axial_argument(p)
     p.add_argument(
         "--effects",
         metavar="NAME[,NAME...]",
@@ -108,7 +109,7 @@ def run(args: argparse.Namespace) -> int:
     )
     from hybridtable.six_dof.run6 import is_run6
 
-    if is_run6(args.runs):
+    if is_run6(args.runs) and not args.axial:
         from hybridtable.commands._diagnose6 import diagnose6
 
         return diagnose6(args)

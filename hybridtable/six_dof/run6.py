@@ -237,7 +237,9 @@ def run6_json(run: Run6) -> dict:
 
 # -- reading ---------------------------------------------------------------------
 def is_run6(paths: Sequence[str | Path]) -> bool:
-    """True if the first run ``paths`` name is a 6-DoF run (its JSON's format)."""
+    """True if the first run ``paths`` name is a 6-DoF run: its JSON's format
+    is a ``hybridtable-run6`` one (another version too, which the reader then
+    refuses by name), or it holds a ``scenario`` and no 1-D ``format``."""
     try:
         pairs = find_run_files(paths, formats=(FORMAT6,))
     except MeasurementError:
@@ -247,7 +249,12 @@ def is_run6(paths: Sequence[str | Path]) -> bool:
             raw = read_user_json(json_path)
         except (OSError, ValueError):
             return False
-        return isinstance(raw, dict) and raw.get("format") == FORMAT6
+        if not isinstance(raw, dict):
+            return False
+        kind = raw.get("format")
+        if isinstance(kind, str) and kind.startswith(FORMAT6.split("/")[0] + "/"):
+            return True
+        return "scenario" in raw and kind is None
     return False
 
 
