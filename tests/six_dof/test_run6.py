@@ -305,3 +305,46 @@ def test_compare_reports_each_component_with_the_fit(tmp_path, capsys):
     capsys.readouterr()
     assert main([*args, "--no-progress"]) == 2  # the report is not written over without --force
     assert "--force" in capsys.readouterr().err
+
+
+def test_an_on_axis_run_is_the_1d_run_it_projects_to(tmp_path, capsys):
+    """On axis the 6-DoF loop is the 1-D loop: the 1-D replay of the projected
+    run (p = pz, f = -fz, the table's start from the scenario) gives its
+    readings and table to round-off; off axis the projection is refused."""
+    from hybridtable.cli import main
+    from hybridtable.measurement.replay import replay
+    from hybridtable.six_dof.axial import axial_run
+    from hybridtable.six_dof.scenario import load_scenario
+
+    scenario = EXAMPLES / "on_axis.toml"
+    params = load_scenario(scenario, compensator="none")
+    from hybridtable.loop.scenario import read_scenario
+
+    raw = read_scenario(scenario)
+    raw["compensator"]["name"] = "none"
+    run = axial_run(run6_of_docking(simulate6(params), "axis", raw))
+    rep = replay(run)
+    peak = np.max(np.abs(run.f_mea_n))
+    assert np.max(np.abs(rep.f_mea_n - run.f_mea_n)) < 1e-6 * peak
+    assert np.max(np.abs(rep.p_act_m - run.p_act_m)) < 1e-9
+    # through the CLI: the 1-D compare reads the 6-DoF files with --axial
+    folder = tmp_path / "axis"
+    folder.mkdir()
+    raw["rig"].update(force_noise_n=2.0, moment_noise_n_m=0.5)
+    raw["compensator"]["force_deadband_n"] = 12.0
+    noisy = params.with_(force_noise_n=2.0, moment_noise_n_m=0.5, force_deadband_n=12.0)
+    six = run6_of_docking(simulate6(noisy), "axis", raw, 2e-6, 1e-6)
+    (folder / "run1.csv").write_text(run6_csv_text(six))
+    (folder / "run1.json").write_text(json.dumps(run6_json(six)))
+    assert main(["compare", str(folder), "--axial", "--json", "-", "--no-progress"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    # the 1-D CoR of the projection is the 6-DoF normal CoR; its model's is near
+    cor6 = six.metrics().cor_normal
+    assert doc["runs"][0]["cor_measured"] == pytest.approx(cor6, rel=1e-9)
+    assert doc["runs"][0]["cor_model"] == pytest.approx(cor6, abs=0.01)
+    assert doc["verdict"].startswith("The model matches"), doc["verdict"]
+    off = tmp_path / "off"
+    off.mkdir()
+    _write(off, run6_of_docking(simulate6(docking_params(offset_m=0.01)), "off", SCENARIO))
+    assert main(["compare", str(off), "--axial", "--no-progress"]) == 2
+    assert "not on the docking axis (lateral_offset_m, misalignment_deg)" in capsys.readouterr().err
