@@ -9,8 +9,12 @@ origin), ``q = [p; theta]`` the device pose coordinates and ``K = -dw/dq``:
   p_act)`` on the compression force);
 - SDMDC: both.
 
-While the measured force's norm is at or below ``force_deadband_n`` the
-compensated wrench is zero (the 1-D gate on the measured force). The law is
+While the measured force's norm (or, ``deadband_reading="axial_force"``, its
+compression along the docking axis ``-fz``: the 1-D run format's reading) is
+at or below ``force_deadband_n`` the compensated wrench is zero (the 1-D gate
+on the measured force); with ``clamp_nonnegative`` it is zero too while its
+force would pull along the axis (``fz > 0``: the 1-D format's clamp of a
+compression force that turned negative). The law is
 the 1-D one, :func:`hybridtable.laws.compensation.compensate`, on arrays
 (``G = -K``, ``D = -C``). ``K`` and
 ``C`` come from a stiffness model: the contact linearized at the table's pose
@@ -22,6 +26,7 @@ a given matrix.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 from pydrake.systems.framework import BasicVector, LeafSystem
@@ -68,6 +73,11 @@ class WrenchCompensator(LeafSystem):
         Multiply ``stiffness``'s ``K`` and ``C`` by the input ``stiffness_scale``
         (1: an online estimate of the contact's stiffness over the model's,
         :mod:`~hybridtable.six_dof.identification`).
+    axial_deadband : bool
+        The dead band reads the compression along the axis, ``-fz``, not the
+        force's norm.
+    clamp_nonnegative : bool
+        Zero while the compensated force pulls along the axis (``fz > 0``).
     """
 
     def __init__(
@@ -77,9 +87,12 @@ class WrenchCompensator(LeafSystem):
         stiffness: StiffnessModel | None = None,
         force_deadband_n: float = 0.0,
         stiffness_scale_input: bool = False,
+        axial_deadband: bool = False,
+        clamp_nonnegative: bool = False,
     ) -> None:
         LeafSystem.__init__(self)
         self._h = float(period_s)
+        self._axial = bool(axial_deadband)
         self._stiffness = stiffness
         self._scale = None
         if stiffness_scale_input:
@@ -89,7 +102,11 @@ class WrenchCompensator(LeafSystem):
             lead_time_s=float(lead_time_s),
             motion_correction=stiffness is not None,
             force_deadband_n=float(force_deadband_n),
+            clamp_nonnegative=bool(clamp_nonnegative),
         )
+        # the law on the wrench's components, without the scalar clamp (the
+        # wrench's clamp is on its axial force: _clamped)
+        self._law = replace(self.law, clamp_nonnegative=False)
         self._w = self.DeclareVectorInputPort("measured_wrench", 6)
         self._table = self.DeclareVectorInputPort("table_state", 12)
         self._cmd = self.DeclareVectorInputPort("commanded_state", 12)
@@ -102,14 +119,14 @@ class WrenchCompensator(LeafSystem):
 
     def _calc(self, context, output) -> None:
         w = np.array(self._w.Eval(context))
-        level = np.linalg.norm(w[3:])
+        level = -w[5] if self._axial else np.linalg.norm(w[3:])
         if not self.law.gate_open(level):  # before K: it costs a contact evaluation
             output.SetFromVector(np.zeros(6))
             return
         previous = context.get_discrete_state(0).value()
         rate = backward_difference(w, previous, self._h)
         if not self.law.motion_correction:
-            output.SetFromVector(compensate(self.law, w, rate, gate_force=level))
+            output.SetFromVector(self._clamped(compensate(self._law, w, rate, gate_force=level)))
             return
         x_act = self._table.Eval(context)
         x_des = self._cmd.Eval(context)
@@ -119,7 +136,7 @@ class WrenchCompensator(LeafSystem):
             K, C = scale * K, scale * C
         # G = dw/dq = -K: the law predicts the wrench at the commanded pose.
         out = compensate(
-            self.law,
+            self._law,
             w,
             rate,
             x_des[:6] - x_act[:6],
@@ -128,4 +145,11 @@ class WrenchCompensator(LeafSystem):
             -C if np.any(C) else None,
             gate_force=level,
         )
-        output.SetFromVector(out)
+        output.SetFromVector(self._clamped(out))
+
+    def _clamped(self, wrench: np.ndarray) -> np.ndarray:
+        """The 1-D clamp on the wrench: zero while its force pulls along the
+        axis (the compression ``-fz`` below zero)."""
+        if self.law.clamp_nonnegative and -wrench[5] < 0.0:
+            return np.zeros(6)
+        return wrench

@@ -167,6 +167,8 @@ def make_online_sdmdc(params, stiffness: StiffnessModel) -> Diagram:
             stiffness=stiffness,
             force_deadband_n=params.force_deadband_n,
             stiffness_scale_input=True,
+            axial_deadband=params.deadband_reading == "axial_force",
+            clamp_nonnegative=params.clamp_nonnegative,
         ),
     )
     builder.Connect(delay.get_output_port(0), ident.GetInputPort("aligned_table_state"))

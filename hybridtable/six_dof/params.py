@@ -41,6 +41,7 @@ __all__ = [
     "MAX_MISALIGNMENT_RAD",
     "TABLE_BACKENDS",
     "STIFFNESS_MODELS",
+    "DEADBAND_READINGS",
     "RigidBodyParams",
     "DockingContactParams",
     "ApproachParams",
@@ -58,6 +59,10 @@ TABLE_BACKENDS: tuple[str, ...] = ("model", "stewart")
 #: How the MDC gets its 6x6 stiffness: linearized at the table's pose at every
 #: tick of the contact, linearized once at the nominal docked pose, or given.
 STIFFNESS_MODELS: tuple[str, ...] = ("linearized", "nominal", "given")
+
+#: What the compensator's dead band reads: the measured force's norm, or its
+#: component along the docking axis (the compression, ``-fz``: the 1-D reading).
+DEADBAND_READINGS: tuple[str, ...] = ("force_norm", "axial_force")
 
 
 def inertia_matrix(name: str, value) -> np.ndarray:
@@ -327,7 +332,15 @@ class WrenchCompensatorConfig:
         rows/columns ``[x, y, z, rx, ry, rz]`` with the moment rows first in
         the wrench: ``-dw/dq`` (N/m, N, N m/m, N m/rad).
     force_deadband_n : float
-        The compensator acts while the measured force's norm exceeds it.
+        The compensator acts while the measured force's norm (or its axial
+        compression, ``deadband_reading``) exceeds it.
+    deadband_reading : {"force_norm", "axial_force"}
+        What the dead band reads (:data:`DEADBAND_READINGS`): ``axial_force``
+        is the 1-D run format's gate, ``f_mea <= force_deadband_n``.
+    clamp_nonnegative : bool
+        The compensated wrench is zero while its force would pull the devices
+        together along the docking axis (``fz > 0`` on the spacecraft): the 1-D
+        run format's clamp ``f_comp = max(f_comp, 0)``.
     stiffness_n_per_m : float or None
         The contact stiffness (all pads together) of the compensator's contact
         model (``compensator_stiffness_n_per_m``, as in 1-D): its linearized
@@ -341,6 +354,8 @@ class WrenchCompensatorConfig:
     stiffness_matrix: tuple | None = None
     force_deadband_n: float = 0.0
     stiffness_n_per_m: float | None = None
+    deadband_reading: str = "force_norm"
+    clamp_nonnegative: bool = False
 
     def __post_init__(self) -> None:
         from hybridtable.six_dof.registry import wrench_compensator_names
@@ -359,6 +374,11 @@ class WrenchCompensatorConfig:
         if self.stiffness_model == "given" and self.stiffness_matrix is None:
             raise ParameterError('stiffness_model "given" needs compensator_stiffness_matrix')
         s(self, "force_deadband_n", check_nonnegative("force_deadband_n", self.force_deadband_n))
+        check_choice("deadband_reading", self.deadband_reading, DEADBAND_READINGS)
+        if not isinstance(self.clamp_nonnegative, bool):
+            raise ParameterError(
+                f"clamp_nonnegative must be true or false (got {self.clamp_nonnegative!r})"
+            )
         if self.stiffness_n_per_m is not None:
             k = check_positive("compensator_stiffness_n_per_m", self.stiffness_n_per_m)
             s(self, "stiffness_n_per_m", check_plausible("compensator_stiffness_n_per_m", k))
@@ -489,6 +509,8 @@ class DockingLoopParams(NestedParams):
         "stiffness_model": ("rig", "compensator", "stiffness_model"),
         "compensator_stiffness_matrix": ("rig", "compensator", "stiffness_matrix"),
         "force_deadband_n": ("rig", "compensator", "force_deadband_n"),
+        "deadband_reading": ("rig", "compensator", "deadband_reading"),
+        "clamp_nonnegative": ("rig", "compensator", "clamp_nonnegative"),
         "compensator_stiffness_n_per_m": ("rig", "compensator", "stiffness_n_per_m"),
         "force_noise_n": ("rig", "noise", "force_std_n"),
         "moment_noise_n_m": ("rig", "noise", "moment_std_n_m"),

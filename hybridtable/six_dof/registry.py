@@ -55,6 +55,8 @@ def _paper(params: Any, stiffness: StiffnessModel) -> System:
         lead_time_s=params.effective_lead_time_s if kind in ("SDC", "SDMDC") else 0.0,
         stiffness=stiffness if kind in ("MDC", "SDMDC") else None,
         force_deadband_n=params.force_deadband_n,
+        axial_deadband=params.deadband_reading == "axial_force",
+        clamp_nonnegative=params.clamp_nonnegative,
     )
 
 

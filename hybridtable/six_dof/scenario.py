@@ -25,7 +25,9 @@ Sections and keys (SI units; every key optional unless marked)::
     [table.stewart.geometry]  StewartGeometry fields
     [compensator]  name, lead_time_s, stiffness_model = "linearized" | "nominal" |
                    "given", stiffness_matrix (6x6), force_deadband_n,
-                   stiffness_n_per_m (the contact stiffness it believes)
+                   stiffness_n_per_m (the contact stiffness it believes),
+                   deadband_reading = "force_norm" | "axial_force",
+                   clamp_nonnegative (true: the 1-D run format's clamp)
 
 Any other key, a wrong type or a value out of range raises
 :class:`~hybridtable.errors.SpecError` in one line naming the file and the key.
@@ -94,6 +96,8 @@ SCENARIO_KEYS: dict[str, tuple[str, ...]] = {
         "stiffness_matrix",
         "force_deadband_n",
         "stiffness_n_per_m",
+        "deadband_reading",
+        "clamp_nonnegative",
     ),
 }
 
