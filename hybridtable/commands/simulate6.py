@@ -56,9 +56,10 @@ def register(sub) -> None:
     g.add_argument(
         "--record",
         metavar="DIR",
-        help="write run1.csv and run1.json into DIR: the simulated run with the scenario's F/T "
-        "noise ([rig] force_noise_n, moment_noise_n_m, seed: in the loop) and the pose noise "
-        "below (on the log); existing files are replaced only with --force",
+        help="write run1.csv and run1.json into DIR: the simulated run as the rig computer "
+        "read it, with the scenario's noise ([rig] force_noise_n, moment_noise_n_m, "
+        "position_noise_m, attitude_noise_rad, seed: inside the loop); existing files are "
+        "replaced only with --force",
     )
     g.add_argument(
         "--noise-position-m",
@@ -117,6 +118,12 @@ def run(args: argparse.Namespace) -> int:
     from hybridtable.six_dof.simulation import simulate6
 
     overrides = {} if args.compensator is None else {"compensator": args.compensator}
+    for flag, name in (
+        ("noise_position_m", "position_noise_m"),
+        ("noise_attitude_rad", "attitude_noise_rad"),
+    ):
+        if getattr(args, flag) is not None:
+            overrides[name] = getattr(args, flag)
     params = load_scenario(args.scenario, **overrides)
     physics, hidden = _hidden_physics(args, params)
     check_outputs(
@@ -270,15 +277,15 @@ def _record(args: argparse.Namespace, result, hidden: list, physics) -> dict:
     scenario = read_scenario(args.scenario)
     if args.compensator is not None:
         scenario.setdefault("compensator", {})["name"] = result.params.compensator
+    noise = result.params.rig.noise
+    for flag, key, value in (
+        ("noise_position_m", "position_noise_m", noise.position_std_m),
+        ("noise_attitude_rad", "attitude_noise_rad", noise.attitude_std_rad),
+    ):
+        if getattr(args, flag) is not None:
+            scenario.setdefault("rig", {})[key] = value
     run_id = f"{Path(args.scenario).stem}-{result.params.compensator}"
-    run = run6_of_docking(
-        result,
-        run_id,
-        scenario,
-        args.noise_position_m,
-        args.noise_attitude_rad,
-        result.params.rig.noise.seed,
-    )
+    run = run6_of_docking(result, run_id, scenario)
     folder = Path(args.record)
     with staged_folder(folder) as stage:
         write_text_atomic(stage.path / "run1.csv", run6_csv_text(run))
@@ -300,6 +307,6 @@ def _record(args: argparse.Namespace, result, hidden: list, physics) -> dict:
         "json": str(folder / "run1.json"),
         "run_id": run_id,
         "ticks": run.n,
-        "noise_position_m": args.noise_position_m,
-        "noise_attitude_rad": args.noise_attitude_rad,
+        "position_noise_m": noise.position_std_m,
+        "attitude_noise_rad": noise.attitude_std_rad,
     }

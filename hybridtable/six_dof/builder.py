@@ -37,7 +37,7 @@ from hybridtable.six_dof.contact import DockingContact, DockingContactSystem, po
 from hybridtable.six_dof.params import DockingLoopParams
 from hybridtable.six_dof.physics6 import DockingPhysics
 from hybridtable.six_dof.registry import make_wrench_compensator
-from hybridtable.six_dof.sensor import add_wrench_sensor
+from hybridtable.six_dof.sensor import PoseNoise, add_wrench_sensor
 from hybridtable.six_dof.spacecraft import BODY_STATE_SIZE, RigidSpacecraft, port_state
 from hybridtable.six_dof.table import PoseTable, add_pose_table
 from hybridtable.stewart.geometry import rotation_from_rpy
@@ -63,6 +63,8 @@ LOG_LAYOUT: dict[str, int] = {
     "measured_wrench": 6,
     "compensated_wrench": 6,
     "body_state": BODY_STATE_SIZE,
+    # the table's state as the compensator read it (its encoders' noise)
+    "measured_table_state": 12,
 }
 
 
@@ -156,7 +158,8 @@ def add_rig_part(
     ``commanded_state`` through the physics' table gain, and ``backend``'s
     ``contact_wrench`` through the sensor's gain and low pass, the F/T
     sensor's delay (and its noise, if ``noise``) and bias. Returns the
-    measured wrench's output port. Drake primitives (``MatrixGain``, a
+    measured wrench's and the measured table state's output ports (the
+    encoders' noise on the pose, if ``noise``). Drake primitives (``MatrixGain``, a
     discrete ``LinearSystem``, ``Adder``); plain connections where ``physics``
     has none. ``params`` are the rig computer's (:meth:`DockingPhysics.apply`
     gives the sensor's delay)."""
@@ -193,7 +196,15 @@ def add_rig_part(
         builder.Connect(measured, adder.get_input_port(0))
         builder.Connect(bias.get_output_port(), adder.get_input_port(1))
         measured = adder.get_output_port()
-    return measured
+    table = backend.GetOutputPort("table_state")
+    if noise and true.rig.noise.on_pose:
+        n = true.rig.noise
+        encoders = builder.AddNamedSystem(
+            "encoders", PoseNoise(n.position_std_m, n.attitude_std_rad, n.seed, h)
+        )
+        builder.Connect(table, encoders.get_input_port())
+        table = encoders.get_output_port()
+    return measured, table
 
 
 def initial_port_state(
@@ -265,9 +276,9 @@ def add_docking_loop(
         "compensator", compensator or make_wrench_compensator(params, _stiffness_model(params))
     )
     command = spacecraft.GetOutputPort("commanded_state")
-    measured = add_rig_part(builder, params, physics, command, backend)
+    measured, table = add_rig_part(builder, params, physics, command, backend)
     builder.Connect(measured, compensator.GetInputPort("measured_wrench"))
-    builder.Connect(backend.GetOutputPort("table_state"), compensator.GetInputPort("table_state"))
+    builder.Connect(table, compensator.GetInputPort("table_state"))
     builder.Connect(command, compensator.GetInputPort("commanded_state"))
     builder.Connect(
         compensator.GetOutputPort("compensated_wrench"),
@@ -282,6 +293,7 @@ def add_docking_loop(
             measured,
             compensator.GetOutputPort("compensated_wrench"),
             spacecraft.GetOutputPort("body_state"),
+            table,
         ]
         mux = builder.AddNamedSystem("log_mux", Multiplexer([p.size() for p in ports]))
         for i, port in enumerate(ports):

@@ -9,7 +9,7 @@ its quaternion). Each residual's RMS is divided by the component's noise
 level (:func:`noise_level`), and the largest ``|residual| / noise`` is placed
 in time and in the contact's phase (approach, contact, after). It also runs
 the scenario's whole loop (:func:`~hybridtable.six_dof.simulation.simulate6`,
-without the F/T noise) for as many ticks as the record: the closed loop's
+without the noise) for as many ticks as the record: the closed loop's
 components, normal CoR and energy ratio against the record's.
 
 The verdict reads the replay: the model explains the run when every
@@ -263,7 +263,13 @@ def compare_run6(run: Run6, physics: DockingPhysics | None = None) -> Comparison
     h = params.sample_period_s
     phase, contact = phases(run)
     replayed = _replayed(run, physics)
-    model_params = params.with_(force_noise_n=0.0, moment_noise_n_m=0.0, duration_s=run.n * h)
+    model_params = params.with_(
+        force_noise_n=0.0,
+        moment_noise_n_m=0.0,
+        position_noise_m=0.0,
+        attitude_noise_rad=0.0,
+        duration_s=run.n * h,
+    )
     simulated = simulate6(model_params, physics=physics)
     model = run6_of_docking(simulated, f"{run.run_id}-model", run.scenario)
     looped = {b: _block(model, b) for b in ("f_mea", "m_mea", "p_act")}

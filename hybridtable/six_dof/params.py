@@ -386,24 +386,37 @@ class WrenchCompensatorConfig:
 
 @dataclass(frozen=True)
 class FTNoiseParams:
-    """White noise of the F/T sensor, per axis, drawn at the rig computer's ticks.
+    """White noise of what the rig computer reads, per axis, drawn at its
+    ticks: the F/T sensor's wrench and the table's measured pose.
 
     Parameters
     ----------
     force_std_n, moment_std_n_m : float
-        Standard deviations (``force_noise_n``, ``moment_noise_n_m``), >= 0.
+        Standard deviations of the F/T reading (``force_noise_n``,
+        ``moment_noise_n_m``), >= 0.
     seed : int
         Seed of the noise, a whole number >= 0.
+    position_std_m, attitude_std_rad : float
+        Standard deviations of the table's measured position and of a small
+        rotation of its measured attitude about each axis (``position_noise_m``,
+        ``attitude_noise_rad``), >= 0: the encoders the compensator reads.
     """
 
     force_std_n: float = 0.0
     moment_std_n_m: float = 0.0
     seed: int = 0
+    position_std_m: float = 0.0
+    attitude_std_rad: float = 0.0
 
     def __post_init__(self) -> None:
-        for name in ("force_std_n", "moment_std_n_m"):
+        for name in ("force_std_n", "moment_std_n_m", "position_std_m", "attitude_std_rad"):
             object.__setattr__(self, name, check_nonnegative(name, getattr(self, name)))
         object.__setattr__(self, "seed", check_seed("seed", self.seed))
+
+    @property
+    def on_pose(self) -> bool:
+        """The measured pose has noise."""
+        return self.position_std_m > 0.0 or self.attitude_std_rad > 0.0
 
 
 @dataclass(frozen=True)
@@ -514,6 +527,8 @@ class DockingLoopParams(NestedParams):
         "compensator_stiffness_n_per_m": ("rig", "compensator", "stiffness_n_per_m"),
         "force_noise_n": ("rig", "noise", "force_std_n"),
         "moment_noise_n_m": ("rig", "noise", "moment_std_n_m"),
+        "position_noise_m": ("rig", "noise", "position_std_m"),
+        "attitude_noise_rad": ("rig", "noise", "attitude_std_rad"),
         "seed": ("rig", "noise", "seed"),
         "duration_s": ("rig", "duration_s"),
         "stewart": ("plant", "table", "stewart"),

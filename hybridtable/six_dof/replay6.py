@@ -103,8 +103,10 @@ def replay_run6(run: Run6, physics: DockingPhysics | None = None) -> Replay6:
     builder = DiagramBuilder()
     playback = builder.AddNamedSystem("playback", CommandPlayback(commands, h, start))
     backend = builder.AddNamedSystem("table_backend", table_backend(true))
-    measured = add_rig_part(builder, params, physics, playback.get_output_port(), backend, False)
-    ports = [backend.GetOutputPort("table_state"), measured]
+    measured, table = add_rig_part(
+        builder, params, physics, playback.get_output_port(), backend, False
+    )
+    ports = [table, measured]
     mux = builder.AddNamedSystem("log_mux", Multiplexer([p.size() for p in ports]))
     for i, port in enumerate(ports):
         builder.Connect(port, mux.get_input_port(i))

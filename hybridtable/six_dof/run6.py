@@ -168,40 +168,27 @@ class Run6:
 
 
 # -- writing ---------------------------------------------------------------------
-def run6_of_docking(
-    run: DockingRun,
-    run_id: str,
-    scenario: Mapping[str, Any],
-    position_noise_m: float = 0.0,
-    attitude_noise_rad: float = 0.0,
-    seed: int = 0,
-) -> Run6:
-    """The 6-DoF run a data logger would write of a simulated run: the
-    format's rows of the diagram's log (see the module), with white noise of
-    ``position_noise_m`` on each measured position and a rotation of
-    ``attitude_noise_rad`` about each axis on the measured attitude (seeded;
-    the F/T noise is the scenario's, in the loop). ``scenario`` is what the
-    JSON holds: what the rig computer was told, which may differ from the
-    physics ``run`` simulated (the run's :attr:`Run6.params` are the
-    scenario's, as a reader finds them)."""
+def run6_of_docking(run: DockingRun, run_id: str, scenario: Mapping[str, Any]) -> Run6:
+    """The 6-DoF run a data logger would have written of a simulated run: the
+    format's rows of the diagram's log (see the module), the readings as the
+    rig computer read them (the F/T sensor's and the encoders' noise, the
+    scenario's ``[rig]``, inside the loop). ``scenario`` is what the JSON
+    holds: what the rig computer was told, which may differ from the physics
+    ``run`` simulated (the run's :attr:`Run6.params` are the scenario's, as a
+    reader finds them)."""
     log = run.log
     n = len(run.time_s) - 1
     if n < 3:
         raise ParameterError("the record is too short to write (fewer than 3 ticks)")
     command = log["commanded_state"][1:]
-    table = log["table_state"][:n]
-    rng = np.random.default_rng([int(seed), 6])
-    position = table[:, 0:3] + position_noise_m * rng.standard_normal((n, 3))
-    turn = quaternions_of_rotation_vectors(attitude_noise_rad * rng.standard_normal((n, 3)))
-    attitude = quaternion_product(turn, quaternions_of_rotation_vectors(table[:, 3:6]))
-    attitude *= np.where(attitude[:, :1] < 0.0, -1.0, 1.0)
+    table = log["measured_table_state"][:n]
     blocks = {
         "p_des": command[:, 0:3],
         "q_des": quaternions_of_rotation_vectors(command[:, 3:6]),
         "v_des": command[:, 6:9],
         "w_des": command[:, 9:12],
-        "p_act": position,
-        "q_act": attitude,
+        "p_act": table[:, 0:3],
+        "q_act": quaternions_of_rotation_vectors(table[:, 3:6]),
         "f_mea": log["measured_wrench"][:n, 3:6],
         "m_mea": log["measured_wrench"][:n, 0:3],
         "f_comp": log["compensated_wrench"][:n, 3:6],

@@ -17,6 +17,7 @@ Sections and keys (SI units; every key optional unless marked)::
                    angular_rate_rad_per_s = [x, y, z] (body frame),
                    lateral_miss_m = [x, y]
     [rig]          sample_rate_hz, sensor_delay_s, force_noise_n, moment_noise_n_m,
+                   position_noise_m, attitude_noise_rad (the table's encoders),
                    seed, duration_s
     [table]        backend = "model" | "stewart", response_hz (a number or "inf"),
                    damping_ratio
@@ -85,6 +86,8 @@ SCENARIO_KEYS: dict[str, tuple[str, ...]] = {
         "sensor_delay_s",
         "force_noise_n",
         "moment_noise_n_m",
+        "position_noise_m",
+        "attitude_noise_rad",
         "seed",
         "duration_s",
     ),

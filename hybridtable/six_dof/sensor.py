@@ -1,4 +1,5 @@
-"""The 6-axis force/torque sensor of the 6-DoF loop: a delay and white noise.
+"""The 6-axis force/torque sensor of the 6-DoF loop: a delay and white noise;
+and the table's encoders: white noise on the measured pose.
 
 The delay is the 1-D loop's sampled delay line on six channels
 (:class:`~hybridtable.systems.sensor.ForceSensorDelay`); the noise is
@@ -12,13 +13,17 @@ import numpy as np
 from pydrake.systems.framework import BasicVector, DiagramBuilder, LeafSystem, System
 
 from hybridtable.six_dof.params import FTNoiseParams
+from hybridtable.six_dof.pose import rotation_exp, rotation_log
 from hybridtable.systems.noise import noise_sample
 from hybridtable.systems.sensor import ForceSensorDelay, SensorParams
 
-__all__ = ["WrenchNoise", "add_wrench_sensor"]
+__all__ = ["WrenchNoise", "PoseNoise", "add_wrench_sensor"]
 
 #: Noise channels of the six wrench components (distinct from the 1-D channels).
 _CHANNELS = (601, 602, 603, 604, 605, 606)
+
+#: Noise channels of the measured pose: position x, y, z, then the attitude's turn.
+_POSE_CHANNELS = (611, 612, 613, 614, 615, 616)
 
 
 class WrenchNoise(LeafSystem):
@@ -42,6 +47,35 @@ class WrenchNoise(LeafSystem):
         tick = int(round(context.get_time() / self._h))
         n = np.array([noise_sample(self._seed, c, tick) for c in _CHANNELS])
         output.SetFromVector(self._in.Eval(context) + self._std * n)
+
+
+class PoseNoise(LeafSystem):
+    """The table's pose as its encoders read it, at the rig computer's ticks.
+
+    Ports
+    -----
+    Input ``table_state`` (12: m, rad, m/s, rad/s), output
+    ``measured_table_state`` (12): the position plus ``sigma_p n[k]``, the
+    attitude ``R`` turned to ``exp(sigma_a n'[k]) R`` (its rotation vector),
+    the twist as it is; ``k`` the tick of the current time.
+    """
+
+    def __init__(self, position_std_m: float, attitude_std_rad: float, seed: int, period_s: float):
+        LeafSystem.__init__(self)
+        self._std = (float(position_std_m), float(attitude_std_rad))
+        self._seed = int(seed)
+        self._h = float(period_s)
+        self._in = self.DeclareVectorInputPort("table_state", 12)
+        self.DeclareVectorOutputPort("measured_table_state", BasicVector(12), self._calc)
+
+    def _calc(self, context, output) -> None:
+        tick = int(round(context.get_time() / self._h))
+        n = np.array([noise_sample(self._seed, c, tick) for c in _POSE_CHANNELS])
+        x = np.array(self._in.Eval(context))
+        x[0:3] += self._std[0] * n[0:3]
+        if self._std[1] > 0.0:
+            x[3:6] = rotation_log(rotation_exp(self._std[1] * n[3:6]) @ rotation_exp(x[3:6]))
+        output.SetFromVector(x)
 
 
 def add_wrench_sensor(

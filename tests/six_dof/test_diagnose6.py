@@ -16,11 +16,18 @@ from hybridtable.six_dof.scenario import parse_scenario
 from hybridtable.six_dof.simulation import simulate6
 from tests.six_dof.test_run6 import SCENARIO
 
-#: The conftest's rig with F/T noise in the loop and a dead band above it.
+#: The conftest's rig with F/T and encoder noise in the loop and a dead band above it.
 NOISY = {
     **SCENARIO,
     "contact": {**SCENARIO["contact"], "friction_coefficient": 0.3},
-    "rig": {**SCENARIO["rig"], "force_noise_n": 2.0, "moment_noise_n_m": 0.5, "seed": 3},
+    "rig": {
+        **SCENARIO["rig"],
+        "force_noise_n": 2.0,
+        "moment_noise_n_m": 0.5,
+        "position_noise_m": 2e-6,
+        "attitude_noise_rad": 1e-6,
+        "seed": 3,
+    },
     "compensator": {"name": "SDMDC", "force_deadband_n": 12.0},
 }
 
@@ -28,7 +35,7 @@ NOISY = {
 def _run(hidden: dict, run_id: str):
     params = parse_scenario(NOISY)
     physics = physics_with([(get_effect(n), v) for n, v in hidden.items()], rig_scale(params))
-    return run6_of_docking(simulate6(params, physics=physics), run_id, NOISY, 2e-6, 1e-6)
+    return run6_of_docking(simulate6(params, physics=physics), run_id, NOISY)
 
 
 def test_a_run_of_the_scenarios_own_rig_misses_nothing():

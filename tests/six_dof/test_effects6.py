@@ -87,11 +87,17 @@ def test_a_turned_sensor_reads_the_turned_wrench_and_a_turned_table_reaches_the_
 
 
 def test_a_fit_to_a_noisy_run_finds_the_hidden_values():
-    """Hidden: a turned sensor and friction across the face; F/T noise in the
-    loop, pose noise on the log."""
+    """Hidden: a turned sensor and friction across the face; F/T and encoder
+    noise in the loop."""
     scenario = {
         **SCENARIO,
-        "rig": {**SCENARIO["rig"], "force_noise_n": 2.0, "moment_noise_n_m": 0.5},
+        "rig": {
+            **SCENARIO["rig"],
+            "force_noise_n": 2.0,
+            "moment_noise_n_m": 0.5,
+            "position_noise_m": 2e-6,
+            "attitude_noise_rad": 1e-6,
+        },
         "compensator": {"name": "SDMDC", "force_deadband_n": 12.0},
     }
     from hybridtable.six_dof.scenario import parse_scenario
@@ -106,7 +112,7 @@ def test_a_fit_to_a_noisy_run_finds_the_hidden_values():
         ],
         rig_scale(params),
     )
-    run = run6_of_docking(simulate6(params, physics=hidden), "hidden", scenario, 2e-6, 1e-6)
+    run = run6_of_docking(simulate6(params, physics=hidden), "hidden", scenario)
     fit = fit_runs6(
         [run], [(get_effect("sensor_misalignment"), {}), (get_effect("friction_across_face"), {})]
     )

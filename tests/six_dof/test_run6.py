@@ -330,10 +330,11 @@ def test_an_on_axis_run_is_the_1d_run_it_projects_to(tmp_path, capsys):
     # through the CLI: the 1-D compare reads the 6-DoF files with --axial
     folder = tmp_path / "axis"
     folder.mkdir()
-    raw["rig"].update(force_noise_n=2.0, moment_noise_n_m=0.5)
+    noise = {"force_noise_n": 2.0, "moment_noise_n_m": 0.5, "position_noise_m": 2e-6}
+    raw["rig"].update(noise)
     raw["compensator"]["force_deadband_n"] = 12.0
-    noisy = params.with_(force_noise_n=2.0, moment_noise_n_m=0.5, force_deadband_n=12.0)
-    six = run6_of_docking(simulate6(noisy), "axis", raw, 2e-6, 1e-6)
+    noisy = params.with_(force_deadband_n=12.0, **noise)
+    six = run6_of_docking(simulate6(noisy), "axis", raw)
     (folder / "run1.csv").write_text(run6_csv_text(six))
     (folder / "run1.json").write_text(json.dumps(run6_json(six)))
     assert main(["compare", str(folder), "--axial", "--json", "-", "--no-progress"]) == 0
