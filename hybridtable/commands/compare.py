@@ -68,6 +68,7 @@ def run(args: argparse.Namespace) -> int:
         parse_added,
         write_model,
     )
+    from hybridtable.errors import CommandError
     from hybridtable.measurement.comparison import (
         check_comparable,
         compare_run,
@@ -82,6 +83,12 @@ def run(args: argparse.Namespace) -> int:
         return compare6(args)
     load_plugins(args)
     added = parse_added(args)  # a malformed --add before any work
+    for effect, _ in added:
+        if effect.apply is None:
+            raise CommandError(
+                f"--add {effect.name}: the effect acts on a six-axis rig only (hybridtable "
+                "effects, column loops): these are 1-D runs"
+            )
     base = load_model_arg(args)
     runs, splits, layout = read_run_arguments(args)
     for r in runs:  # every defect before any work

@@ -208,8 +208,8 @@ def format_effects(items: list[dict]) -> str:
         "(- : none). tried by: the commands that try the effect unless told which "
         "(diagnose --effects, explain --effects name any effect); CoR by: how explain runs "
         "the loop with it; loops: the 1-D loop's runs and tables, 6-DoF runs (simulate6 "
-        "--record, compare of hybridtable-run6/1 runs). Use an effect with "
-        "--add NAME[:param=value,...]."
+        "--add, compare and diagnose of hybridtable-run6/1 runs: diagnose tries every effect "
+        "with 6-DoF among its loops). Use an effect with --add NAME[:param=value,...]."
     )
     return "\n".join(lines)
 

@@ -151,6 +151,12 @@ def run(args: argparse.Namespace) -> int:
             raise CommandError(f"--effects: {err}") from None
         if not effects:
             raise CommandError("--effects: give at least one effect name (hybridtable effects)")
+        for e in effects:
+            if e.apply is None:
+                raise CommandError(
+                    f"--effects {e.name}: the effect acts on a six-axis rig only (hybridtable "
+                    "effects, column loops): a CoR table is the 1-D loop's"
+                )
     quiet = args.json == "-"
     bar = None
     if not args.no_progress and not quiet and sys.stderr.isatty():

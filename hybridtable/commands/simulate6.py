@@ -263,10 +263,24 @@ def _hidden_physics(args: argparse.Namespace, params):
     return (physics if hidden else None), hidden
 
 
+def _json_values(value):
+    """A TOML document's values as JSON has them: an infinite number is the
+    string ``"inf"`` (the scenario's own spelling of an ideal table)."""
+    import math
+
+    if isinstance(value, dict):
+        return {k: _json_values(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_json_values(v) for v in value]
+    if isinstance(value, float) and math.isinf(value):
+        return "inf" if value > 0 else "-inf"
+    return value
+
+
 def _record(args: argparse.Namespace, result, hidden: list, physics) -> dict:
     """Write the run of ``--record`` (the scenario file's content, with the
     command line's compensator, as its JSON) and, with hidden effects,
-    ``truth.json``."""
+    ``truth.json`` (what was hidden: nothing, without ``--add``)."""
     import json
     from pathlib import Path
 
@@ -274,7 +288,7 @@ def _record(args: argparse.Namespace, result, hidden: list, physics) -> dict:
     from hybridtable.loop.scenario import read_scenario
     from hybridtable.six_dof.run6 import run6_csv_text, run6_json, run6_of_docking
 
-    scenario = read_scenario(args.scenario)
+    scenario = _json_values(read_scenario(args.scenario))
     if args.compensator is not None:
         scenario.setdefault("compensator", {})["name"] = result.params.compensator
     noise = result.params.rig.noise
@@ -290,17 +304,20 @@ def _record(args: argparse.Namespace, result, hidden: list, physics) -> dict:
     with staged_folder(folder) as stage:
         write_text_atomic(stage.path / "run1.csv", run6_csv_text(run))
         write_text_atomic(stage.path / "run1.json", json.dumps(run6_json(run), indent=2) + "\n")
-        if hidden:
-            from hybridtable.commands._record import TRUTH_FORMAT
-            from hybridtable.diagnosis.model_file import tool_version
+        # always written: a run recorded again with --force has no older truth beside it
+        from hybridtable.commands._record import TRUTH_FORMAT
+        from hybridtable.diagnosis.model_file import tool_version
 
-            truth = {
-                "format": TRUTH_FORMAT,
-                "tool_version": tool_version(),
-                "hidden": {"effects": hidden, "physics": physics.to_dict()},
-                "runs": [{"run_id": run_id, "csv": "run1.csv", "json": "run1.json"}],
-            }
-            write_text_atomic(stage.path / "truth.json", json.dumps(truth, indent=2) + "\n")
+        truth = {
+            "format": TRUTH_FORMAT,
+            "tool_version": tool_version(),
+            "hidden": {
+                "effects": hidden,
+                "physics": None if physics is None else physics.to_dict(),
+            },
+            "runs": [{"run_id": run_id, "csv": "run1.csv", "json": "run1.json"}],
+        }
+        write_text_atomic(stage.path / "truth.json", json.dumps(truth, indent=2) + "\n")
     return {
         "folder": str(folder),
         "csv": str(folder / "run1.csv"),

@@ -43,7 +43,7 @@ from hybridtable.errors import MeasurementError
 from hybridtable.limits import LIMITS
 from hybridtable.measurement.run_format import RUN_COLUMNS, Run
 
-__all__ = ["NOISE_MULTIPLE", "noise_level", "check_channels"]
+__all__ = ["NOISE_MULTIPLE", "noise_level", "noise_level_of_differences", "check_channels"]
 
 #: A signal counts as present when it exceeds this many noise levels.
 NOISE_MULTIPLE = 5.0
@@ -61,7 +61,14 @@ def noise_level(x: np.ndarray) -> float:
     ``1.4826 median|d2 x| / sqrt(6)`` (white noise of std s gives s)."""
     if len(x) < 3:
         return 0.0
-    d2 = np.diff(x, 2)
+    return noise_level_of_differences(np.diff(x, 2))
+
+
+def noise_level_of_differences(d2: np.ndarray) -> float:
+    """:func:`noise_level` of a series whose second differences are ``d2``
+    (some of them: a window, the ticks out of contact)."""
+    if len(d2) == 0:
+        return 0.0
     return float(1.4826 * np.median(np.abs(d2)) / math.sqrt(6.0))
 
 

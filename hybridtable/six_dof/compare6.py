@@ -57,8 +57,9 @@ COMPONENTS: tuple[tuple[str, str, int, str], ...] = (
     *((f"theta{a}_act", "theta_act", i, "rad") for i, a in enumerate("xyz")),
 )
 
-#: Floors of the noise levels, as fractions of the contact's own scales.
-_FLOOR = 1e-3
+#: Floors of the noise levels, as fractions of the contact's own scales (a
+#: noise-free record's resolution: 0.016 N and 0.16 um on Table 1's contact).
+_FLOOR = 1e-5
 
 
 @dataclass(frozen=True)
@@ -163,11 +164,14 @@ def _length_m(run: Run6) -> float:
 
 
 def noise_level(run: Run6, block: str) -> np.ndarray:
-    """Each column's noise std of a measured block (:func:`noise_levels`),
-    floored at :data:`_FLOOR` of its scale: the undamped head-on peak force,
-    that force over the contact's lever, the peak deflection ``v0 / omega``
-    and that over the lever (a record without noise is compared at the
-    floor)."""
+    """Each column's noise std of a measured block: the white-noise estimate
+    of :func:`~hybridtable.six_dof.run6.noise_levels` over the ticks out of
+    contact (before the touch and after the release, where the readings hold
+    no curvature of the contact's own: at least 20 ticks, else over every
+    tick), floored at :data:`_FLOOR` of its scale: the undamped head-on peak
+    force, that force over the contact's lever, the peak deflection ``v0 /
+    omega`` and that over the lever (a record without noise is compared at
+    the floor)."""
     p = run.params
     force = peak_force_n(p)
     deflection = p.approach.initial_velocity_m_per_s / (2.0 * math.pi * p.contact_frequency_hz)
@@ -178,7 +182,28 @@ def noise_level(run: Run6, block: str) -> np.ndarray:
         "p_act": deflection,
         "theta_act": deflection / lever,
     }[block]
-    return np.maximum(noise_levels(_block(run, block)), _FLOOR * scale)
+    quiet = _quiet(run)
+    rows = quiet if np.count_nonzero(quiet) >= _QUIET_TICKS else None
+    return np.maximum(noise_levels(_block(run, block), rows), _FLOOR * scale)
+
+
+#: Ticks out of contact the noise is estimated from (fewer: every tick).
+_QUIET_TICKS = 20
+
+
+def _quiet(run: Run6) -> np.ndarray:
+    """The ticks out of contact: the measured force within five noise levels
+    (estimated over every tick) and the dead band, and the sensor's delay
+    plus two ticks away from any tick that is not."""
+    force = np.linalg.norm(run.blocks["f_mea"], axis=1)
+    p = run.params
+    level = 5.0 * max(
+        float(np.linalg.norm(noise_levels(run.blocks["f_mea"]))), _FLOOR * peak_force_n(p)
+    )
+    loud = force > level + p.force_deadband_n
+    margin = p.delay_ticks + 2
+    near = np.convolve(loud.astype(float), np.ones(2 * margin + 1), mode="same") > 0.0
+    return ~near
 
 
 def measured_block(run: Run6, block: str) -> np.ndarray:

@@ -33,7 +33,7 @@ from hybridtable.six_dof.compare6 import COMPONENTS, replay_residuals
 from hybridtable.six_dof.physics6 import DockingPhysics, physics_with, rig_scale
 from hybridtable.six_dof.run6 import Run6
 
-__all__ = ["Fit6", "fit_runs6", "blocks", "BLOCK_FLOOR"]
+__all__ = ["Fit6", "fit_runs6", "blocks"]
 
 
 @dataclass
@@ -87,23 +87,23 @@ class Fit6:
         }
 
 
+class _CannotAct(RuntimeError):
+    """An effect's values the rig cannot take (a ParameterError, which the
+    core's fit would take for a failed polish: it catches ValueError)."""
+
+
 def blocks(runs: Sequence[Run6], residuals: np.ndarray) -> list[Block]:
     """The residuals (:func:`~hybridtable.six_dof.compare6.replay_residuals`
     of each run in turn) as one block per run and component, for the
-    information criterion (:mod:`hybridtable.effects.selection`; their
-    variance estimated, never below :data:`BLOCK_FLOOR`)."""
+    information criterion (:mod:`hybridtable.effects.selection`; in noise
+    levels: the noise is stated)."""
     out, start = [], 0
     for run in runs:
         for _ in COMPONENTS:
             part = residuals[start : start + run.n]
-            out.append(Block(float(part @ part), run.n, BLOCK_FLOOR))
+            out.append(Block(float(part @ part), run.n))
             start += run.n
     return out
-
-
-#: The smallest variance (noise levels squared) a block is credited with: a
-#: model is not better for errors under a hundredth of the noise.
-BLOCK_FLOOR = 1e-4
 
 
 def fit_runs6(
@@ -153,15 +153,21 @@ def fit_runs6(
     def residual(values: Values) -> np.ndarray:
         nonlocal evaluations
         evaluations += 1
-        physics = physics_with([(by_name[n], values[n]) for n in names], scale)
-        return np.concatenate([replay_residuals(r, physics) for r in runs])
+        try:
+            physics = physics_with([(by_name[n], values[n]) for n in names], scale)
+            return np.concatenate([replay_residuals(r, physics) for r in runs])
+        except ParameterError as err:  # not a failed polish: the effect cannot act here
+            raise _CannotAct(str(err)) from None
 
     r0 = np.concatenate([replay_residuals(r) for r in runs])
     space = Coordinates(free, scale, origin)
     starts = [start] if start else []
-    solution = fit_values(residual, space, starts, REPLAY_LEAST_SQUARES, held=given)
-    r1 = residual(solution.values)
-    std = standard_errors(residual, solution.coordinates, r1, REPLAY_LEAST_SQUARES.diff_step)
+    try:
+        solution = fit_values(residual, space, starts, REPLAY_LEAST_SQUARES, held=given)
+        r1 = residual(solution.values)
+        std = standard_errors(residual, solution.coordinates, r1, REPLAY_LEAST_SQUARES.diff_step)
+    except _CannotAct as err:
+        raise ParameterError(f"{' + '.join(names)} cannot act on this rig: {err}") from None
     return Fit6(
         values=solution.values,
         std=std,

@@ -80,6 +80,7 @@ class DockingPhysics:
     offsets: Mapping[str, float] = field(default_factory=dict)
     factors: Mapping[str, float] = field(default_factory=dict)
     sensor_time_constant_s: float = 0.0
+    #: The reading's offset ``[m; f]`` (N m, N).
     sensor_bias: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
@@ -147,8 +148,8 @@ class DockingPhysics:
         return replace(self, table_gain=np.asarray(gain) @ old)
 
     def turn_sensor(self, rotation_vector_rad: Any) -> DockingPhysics:
-        """The F/T sensor's frame turned by ``exp(theta)``: it reads
-        ``[R m; R f]`` of the wrench ``[m; f]``."""
+        """The F/T sensor's reading turned by ``R = exp(theta)``: it reads
+        ``[R m; R f]`` of the wrench ``[m; f]`` (its frame turned by ``R^T``)."""
         R = rotation_exp(np.asarray(rotation_vector_rad, dtype=float))
         return self.times_sensor(np.block([[R, np.zeros((3, 3))], [np.zeros((3, 3)), R]]))
 

@@ -33,6 +33,7 @@ import numpy as np
 
 from hybridtable._files import read_user_json, regular_file_problem
 from hybridtable.errors import MeasurementError, ParameterError
+from hybridtable.measurement.channels import noise_level_of_differences
 from hybridtable.measurement.log_layout import LogLayout
 from hybridtable.measurement.run_files import find_run_files
 from hybridtable.measurement.run_reader import check_time, check_unique_ids, read_series
@@ -97,6 +98,10 @@ _RANGES: dict[str, float] = {"m": 100.0, "m/s": 1000.0, "rad/s": 100.0, "N": 1e9
 
 #: How far a quaternion's norm may be off 1 (a logger's rounding is far below).
 QUATERNION_NORM_TOLERANCE = 1e-3
+
+#: The largest attitude from the target frame a docking's pose may have (deg): a
+#: quaternion read in another column order is about 180 deg off.
+MAX_ATTITUDE_DEG = 60.0
 
 #: The format's own CSV.
 LAYOUT6 = LogLayout(source="the 6-DoF format", format_columns=RUN6_COLUMNS)
@@ -349,6 +354,16 @@ def _check_quaternions(run: Run6, which: str, lines: Sequence[int]) -> None:
             f"quaternion (norm {norm[i]:.6g} at t = {run.time_s[i]:.6g} s), so not a rotation: "
             "the format's attitude is a unit quaternion (qw, qx, qy, qz)"
         )
+    angle = np.degrees(2.0 * np.arccos(np.clip(np.abs(q[:, 0]), 0.0, 1.0)))
+    far = np.flatnonzero(angle > MAX_ATTITUDE_DEG)
+    if far.size:
+        i = int(far[0])
+        raise MeasurementError(
+            f"{run.csv_path} line {lines[i]}: {name} (the {BLOCKS[name][2]}) is {angle[i]:.0f} deg "
+            f"from the target frame at t = {run.time_s[i]:.6g} s, where a docking stays within "
+            f"{MAX_ATTITUDE_DEG:g} deg of it: are the quaternion's columns in another order, "
+            "(x, y, z, w)? map them with --column-map"
+        )
     if q[0, 0] < 0.0:
         raise MeasurementError(
             f"{run.csv_path} line {lines[0]}: {name} starts with qw < 0; the format's first "
@@ -386,43 +401,72 @@ _TURNING_RAD_PER_S = 1e-6
 
 def _check_rates(run: Run6, layout: LogLayout = LAYOUT6) -> None:
     """The model's twist against the commanded pose's change from tick to
-    tick: the attitude's change is ``exp(h w_des[k]) R[k-1]`` exactly (the
-    rig computer's step), the position's about ``h v_des[k]``."""
+    tick, axis by axis: the attitude's change is ``exp(h w_des[k]) R[k-1]``
+    exactly (the rig computer's step), the position's ``h v_des[k]`` but for
+    the turn of the port's lever arm."""
     h = run.params.sample_period_s
     q = run.blocks["q_des"]
     conj = q[:-1] * np.array([1.0, -1.0, -1.0, -1.0])
     turn = rotation_vectors_of_quaternions(quaternion_product(q[1:], conj)) / h
     w = run.blocks["w_des"][1:]
-    if math.sqrt(float(np.mean(np.sum(turn * turn, axis=1)))) > _TURNING_RAD_PER_S:
-        s = _slope(w, turn)
+    columns = BLOCKS["w_des"][0]
+    for j in range(3):
+        if math.sqrt(float(np.mean(turn[:, j] ** 2))) <= _TURNING_RAD_PER_S:
+            continue  # this axis does not turn measurably
+        s = _slope(w[:, j], turn[:, j])
         if abs(s / math.degrees(1.0) - 1.0) < 0.1:
-            columns = BLOCKS["w_des"][0]
             raise MeasurementError(
-                f"{run.csv_path}: w_des (wx/wy/wz_des_rad_per_s) is {s:.4g} times the commanded "
-                "attitude's rate of turn: logged in degrees per second where radians per second "
-                f"are due; {layout.unit_advice({c: 'deg/s' for c in columns})}"
+                f"{run.csv_path}: {columns[j]} is {s:.4g} times the commanded attitude's rate "
+                "of turn: logged in degrees per second where radians per second are due; "
+                f"{layout.unit_advice({c: 'deg/s' for c in columns})}"
             )
         if not 0.8 < s < 1.25:
             raise MeasurementError(
-                f"{run.csv_path}: w_des (wx/wy/wz_des_rad_per_s) does not follow the commanded "
-                f"attitude's change from tick to tick (slope {s:.4g}, expected 1): a sign-flipped "
-                "or mislabelled angular velocity column"
+                f"{run.csv_path}: {columns[j]} does not follow the commanded attitude's change "
+                f"from tick to tick (slope {s:.4g}, expected 1): a sign-flipped or mislabelled "
+                "angular velocity column"
             )
     step = np.diff(run.blocks["p_des"], axis=0) / h
-    s = _slope(run.blocks["v_des"][1:], step)
-    if not 0.8 < s < 1.25:
+    v = run.blocks["v_des"]
+    speed = math.sqrt(float(np.mean(np.sum(v * v, axis=1))))
+    columns = BLOCKS["v_des"][0]
+    for j in range(3):
+        if math.sqrt(float(np.mean(step[:, j] ** 2))) <= 1e-6 * speed:
+            continue  # no motion along this axis to compare (the command has no noise)
+        s = _slope(v[1:, j], step[:, j])
+        if not 0.8 < s < 1.25:
+            raise MeasurementError(
+                f"{run.csv_path}: {columns[j]} does not follow the commanded position's change "
+                f"from tick to tick (slope {s:.4g}, expected 1): a sign-flipped or mislabelled "
+                "velocity column"
+            )
+    # p_des[k] - p_des[k-1] = h v_des[k]: a command logged a row off is closer
+    # to its neighbour's velocity (seen while the model accelerates)
+    errors = {
+        d: float(np.sqrt(np.mean((step[1:-1] - v[2 + d : len(v) - 1 + d]) ** 2)))
+        for d in (-1, 0, 1)
+    }
+    best = min(errors, key=errors.__getitem__)
+    if best != 0 and errors[best] < 0.3 * errors[0] and errors[0] > 1e-6 * speed:
+        side = "late" if best == -1 else "early"
         raise MeasurementError(
-            f"{run.csv_path}: v_des (vx/vy/vz_des_m_per_s) does not follow the commanded "
-            f"position's change from tick to tick (slope {s:.4g}, expected 1): a sign-flipped "
-            "or mislabelled velocity column"
+            f"{run.csv_path}: the commanded position steps by h v_des of the row "
+            f"{'before' if best == -1 else 'after'} (RMS {errors[best]:.3g} m/s against "
+            f"{errors[0]:.3g} m/s for its own row): p_des is logged a row {side} against v_des; "
+            "the format logs both after the tick's update"
         )
 
 
-def noise_levels(values: np.ndarray) -> np.ndarray:
-    """Robust white-noise std of each column (N, k) from its second
-    differences: ``1.4826 median|d2| / sqrt(6)``."""
+def noise_levels(values: np.ndarray, rows: np.ndarray | None = None) -> np.ndarray:
+    """Robust white-noise std of each column (N, k): the 1-D channels'
+    :func:`~hybridtable.measurement.channels.noise_level` of its second
+    differences, over the second differences centred on ``rows`` (a mask of
+    the N rows; default all)."""
+    values = np.asarray(values, dtype=float)
     d2 = np.diff(values, n=2, axis=0)
-    return 1.4826 * np.median(np.abs(d2), axis=0) / math.sqrt(6.0)
+    if rows is not None:
+        d2 = d2[rows[:-2] & rows[1:-1] & rows[2:]]
+    return np.array([noise_level_of_differences(c) for c in d2.T])
 
 
 def _check_contact(run: Run6) -> None:

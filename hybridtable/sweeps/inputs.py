@@ -143,8 +143,8 @@ def input_of(name: str) -> Input | None:
         return None
     from hybridtable.effects.registry import effect_names, get_effect
 
-    if effect_name not in effect_names():
-        return None
+    if effect_name not in effect_names() or get_effect(effect_name).apply is None:
+        return None  # not an effect of the 1-D loop (a six-axis rig's only)
     for p in get_effect(effect_name).parameters:
         if p.name == parameter:
             return Input(name, "number", p.unit, p.description)

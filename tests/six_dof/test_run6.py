@@ -189,6 +189,29 @@ def _broken(recorded, tmp_path, column, change):
             "sign-flipped or mislabelled velocity",
         ),
         ("fx_mea_n", lambda rows, j: rows[50].__setitem__(j, "nan"), "not finite"),
+        (
+            # a quaternion logged (x, y, z, w): about 180 deg from the target frame
+            "qw_act",
+            lambda rows, j: [
+                r.__setitem__(slice(j, j + 4), [r[j + 1], r[j + 2], r[j + 3], r[j]]) for r in rows
+            ],
+            "another order",
+        ),
+        (
+            # the command logged a row late against the model's velocity
+            "px_des_m",
+            lambda rows, j: [
+                r.__setitem__(slice(j, j + 3), p)
+                for r, p in zip(rows[1:], [x[j : j + 3] for x in rows[:-1]], strict=True)
+            ],
+            "a row late",
+        ),
+        (
+            # one lateral axis flipped (the other two right)
+            "vx_des_m_per_s",
+            lambda rows, j: [r.__setitem__(j, repr(-float(r[j]))) for r in rows],
+            "vx_des_m_per_s does not follow",
+        ),
     ],
 )
 def test_a_broken_log_is_one_line_naming_it(recorded, tmp_path, column, change, words):
@@ -349,3 +372,33 @@ def test_an_on_axis_run_is_the_1d_run_it_projects_to(tmp_path, capsys):
     _write(off, run6_of_docking(simulate6(docking_params(offset_m=0.01)), "off", SCENARIO))
     assert main(["compare", str(off), "--axial", "--no-progress"]) == 2
     assert "not on the docking axis (lateral_offset_m, misalignment_deg)" in capsys.readouterr().err
+
+
+def test_a_6dof_only_effect_is_refused_by_the_1d_commands(tmp_path, capsys):
+    from hybridtable.cli import main
+
+    table = tmp_path / "t.csv"
+    table.write_text("compensator,sensor_delay_s,cor\nnone,0.005,1.16\nSDC,0.005,1.0\n")
+    assert main(["explain", str(table), "--effects", "friction_across_face", "--no-progress"]) == 2
+    assert "six-axis rig only" in capsys.readouterr().err
+    runs = Path(__file__).resolve().parents[2] / "examples" / "nominal"
+    assert main(["compare", str(runs), "--add", "sensor_misalignment", "--no-progress"]) == 2
+    assert "six-axis rig only" in capsys.readouterr().err
+
+
+def test_a_record_writes_its_truth_and_the_scenarios_inf_as_json_can(tmp_path):
+    from hybridtable.cli import main
+
+    scenario = tmp_path / "ideal.toml"
+    text = (
+        (EXAMPLES / "on_axis.toml").read_text().replace("response_hz = 25.0", 'response_hz = "inf"')
+    )
+    scenario.write_text(text.replace('response_hz = "inf"', "response_hz = inf"))
+    folder = tmp_path / "rec"
+    argv = ["simulate6", str(scenario), "--record", str(folder), "--no-reference", "--no-progress"]
+    assert main(argv) == 0
+    doc = json.loads((folder / "run1.json").read_text())  # strict JSON: no Infinity
+    assert doc["scenario"]["table"]["response_hz"] == "inf"
+    truth = json.loads((folder / "truth.json").read_text())
+    assert truth["hidden"]["effects"] == []  # written without --add too: never stale
+    assert read_run6(folder / "run1.csv").params.table_response_hz == float("inf")

@@ -2,11 +2,13 @@
 
 Physics: the pads slide on the target's face with a Coulomb coefficient
 ``mu + d_mu`` where the scenario states ``mu`` (often 0: a face assumed
-lubricated). Off axis, the tangential force it makes turns the spacecraft and
-moves it sideways.
+lubricated), ``d_mu >= 0``: the face grips more than stated. Off axis, the
+tangential force it makes turns the spacecraft and moves it sideways. (A face
+that grips less than stated would need the stated coefficient in the bounds,
+which the effect's scale does not carry: not modelled.)
 
 Model: the docking contact's ``friction_coefficient`` is the scenario's plus
-``extra_friction_coefficient`` (at least 0); Drake's regularized friction
+``extra_friction_coefficient``; Drake's regularized friction
 (:mod:`hybridtable.six_dof.contact`).
 
 Signature: in the measured force across the face (fx, fy) and the moments
@@ -29,7 +31,7 @@ EFFECT = Effect(
             "extra_friction_coefficient",
             "1",
             "true friction coefficient minus the stated one",
-            lower=-0.5,
+            lower=0.0,
             upper=1.5,
             scale=0.05,
             null=0.0,

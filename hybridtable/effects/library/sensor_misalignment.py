@@ -1,13 +1,14 @@
 """The F/T sensor's frame turned from the one the rig computer assumes (a
 six-axis rig's).
 
-Physics: the sensor is mounted turned by a small rotation ``exp(theta)``:
-it reports the wrench in its own axes, which the rig computer takes for the
-target frame's, so a push along the docking axis reads partly across it.
+Physics: the sensor is mounted turned by a small rotation: it reports the
+wrench in its own axes, which the rig computer takes for the target frame's,
+so a push along the docking axis reads partly across it.
 
-Model: the sensor reads ``[R m; R f]`` of the contact's wrench ``[m; f]``
-with ``R = exp(theta)``, ``theta = (roll, pitch, yaw)`` in rad
-(:meth:`~hybridtable.six_dof.physics6.DockingPhysics.turn_sensor`).
+Model: the reading is the contact's wrench ``[m; f]`` turned by ``R =
+exp(theta)``: ``[R m; R f]``, ``theta = (roll, pitch, yaw)`` in rad (a sensor
+frame turned by ``R^T``;
+:meth:`~hybridtable.six_dof.physics6.DockingPhysics.turn_sensor`).
 
 Signature: a lateral force and moments that follow the axial force pulse in
 proportion (``f_x ~ pitch f_z``, ``f_y ~ -roll f_z``), also on axis.
@@ -23,8 +24,8 @@ __all__ = ["EFFECT"]
 #: The effect ``sensor_misalignment`` (registered by :mod:`hybridtable.effects.registry`).
 EFFECT = Effect(
     name="sensor_misalignment",
-    description="the F/T sensor's frame is turned from the assumed one (6-DoF)",
-    parameters=rotation_parameters("sensor", "the sensor frame"),
+    description="the F/T sensor's frame is turned from the assumed one: its reading turned (6-DoF)",
+    parameters=rotation_parameters("sensor", "the reading"),
     signature=Signature(
         ("fx_mea", "fy_mea", "mx_mea", "my_mea", "mz_mea"),
         CONTACT,
