@@ -227,9 +227,8 @@ def _able(runs: Sequence[Run6], effects: Sequence[str]) -> tuple[list[str], dict
     for name in effects:
         effect = get_effect(name)
         values = {}
-        for p in effect.parameters:
-            at = p.at(scale)
-            values[p.name] = min(at.null + at.scale, at.upper) if not p.log else at.null
+        for p in effect.parameters:  # one typical change from the null (of ln for a ratio)
+            values[p.name] = min(p.value_at(1.0, scale), p.bounds(scale)[1])
         try:
             physics_with([(effect, values)], scale).apply(params)
         except ParameterError as err:

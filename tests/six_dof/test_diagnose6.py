@@ -92,3 +92,20 @@ def test_a_pair_is_found_and_an_effect_outside_the_candidates_is_not_explained(t
     assert roll == pytest.approx(
         0.01, abs=4.0 * doc["fit"]["std"]["sensor_misalignment"]["sensor_roll_rad"]
     )
+
+
+def test_a_candidate_that_cannot_act_on_the_rig_is_left_out_with_why():
+    """The Stewart platform's response is its legs' reference model: the
+    table's response effects cannot change it, and diagnose says so instead
+    of failing their fits."""
+    from types import SimpleNamespace
+
+    from hybridtable.six_dof.diagnose6 import _able
+    from hybridtable.six_dof.scenario import load_scenario
+    from tests.six_dof.test_run6 import EXAMPLES
+
+    run = SimpleNamespace(params=load_scenario(EXAMPLES / "stewart.toml"))
+    able, refused = _able([run], ["stiffness_error", "table_response", "table_damping"])
+    assert able == ["stiffness_error"]
+    assert set(refused) == {"table_response", "table_damping"}
+    assert all("Stewart" in why for why in refused.values())
