@@ -65,16 +65,19 @@ def register(sub) -> None:
         "--noise-position-m",
         type=number_type("0..1", "m"),
         metavar="METRES",
-        default=0.0,
-        help="white noise on the measured table position, std per axis [m], 0 to 1 (default: 0)",
+        default=None,
+        help="replace the scenario's [rig] position_noise_m: white noise on the table's "
+        "measured position (its encoders, which the compensator reads), std per axis [m], "
+        "0 to 1 (default: the scenario's, else 0)",
     )
     g.add_argument(
         "--noise-attitude-rad",
         type=number_type("0..0.1", "rad"),
         metavar="RADIANS",
-        default=0.0,
-        help="white noise on the measured table attitude, a rotation of this std about each "
-        "axis [rad], 0 to 0.1 (default: 0)",
+        default=None,
+        help="replace the scenario's [rig] attitude_noise_rad: a rotation of this std about "
+        "each axis on the table's measured attitude [rad], 0 to 0.1 (default: the "
+        "scenario's, else 0)",
     )
     add_effect_argument(
         p,

@@ -393,12 +393,16 @@ def test_a_record_writes_its_truth_and_the_scenarios_inf_as_json_can(tmp_path):
     text = (
         (EXAMPLES / "on_axis.toml").read_text().replace("response_hz = 25.0", 'response_hz = "inf"')
     )
-    scenario.write_text(text.replace('response_hz = "inf"', "response_hz = inf"))
+    text = text.replace('response_hz = "inf"', "response_hz = inf")
+    # the scenario's encoder noise is kept without the flags (they only replace it)
+    scenario.write_text(text.replace("[rig]\n", "[rig]\nposition_noise_m = 3e-6\n"))
     folder = tmp_path / "rec"
     argv = ["simulate6", str(scenario), "--record", str(folder), "--no-reference", "--no-progress"]
-    assert main(argv) == 0
+    assert main([*argv, "--json", str(tmp_path / "s.json")]) == 0
+    assert json.loads((tmp_path / "s.json").read_text())["record"]["position_noise_m"] == 3e-6
     doc = json.loads((folder / "run1.json").read_text())  # strict JSON: no Infinity
     assert doc["scenario"]["table"]["response_hz"] == "inf"
+    assert doc["scenario"]["rig"]["position_noise_m"] == 3e-6
     truth = json.loads((folder / "truth.json").read_text())
     assert truth["hidden"]["effects"] == []  # written without --add too: never stale
     assert read_run6(folder / "run1.csv").params.table_response_hz == float("inf")
