@@ -19,7 +19,6 @@ from hybridtable.six_dof.compare6 import (  # noqa: E402
     COMPONENTS,
     Comparison6,
     measured_block,
-    noise_level,
 )
 
 __all__ = ["write_report6"]
@@ -40,6 +39,17 @@ def _panels(title: str):
     return fig, axes.T.ravel()  # columns: force, moment, position, attitude in rows of 3
 
 
+def _save(fig, axes, path: Path) -> Path:
+    """Label the bottom row's time axes, the legend, and write the figure."""
+    for ax in axes[3::4]:
+        ax.set_xlabel("time [s]")
+    axes[0].legend(fontsize=8, loc="best")
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
+
+
 def plot_components(c: Comparison6, path: Path, fitted: Comparison6 | None = None) -> Path:
     """The twelve components over time: measured, replay, replay with the fit."""
     run = c.run
@@ -54,13 +64,7 @@ def plot_components(c: Comparison6, path: Path, fitted: Comparison6 | None = Non
             ax.plot(t, k * fitted.replayed[block][: run.n, j], "--", color="C1", lw=1.0,
                     label="replay with the fit")  # fmt: skip
         ax.set_ylabel(f"{name} [{shown}]")
-    for ax in axes[3::4]:
-        ax.set_xlabel("time [s]")
-    axes[0].legend(fontsize=8, loc="best")
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return path
+    return _save(fig, axes, path)
 
 
 def plot_residuals(c: Comparison6, path: Path, fitted: Comparison6 | None = None) -> Path:
@@ -68,8 +72,8 @@ def plot_residuals(c: Comparison6, path: Path, fitted: Comparison6 | None = None
     run = c.run
     t = run.time_s
     fig, axes = _panels(f"{c.run_id}: replay residuals in noise levels (contact shaded)")
-    for ax, (name, block, j, _) in zip(axes, COMPONENTS, strict=True):
-        sigma = float(noise_level(run, block)[j])
+    for ax, (name, block, j, _), error in zip(axes, COMPONENTS, c.components, strict=True):
+        sigma = error.noise
         measured = measured_block(run, block)[:, j]
         _shade(ax, c)
         ax.axhline(3.0, color="0.6", lw=0.6, ls=":")
@@ -80,13 +84,7 @@ def plot_residuals(c: Comparison6, path: Path, fitted: Comparison6 | None = None
             r = (measured - fitted.replayed[block][: run.n, j]) / sigma
             ax.plot(t, r, color="C1", lw=0.8, label="with the fit")
         ax.set_ylabel(f"{name} [noise levels]")
-    for ax in axes[3::4]:
-        ax.set_xlabel("time [s]")
-    axes[0].legend(fontsize=8, loc="best")
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return path
+    return _save(fig, axes, path)
 
 
 def write_report6(

@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 
 from hybridtable.errors import ParameterError
+from hybridtable.measurement.recorder import FORMAT_COMPENSATORS
 from hybridtable.measurement.rig import TABLE_START_KEY
 from hybridtable.measurement.run_format import Run, RunInfo
 from hybridtable.six_dof.builder import initial_port_state
@@ -27,9 +28,6 @@ from hybridtable.six_dof.run6 import Run6
 from hybridtable.six_dof.spacecraft import RigidSpacecraft
 
 __all__ = ["axial_run"]
-
-#: The compensators of the 1-D run format's rig computer.
-_FORMAT_COMPENSATORS = ("none", "SDC", "MDC", "SDMDC")
 
 
 def axial_run(run: Run6) -> Run:
@@ -64,10 +62,10 @@ def axial_run(run: Run6) -> Run:
             f"run {run.run_id}: an ideal table (response_hz = inf) has no 1-D run format "
             "(it states a second-order table)"
         )
-    if p.compensator not in _FORMAT_COMPENSATORS:
+    if p.compensator not in FORMAT_COMPENSATORS:
         raise ParameterError(
             f"run {run.run_id}: compensator {p.compensator} is not one of the 1-D format's "
-            f"({', '.join(_FORMAT_COMPENSATORS)})"
+            f"({', '.join(FORMAT_COMPENSATORS)})"
         )
     info = RunInfo(
         run_id=run.run_id,

@@ -31,7 +31,7 @@ import numpy as np
 from hybridtable.six_dof.physics6 import DockingPhysics
 from hybridtable.six_dof.pose import rotation_vectors_of_quaternions
 from hybridtable.six_dof.replay6 import replay_run6
-from hybridtable.six_dof.run6 import Run6, noise_levels, run6_of_docking
+from hybridtable.six_dof.run6 import Run6, contact_level_n, noise_levels, run6_of_docking
 from hybridtable.six_dof.simulation import peak_force_n, simulate6
 
 __all__ = [
@@ -43,6 +43,7 @@ __all__ = [
     "replay_residuals",
     "measured_block",
     "noise_level",
+    "noise_levels_of",
     "phases",
 ]
 
@@ -172,19 +173,28 @@ def noise_level(run: Run6, block: str) -> np.ndarray:
     force, that force over the contact's lever, the peak deflection ``v0 /
     omega`` and that over the lever (a record without noise is compared at
     the floor)."""
+    return noise_levels_of(run)[block]
+
+
+def noise_levels_of(run: Run6) -> dict[str, np.ndarray]:
+    """:func:`noise_level` of every measured block of :data:`COMPONENTS`
+    (the ticks out of contact found once)."""
     p = run.params
     force = peak_force_n(p)
     deflection = p.approach.initial_velocity_m_per_s / (2.0 * math.pi * p.contact_frequency_hz)
     lever = _length_m(run)
-    scale = {
+    scales = {
         "f_mea": force,
         "m_mea": force * lever,
         "p_act": deflection,
         "theta_act": deflection / lever,
-    }[block]
+    }
     quiet = _quiet(run)
     rows = quiet if np.count_nonzero(quiet) >= _QUIET_TICKS else None
-    return np.maximum(noise_levels(_block(run, block), rows), _FLOOR * scale)
+    return {
+        block: np.maximum(noise_levels(_block(run, block), rows), _FLOOR * scale)
+        for block, scale in scales.items()
+    }
 
 
 #: Ticks out of contact the noise is estimated from (fewer: every tick).
@@ -192,16 +202,12 @@ _QUIET_TICKS = 20
 
 
 def _quiet(run: Run6) -> np.ndarray:
-    """The ticks out of contact: the measured force within five noise levels
-    (estimated over every tick) and the dead band, and the sensor's delay
-    plus two ticks away from any tick that is not."""
+    """The ticks out of contact: the measured force at or below the contact's
+    level (:func:`~hybridtable.six_dof.run6.contact_level_n`), and the
+    sensor's delay plus two ticks away from any tick above it."""
     force = np.linalg.norm(run.blocks["f_mea"], axis=1)
-    p = run.params
-    level = 5.0 * max(
-        float(np.linalg.norm(noise_levels(run.blocks["f_mea"]))), _FLOOR * peak_force_n(p)
-    )
-    loud = force > level + p.force_deadband_n
-    margin = p.delay_ticks + 2
+    loud = force > contact_level_n(run, _FLOOR)
+    margin = run.params.delay_ticks + 2
     near = np.convolve(loud.astype(float), np.ones(2 * margin + 1), mode="same") > 0.0
     return ~near
 
@@ -239,9 +245,10 @@ _PHASES = ("approach", "contact", "after")
 def _errors(run: Run6, predicted: dict[str, np.ndarray], phase: np.ndarray) -> list:
     n = min(run.n, *(len(v) for v in predicted.values()))
     out = []
+    levels = noise_levels_of(run)
     for name, block, j, unit in COMPONENTS:
         residual = _block(run, block)[:n, j] - predicted[block][:n, j]
-        sigma = float(noise_level(run, block)[j])
+        sigma = float(levels[block][j])
         scaled = np.abs(residual) / sigma
         k = int(np.argmax(scaled))
         rms = float(np.sqrt(np.mean(residual**2)))
@@ -267,9 +274,10 @@ def replay_residuals(run: Run6, physics: DockingPhysics | None = None) -> np.nda
     """Every component's replay residual at every tick, in its noise levels,
     one component after the other (:data:`COMPONENTS`; the fit's residual)."""
     predicted = _replayed(run, physics)
+    levels = noise_levels_of(run)
     out = []
     for _, block, j, _ in COMPONENTS:
-        sigma = float(noise_level(run, block)[j])
+        sigma = float(levels[block][j])
         out.append((_block(run, block)[:, j] - predicted[block][: run.n, j]) / sigma)
     return np.concatenate(out)
 

@@ -60,6 +60,7 @@ __all__ = [
     "is_run6",
     "quaternion_product",
     "noise_levels",
+    "contact_level_n",
 ]
 
 #: Value of the JSON ``format`` key.
@@ -199,13 +200,9 @@ def run6_of_docking(run: DockingRun, run_id: str, scenario: Mapping[str, Any]) -
         "f_comp": log["compensated_wrench"][:n, 3:6],
         "m_comp": log["compensated_wrench"][:n, 0:3],
     }
-    try:
-        params = parse_scenario(scenario, f"the scenario of run {run_id}")
-    except ParameterError as err:
-        raise ParameterError(str(err)) from None
     return Run6(
         run_id,
-        params,
+        parse_scenario(scenario, f"the scenario of run {run_id}"),
         copy.deepcopy(dict(scenario)),
         run.time_s[:n].copy(),
         {k: np.ascontiguousarray(v, dtype=float) for k, v in blocks.items()},
@@ -469,13 +466,21 @@ def noise_levels(values: np.ndarray, rows: np.ndarray | None = None) -> np.ndarr
     return np.array([noise_level_of_differences(c) for c in d2.T])
 
 
+def contact_level_n(run: Run6, floor: float) -> float:
+    """The measured force above which the devices touch: five noise levels
+    of the force (estimated over every tick, at least ``floor`` times the
+    undamped head-on peak force) plus the dead band."""
+    noise = max(
+        float(np.linalg.norm(noise_levels(run.blocks["f_mea"]))), floor * peak_force_n(run.params)
+    )
+    return 5.0 * noise + run.params.force_deadband_n
+
+
 def _check_contact(run: Run6) -> None:
     """A contact in the record (a force above five noise levels and the
     dead band), and not at its start."""
     force = np.linalg.norm(run.blocks["f_mea"], axis=1)
-    floor = 1e-3 * peak_force_n(run.params)
-    level = 5.0 * max(float(np.linalg.norm(noise_levels(run.blocks["f_mea"]))), floor)
-    level += run.params.force_deadband_n
+    level = contact_level_n(run, 1e-3)
     touching = np.flatnonzero(force > level)
     if touching.size == 0:
         raise MeasurementError(

@@ -16,15 +16,9 @@ from hybridtable.six_dof.pose import rotation_exp
 from hybridtable.six_dof.replay6 import replay_run6
 from hybridtable.six_dof.run6 import run6_of_docking
 from hybridtable.six_dof.simulation import simulate6
-from tests.six_dof.test_run6 import SCENARIO
+from tests.six_dof.test_run6 import SCENARIO, scenario_params
 
 SIX = [n for n in effect_names() if get_effect(n).apply6 is not None]
-
-
-def _params(**kwargs):
-    from hybridtable.six_dof.scenario import parse_scenario
-
-    return parse_scenario(SCENARIO).with_(**kwargs)
 
 
 @pytest.fixture(scope="module")
@@ -32,7 +26,7 @@ def nominal():
     """The scenario's own run (friction 0.3 stated, so the friction's offset
     is seen), and its replay."""
     scenario = {**SCENARIO, "contact": {**SCENARIO["contact"], "friction_coefficient": 0.3}}
-    params = _params(friction_coefficient=0.3)
+    params = scenario_params(friction_coefficient=0.3)
     run = run6_of_docking(simulate6(params), "nominal", scenario)
     return run, replay_run6(run)
 

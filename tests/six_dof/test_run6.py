@@ -53,18 +53,17 @@ SCENARIO = {
 }
 
 
+def scenario_params(**changes):
+    """The loop of :data:`SCENARIO`, with ``changes`` (flat names)."""
+    from hybridtable.six_dof.scenario import parse_scenario
+
+    return parse_scenario(SCENARIO).with_(**changes)
+
+
 @pytest.fixture(scope="module")
 def recorded():
     """The scenario's run (SDMDC, offset and tilt), as the format's rows."""
-    params = docking_params(
-        offset_m=0.01,
-        pitch_deg=2.0,
-        compensator="SDMDC",
-        sensor_delay_s=0.005,
-        table_response_hz=25.0,
-        table_damping_ratio=0.8,
-    )
-    return run6_of_docking(simulate6(params), "offset", SCENARIO)
+    return run6_of_docking(simulate6(scenario_params()), "offset", SCENARIO)
 
 
 def _write(folder, run, stem="run1", csv=None, doc=None):
@@ -130,15 +129,7 @@ def test_compare_explains_its_own_run_and_names_a_stiffer_contact(recorded, tmp_
     assert c.explained and c.worst.error_sigma < 1e-9
     assert math.isclose(c.cor_measured, c.cor_model, rel_tol=1e-12)
     # the rig's contact is 30 % stiffer than the scenario says
-    stiff = docking_params(
-        offset_m=0.01,
-        pitch_deg=2.0,
-        compensator="SDMDC",
-        sensor_delay_s=0.005,
-        table_response_hz=25.0,
-        table_damping_ratio=0.8,
-    )
-    stiff = stiff.with_(contact_stiffness_n_per_m=1.3e5)
+    stiff = scenario_params(contact_stiffness_n_per_m=1.3e5)
     run = run6_of_docking(simulate6(stiff), "stiff", SCENARIO)
     c = compare_run6(run)
     assert not c.explained
