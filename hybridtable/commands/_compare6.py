@@ -25,6 +25,7 @@ def compare6(args: argparse.Namespace) -> int:
     from hybridtable.commands._common import log_map_entry, write_json
     from hybridtable.commands._model_options import parse_added
     from hybridtable.commands._run6 import read_run6_arguments, require_apply6
+    from hybridtable.six_dof.audit6 import audit_runs6
     from hybridtable.six_dof.compare6 import compare_run6
     from hybridtable.six_dof.fit6 import fit_runs6
 
@@ -32,6 +33,9 @@ def compare6(args: argparse.Namespace) -> int:
     added = parse_added(args)
     for effect, _ in added:
         require_apply6(effect, "--add")
+    # the rig computer's effects are solved by the audit, not fitted to the replays
+    audited = [e.name for e, _ in added if e.stage == "closed_loop"]
+    added = [(e, v) for e, v in added if e.stage != "closed_loop"]
     quiet = args.json == "-"
     iterator = runs
     if len(runs) > 1 and not args.no_progress and not quiet:
@@ -39,6 +43,7 @@ def compare6(args: argparse.Namespace) -> int:
 
         iterator = tqdm(runs, desc="compare", unit="run", file=sys.stderr, leave=False)
     results = [compare_run6(r) for r in iterator]
+    audit = audit_runs6(runs)
     fit = fitted = None
     if added:
         fit = fit_runs6(runs, added)
@@ -54,6 +59,9 @@ def compare6(args: argparse.Namespace) -> int:
     if not quiet:
         for c in results:
             print(c.verdict())
+        print(f"audit: {audit.sentence()}")
+        for name in audited:
+            print(f"--add {name}: an effect of the rig computer; the audit above solves for it")
         if fit is not None:
             _print_fit(fit, added, results, fitted)
         for c in results:
@@ -84,6 +92,7 @@ def compare6(args: argparse.Namespace) -> int:
             "verdicts": [c.verdict() for c in results],
             "runs": [c.to_dict() for c in results],
             "log_map": log_map_entry(layout, runs),
+            "audit": audit.to_dict(),
             "report": report,
             **(
                 {}

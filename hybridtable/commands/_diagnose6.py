@@ -48,6 +48,8 @@ def diagnose6(args: argparse.Namespace) -> int:
         print(f"  {'component':<12}{'nominal':>10}{'model':>10}")
         for name, e0 in result.nominal_errors.items():
             print(f"  {name:<12}{e0:>10.3g}{result.final_errors[name]:>10.3g}")
+        if result.audit is not None:
+            print(f"audit: {result.audit.sentence()}")
         for name, why in result.refused.items():
             print(f"left out: {name} cannot act on this rig ({why})")
         for i, step in enumerate(result.steps, 1):

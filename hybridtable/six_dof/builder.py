@@ -221,7 +221,7 @@ def initial_port_state(
     port = np.array([*miss, port_start_z_m(params.contact, R0, miss, a.initial_gap_m)])
     v0 = np.array([0.0, 0.0, a.initial_velocity_m_per_s])
     body = spacecraft.initial_state(port, R0, v0, np.array(a.angular_rate_rad_per_s))
-    return port_state(params.spacecraft, body), body
+    return port_state(spacecraft.params, body), body
 
 
 def _stiffness_model(params: DockingLoopParams):
@@ -266,11 +266,13 @@ def add_docking_loop(
         The rig's physical part where it differs from ``params`` (the contact,
         the table and the sensor are built from :meth:`DockingPhysics.apply`;
         the spacecraft and the compensator are the rig computer's, from
-        ``params``).
+        ``params``, its spacecraft's centre of mass moved by the physics'
+        :meth:`DockingPhysics.computer`).
     """
     h = params.sample_period_s
     true = physics.apply(params) if physics is not None else params
-    spacecraft = builder.AddNamedSystem("spacecraft", RigidSpacecraft(params.spacecraft, h))
+    computer = physics.computer(params) if physics is not None else params
+    spacecraft = builder.AddNamedSystem("spacecraft", RigidSpacecraft(computer.spacecraft, h))
     backend = builder.AddNamedSystem("table_backend", backend or table_backend(true))
     compensator = builder.AddNamedSystem(
         "compensator", compensator or make_wrench_compensator(params, _stiffness_model(params))

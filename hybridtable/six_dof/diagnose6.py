@@ -30,8 +30,13 @@ the candidates (every registered effect with ``apply6``, or those named):
 4. it stops when the model explains the runs, when no candidate enters, or
    after ``max_effects`` (:data:`MAX_EFFECTS`).
 
+Effects of the rig computer (``stage="closed_loop"``: ``com_offset``) act
+on no replay: the audit of the computer's spacecraft
+(:func:`~hybridtable.six_dof.audit6.audit_runs6`) solves for them from the
+record, and its findings join the verdict.
+
 The verdict is one of: nothing is missing (the nominal model explains the
-runs), the effects found (with their values, standard errors and the error
+runs and the computer's spacecraft is the JSON's), the effects found (with their values, standard errors and the error
 falling), or that the runs are not explained (the best the library does, and
 where the misfit still sits: an effect outside the library).
 """
@@ -54,6 +59,7 @@ from hybridtable.effects.registry import effect_names, get_effect
 from hybridtable.effects.selection import delta_bic
 from hybridtable.effects.workers import pool_map
 from hybridtable.errors import ParameterError, SimulationError
+from hybridtable.six_dof.audit6 import SpacecraftAudit, audit_runs6
 from hybridtable.six_dof.compare6 import COMPONENTS, replay_residuals
 from hybridtable.six_dof.fit6 import Fit6, blocks, fit_runs6
 from hybridtable.six_dof.physics6 import physics_with, rig_scale
@@ -120,6 +126,13 @@ class Diagnosis6:
     #: Candidates that cannot act on this rig, with why (e.g. the table's
     #: response on the Stewart platform, whose response is its reference model).
     refused: dict[str, str] = field(default_factory=dict)
+    #: The audit of the rig computer's spacecraft (its findings are effects found).
+    audit: SpacecraftAudit | None = None
+
+    @property
+    def found(self) -> list[str]:
+        """Every effect found: the audit's, then the replay's selection."""
+        return (self.audit.effects if self.audit is not None else []) + list(self.selected)
 
     @property
     def explained(self) -> bool:
@@ -132,17 +145,30 @@ class Diagnosis6:
     @property
     def verdict(self) -> str:
         """``nothing missing``, ``found`` or ``not explained``."""
-        if not self.selected and self.explained:
+        if not self.found and self.explained:
             return "nothing missing"
         return "found" if self.explained else "not explained"
 
     def sentence(self) -> str:
         """The one-line verdict, with its evidence."""
+        replay = self._replay_sentence()
+        if self.audit is None or not self.audit.findings:
+            return replay
+        computer = self.audit.sentence()
+        if self.verdict == "found" and not self.selected:
+            return (
+                f"found {computer}; the rig's physical part is the scenario's (replay error "
+                f"{pooled_error(self.final_errors):.3g} noise levels pooled, largest component "
+                f"{max(self.final_errors.values()):.3g})"
+            )
+        return f"{replay}; and {computer}"
+
+    def _replay_sentence(self) -> str:
         worst0 = max(self.nominal_errors, key=self.nominal_errors.__getitem__)
         e0 = self.nominal_errors[worst0]
         worst = max(self.final_errors, key=self.final_errors.__getitem__)
         e1 = self.final_errors[worst]
-        if self.verdict == "nothing missing":
+        if self.explained and not self.selected:
             why = (
                 "no effect fitted: none is needed"
                 if not self.steps
@@ -155,7 +181,7 @@ class Diagnosis6:
             )
         named = " + ".join(self.selected) if self.selected else "no candidate"
         values = self._values()
-        if self.verdict == "found":
+        if self.explained:
             alike = f"; look-alikes: {', '.join(self.lookalikes)}" if self.lookalikes else ""
             return (
                 f"found {named} ({values}): the worst component {worst0} falls from {e0:.3g} to "
@@ -187,6 +213,8 @@ class Diagnosis6:
             "runs": self.run_ids,
             "candidates": self.candidates,
             "selected": self.selected,
+            "found": self.found,
+            "audit": None if self.audit is None else self.audit.to_dict(),
             "fit": None if self.fit is None else self.fit.to_dict(),
             "nominal_errors": self.nominal_errors,
             "nominal_pooled_error": pooled_error(self.nominal_errors),
@@ -274,10 +302,12 @@ def diagnose_runs6(
                 f"effect {name} acts on the 1-D loop only (hybridtable effects, column loops, "
                 "lists those of a six-axis rig)"
             )
-    effects, refused = _able(runs, effects)
+    audited = [n for n in effects if get_effect(n).stage == "closed_loop"]
+    effects, refused = _able(runs, [n for n in effects if n not in audited])
     r0 = np.concatenate([replay_residuals(r) for r in runs])
     out = Diagnosis6([r.run_id for r in runs], list(effects), component_errors(runs, r0))
     out.refused = refused
+    out.audit = audit_runs6(runs)
     out.final_errors = dict(out.nominal_errors)
     current = blocks(runs, r0)
     fit: Fit6 | None = None

@@ -22,7 +22,13 @@ A :class:`DockingPhysics` is what the 6-DoF effects change
 - ``sensor_time_constant_s``: the sensor's reading through a first-order low
   pass on each channel (a compliant mount, a filter; the 1-D measurement
   chain's law, before the delay), and ``sensor_bias`` (6): an offset of the
-  reading (after it).
+  reading (after it);
+- ``com_offset_m`` (3): the one change of the rig *computer*: its spacecraft
+  model's centre of mass this far from the scenario's (body frame), so its
+  port sits at ``port_position_m - com_offset_m`` from it
+  (:meth:`DockingPhysics.computer`). The replay of the physical part does not
+  see it; the audit of the computer's arithmetic does
+  (:mod:`~hybridtable.six_dof.audit6`).
 
 They are Drake primitives in the diagram (``MatrixGain``, a discrete
 ``LinearSystem``, ``Adder``: :func:`~hybridtable.six_dof.builder.add_rig_part`),
@@ -82,6 +88,8 @@ class DockingPhysics:
     sensor_time_constant_s: float = 0.0
     #: The reading's offset ``[m; f]`` (N m, N).
     sensor_bias: tuple[float, ...] | None = None
+    #: The rig computer's centre of mass from the scenario's, body frame (m).
+    com_offset_m: tuple[float, float, float] | None = None
 
     def __post_init__(self) -> None:
         for name in ("changes", "offsets", "factors"):
@@ -103,6 +111,11 @@ class DockingPhysics:
             if bias.shape != (6,) or not np.all(np.isfinite(bias)):
                 raise ParameterError("sensor_bias must be 6 finite numbers [N m, N]")
             object.__setattr__(self, "sensor_bias", tuple(float(x) for x in bias))
+        if self.com_offset_m is not None:
+            com = np.asarray(self.com_offset_m, dtype=float)
+            if com.shape != (3,) or not np.all(np.isfinite(com)):
+                raise ParameterError("com_offset_m must be 3 finite numbers [m]")
+            object.__setattr__(self, "com_offset_m", tuple(float(x) for x in com))
 
     @property
     def nominal(self) -> bool:
@@ -111,6 +124,7 @@ class DockingPhysics:
             and self.table_gain is None
             and self.sensor_time_constant_s == 0.0
             and self.sensor_bias is None
+            and self.com_offset_m is None
         )
 
     def low_pass(self, time_constant_s: float) -> DockingPhysics:
@@ -160,6 +174,22 @@ class DockingPhysics:
         R = rotation_exp(np.asarray(rotation_vector_rad, dtype=float))
         return self.times_table(np.block([[R, np.zeros((3, 3))], [np.zeros((3, 3)), R]]))
 
+    def shift_com(self, offset_m: Any) -> DockingPhysics:
+        """The rig computer's centre of mass moved by ``offset_m`` (3, body
+        frame, m; added to earlier ones)."""
+        old = np.zeros(3) if self.com_offset_m is None else np.array(self.com_offset_m)
+        return replace(self, com_offset_m=old + np.asarray(offset_m, dtype=float))
+
+    def computer(self, params: DockingLoopParams) -> DockingLoopParams:
+        """The rig computer's parameters: ``params`` with its spacecraft's
+        centre of mass moved by :attr:`com_offset_m` (the port's position from
+        it less the offset; the body's mass and inertia are the scenario's)."""
+        if self.com_offset_m is None:
+            return params
+        sc = params.spacecraft
+        port = sc.port_position_m - np.array(self.com_offset_m)
+        return params.with_(lateral_offset_m=(port[0], port[1]), port_distance_m=port[2])
+
     def apply(self, params: DockingLoopParams) -> DockingLoopParams:
         """The loop's parameters of the rig's physical part (the contact, the
         table, the sensor): ``params`` with :attr:`changes`, then the
@@ -183,6 +213,7 @@ class DockingPhysics:
             "table_gain": None if self.table_gain is None else [list(r) for r in self.table_gain],
             "sensor_time_constant_s": self.sensor_time_constant_s,
             "sensor_bias": None if self.sensor_bias is None else list(self.sensor_bias),
+            "com_offset_m": None if self.com_offset_m is None else list(self.com_offset_m),
         }
 
 

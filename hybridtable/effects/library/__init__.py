@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from hybridtable.effects.effect import Effect
 from hybridtable.effects.library import (
+    com_offset,
     compensator_stiffness_error,
     contact_damping,
     contact_damping_ratio,
@@ -37,6 +38,7 @@ from hybridtable.effects.library import (
     lead_time_error,
     mass_error,
     nonlinear_stiffness,
+    sensor_crosstalk,
     sensor_filter,
     sensor_misalignment,
     series_compliance,
@@ -73,6 +75,8 @@ BUILTIN_EFFECTS: tuple[Effect, ...] = (
     friction_across_face.EFFECT,
     sensor_misalignment.EFFECT,
     table_misalignment.EFFECT,
+    sensor_crosstalk.EFFECT,
+    com_offset.EFFECT,
 )
 
 
