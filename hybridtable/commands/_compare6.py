@@ -54,7 +54,13 @@ def compare6(args: argparse.Namespace) -> int:
         from hybridtable.reports.run6 import write_report6
 
         with staged_folder(args.report) as stage:
-            files = write_report6(results, stage.path, fitted, _fit_text(fit, added))
+            files = write_report6(
+                results,
+                stage.path,
+                fitted,
+                _fit_text(fit, added),
+                preface=[f"Audit: {audit.sentence()}.", ""],
+            )
             report = [str(stage.final(f)) for f in files]
     if not quiet:
         for c in results:
@@ -124,7 +130,8 @@ def _fit_text(fit, added) -> str:
             s = fit.std[name].get(k)
             given = " (given)" if k not in fit.fitted[name] else ""
             err = f" +- {s:.3g}" if s is not None else given
-            parts.append(f"{k} = {v:.5g}{err} {units[name][k]}")
+            unit = units[name][k]
+            parts.append(f"{k} = {v:.5g}{err}" + (f" {unit}" if unit != "1" else ""))
         lines.append(f"{name}: {', '.join(parts)}")
     return "\n".join(lines)
 

@@ -11,19 +11,21 @@ from hybridtable.errors import CommandError
 __all__ = ["diagnose6"]
 
 #: diagnose's options that act on the 1-D runs only, with their defaults.
-_ONE_D_ONLY = {"report": None, "save_model": None}
+_ONE_D_ONLY = {"save_model": None}
 
 
 def diagnose6(args: argparse.Namespace) -> int:
     """Read every 6-DoF run, run the forward selection, print the verdict,
-    the components' errors before and after and each round's ranking."""
+    the components' errors before and after and each round's ranking;
+    ``--report DIR``: the compare report of the runs, with the effects found
+    fitted, under the diagnosis."""
     from hybridtable.commands._common import log_map_entry, write_json
     from hybridtable.commands._run6 import read_run6_arguments, require_apply6
     from hybridtable.effects.registry import get_effect
     from hybridtable.effects.workers import worker_count
     from hybridtable.six_dof.diagnose6 import diagnose_runs6
 
-    runs, layout = read_run6_arguments(args, _ONE_D_ONLY)
+    runs, layout = read_run6_arguments(args, _ONE_D_ONLY, {"--report": args.report})
     effects = None
     if args.effects is not None:
         effects = [e.strip() for e in args.effects.split(",") if e.strip()]
@@ -39,6 +41,7 @@ def diagnose6(args: argparse.Namespace) -> int:
         progress=not args.no_progress and not quiet and sys.stderr.isatty(),
         max_effects=args.max_effects,
     )
+    report = _report(args.report, runs, result) if args.report else None
     if not quiet:
         print(result.sentence())
         print(
@@ -52,16 +55,57 @@ def diagnose6(args: argparse.Namespace) -> int:
             print(f"audit: {result.audit.sentence()}")
         for name, why in result.refused.items():
             print(f"left out: {name} cannot act on this rig ({why})")
-        for i, step in enumerate(result.steps, 1):
-            ranked = sorted(
-                (r for r in step.ranking if "delta_bic" in r),
-                key=lambda r: r["delta_bic"],
-                reverse=True,
-            )
-            listed = ", ".join(f"{r['effect']} {r['delta_bic']:.4g}" for r in ranked[:4])
-            print(f"round {i}: {step.why} (delta BIC: {listed})")
+        for line in _rounds(result):
+            print(line)
+        if report:
+            print(f"report: {report[0]}")
     if args.json:
         out = {"format": "hybridtable-run6/1", **result.to_dict()}
         out["log_map"] = log_map_entry(layout, runs)
+        out["report"] = report
         write_json(args.json, out, args)
     return 0
+
+
+def _rounds(result) -> list[str]:
+    """Each round's choice and its four best candidates, one line a round."""
+    lines = []
+    for i, step in enumerate(result.steps, 1):
+        ranked = sorted(
+            (r for r in step.ranking if "delta_bic" in r),
+            key=lambda r: r["delta_bic"],
+            reverse=True,
+        )
+        listed = ", ".join(f"{r['effect']} {r['delta_bic']:.4g}" for r in ranked[:4])
+        lines.append(f"round {i}: {step.why} (delta BIC: {listed})")
+    return lines
+
+
+def _report(folder, runs, result) -> list[str]:
+    """The compare report of ``runs`` (and of them with the effects found,
+    fitted), the diagnosis above it; returns the files written."""
+    from hybridtable._files import staged_folder
+    from hybridtable.commands._compare6 import _fit_text
+    from hybridtable.effects.registry import get_effect
+    from hybridtable.reports.run6 import write_report6
+    from hybridtable.six_dof.compare6 import compare_run6
+
+    nominal = [compare_run6(r) for r in runs]
+    fitted = text = None
+    if result.fit is not None:
+        fitted = [compare_run6(r, result.fit.physics) for r in runs]
+        text = _fit_text(result.fit, [(get_effect(n), {}) for n in result.fit.values])
+    preface = [f"**{result.sentence()}**", ""]
+    if result.audit is not None:
+        preface += [f"Audit: {result.audit.sentence()}.", ""]
+    preface += [f"- {line}" for line in _rounds(result)] + [""] * bool(result.steps)
+    with staged_folder(folder) as stage:
+        files = write_report6(
+            nominal,
+            stage.path,
+            fitted,
+            text or "",
+            preface=preface,
+            title="Which effect a six-axis rig's model is missing",
+        )
+        return [str(stage.final(f)) for f in files]

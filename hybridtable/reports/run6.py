@@ -92,15 +92,19 @@ def write_report6(
     folder: str | Path,
     fitted: Sequence[Comparison6] | None = None,
     fit_text: str = "",
+    preface: Sequence[str] = (),
+    title: str = "A six-axis rig's model against its recorded runs",
 ) -> list[Path]:
     """Write ``report.md`` and two figures a run into ``folder``; returns the
-    files written."""
+    files written. ``preface``: markdown lines after the title (a diagnosis's
+    verdict and rounds, the audit of the rig computer)."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     written: list[Path] = []
     md = [
-        "# A six-axis rig's model against its recorded runs",
+        f"# {title}",
         "",
+        *preface,
         *(f"**{c.verdict()}**" for c in comparisons),
         "",
         "Replay: the recorded commands through the model's table, contact and F/T sensor; "

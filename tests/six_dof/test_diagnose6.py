@@ -83,10 +83,21 @@ def test_a_pair_is_found_and_an_effect_outside_the_candidates_is_not_explained(t
     folder.mkdir()
     (folder / "run1.csv").write_text(run6_csv_text(run))
     (folder / "run1.json").write_text(json.dumps(run6_json(run)))
-    out = tmp_path / "d.json"
-    assert main(["diagnose", str(folder), "--json", str(out), "--no-progress"]) == 0
+    out, report = tmp_path / "d.json", tmp_path / "report"
+    args = ["diagnose", str(folder), "--json", str(out), "--no-progress", "--report", str(report)]
+    assert main(args) == 0
     doc = json.loads(out.read_text())
     assert doc["verdict"] == "found" and doc["format"] == "hybridtable-run6/1"
+    # the report: the diagnosis over the compare report, before and with the effects found
+    md = (report / "report.md").read_text()
+    assert md.splitlines()[2] == f"**{doc['sentence']}**" and "round 2:" in md
+    assert "## With the fitted effects" in md and "sensor_roll_rad" in md
+    assert sorted(p.suffix for p in report.iterdir()) == [".md", ".png", ".png"]
+    assert doc["report"] == [
+        str(report / "report.md"),
+        *sorted(str(p) for p in report.glob("*.png")),
+    ]
+    assert main(args) == 2  # an existing report is replaced only with --force
     assert set(doc["selected"]) == {"sensor_misalignment", "friction_across_face"}
     roll = doc["fit"]["values"]["sensor_misalignment"]["sensor_roll_rad"]
     assert roll == pytest.approx(
