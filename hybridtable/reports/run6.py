@@ -109,8 +109,8 @@ def write_report6(
         "",
         "Replay: the recorded commands through the model's table, contact and F/T sensor; "
         "closed loop: the scenario's whole loop, without the F/T noise. Errors are RMS over "
-        "the record in each component's noise level (its white-noise std from second "
-        "differences, floored at 1e-3 of the contact's scale). Definitions: "
+        "the record in each component's noise level (its spread over the ticks out of "
+        "contact, as the 1-D comparison takes it). Definitions: "
         "`docs/run6-format.md`.",
         "",
     ]

@@ -28,11 +28,21 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from hybridtable.measurement.phases import (
+    MERGE_GAP_TICKS,
+    delayed_labels,
+    dilate,
+    settle_ticks,
+    true_runs,
+)
+from hybridtable.measurement.stats import force_noise_rms, position_noise_rms
+from hybridtable.six_dof import drogue
 from hybridtable.six_dof.physics6 import DockingPhysics
-from hybridtable.six_dof.pose import rotation_vectors_of_quaternions
+from hybridtable.six_dof.pose import rotation_exp, rotation_vectors_of_quaternions
 from hybridtable.six_dof.replay6 import replay_run6
-from hybridtable.six_dof.run6 import Run6, contact_level_n, noise_levels, run6_of_docking
+from hybridtable.six_dof.run6 import Run6, noise_levels, run6_of_docking
 from hybridtable.six_dof.simulation import peak_force_n, simulate6
+from hybridtable.systems.table import TableParams
 
 __all__ = [
     "EXPLAINED_SIGMA",
@@ -165,11 +175,14 @@ def _length_m(run: Run6) -> float:
 
 
 def noise_level(run: Run6, block: str) -> np.ndarray:
-    """Each column's noise std of a measured block: the white-noise estimate
-    of :func:`~hybridtable.six_dof.run6.noise_levels` over the ticks out of
-    contact (before the touch and after the release, where the readings hold
-    no curvature of the contact's own: at least 20 ticks, else over every
-    tick), floored at :data:`_FLOOR` of its scale: the undamped head-on peak
+    """Each column's noise std of a measured block over the ticks out of
+    contact (before the touch and after the release, at least 20 of them),
+    by the 1-D comparison's estimators: a wrench's pooled std about each
+    quiet stretch's mean (:func:`~hybridtable.measurement.stats.force_noise_rms`),
+    a pose's from third differences
+    (:func:`~hybridtable.measurement.stats.position_noise_rms`); with fewer
+    quiet ticks, the robust white-noise estimate of
+    :func:`~hybridtable.six_dof.run6.noise_levels` over every tick; floored at :data:`_FLOOR` of its scale: the undamped head-on peak
     force, that force over the contact's lever, the peak deflection ``v0 /
     omega`` and that over the lever (a record without noise is compared at
     the floor)."""
@@ -189,27 +202,66 @@ def noise_levels_of(run: Run6) -> dict[str, np.ndarray]:
         "p_act": deflection,
         "theta_act": deflection / lever,
     }
-    quiet = _quiet(run)
-    rows = quiet if np.count_nonzero(quiet) >= _QUIET_TICKS else None
-    return {
-        block: np.maximum(noise_levels(_block(run, block), rows), _FLOOR * scale)
-        for block, scale in scales.items()
-    }
+    quiet_wrench, quiet_pose = _quiet(run)
+    out = {}
+    for block, scale in scales.items():
+        values = _block(run, block)
+        level = noise_levels(values)  # robust, over every tick: the fallback
+        wrench = block in ("f_mea", "m_mea")
+        quiet = quiet_wrench if wrench else quiet_pose
+        if np.count_nonzero(quiet) >= _QUIET_TICKS:  # the 1-D comparison's estimators
+            estimate = force_noise_rms if wrench else position_noise_rms
+            quiet_level = np.array([estimate(c, quiet)[0] for c in values.T])
+            level = np.where(np.isfinite(quiet_level), quiet_level, level)
+        out[block] = np.maximum(level, _FLOOR * scale)
+    return out
 
 
 #: Ticks out of contact the noise is estimated from (fewer: every tick).
 _QUIET_TICKS = 20
 
 
-def _quiet(run: Run6) -> np.ndarray:
-    """The ticks out of contact: the measured force at or below the contact's
-    level (:func:`~hybridtable.six_dof.run6.contact_level_n`), and the
-    sensor's delay plus two ticks away from any tick above it."""
-    force = np.linalg.norm(run.blocks["f_mea"], axis=1)
-    loud = force > contact_level_n(run, _FLOOR)
-    margin = run.params.delay_ticks + 2
-    near = np.convolve(loud.astype(float), np.ones(2 * margin + 1), mode="same") > 0.0
-    return ~near
+def _touching(run: Run6) -> np.ndarray:
+    """The ticks the devices touch at the measured pose, by the contact's
+    geometry (the 1-D comparison's ``p_act > 0``): a pad below the plate's
+    face, the probe's head into the drogue's smooth surface; gaps of a few
+    ticks inside a contact filled (the encoders' noise at its edges)."""
+    c = run.params.contact
+    q = run.pose("act")
+    R = np.array([rotation_exp(t) for t in q[:, 3:]])
+    if c.is_cone:
+        centres = q[:, :3] + R @ c.probe_centre_m
+        on = np.array([drogue.wall_depth_m(c, x) > 0.0 for x in centres])
+    else:
+        depth = q[:, 2:3] + np.einsum("nj,ij->ni", R[:, 2, :], c.pad_centres_m) + c.pad_radius_m
+        on = np.any(depth > 0.0, axis=1)
+    runs = true_runs(on)
+    for (_, b), (a, _) in zip(runs[:-1], runs[1:], strict=True):
+        if a - b - 1 <= MERGE_GAP_TICKS:
+            on[b + 1 : a] = True
+    return on
+
+
+#: Ticks kept off each side of a contact (the 1-D comparison's guard).
+_GUARD_TICKS = 2
+
+
+def _quiet(run: Run6) -> tuple[np.ndarray, np.ndarray]:
+    """The ticks out of contact, as the 1-D comparison takes them: for the
+    wrench, the touching ticks (:func:`_touching`) widened by two each side
+    and delayed by the sensor's delay; for the pose, widened by two before
+    and the table's settling time after, without the table's first settling
+    time (a record too short for that: two after)."""
+    on = _touching(run)
+    p = run.params
+    wrench = delayed_labels((~dilate(on, _GUARD_TICKS, _GUARD_TICKS)).astype(int), p.delay_ticks)
+    table = TableParams(p.table_response_hz, p.table_damping_ratio)
+    settle = max(settle_ticks(table.settling_time_s, p.sample_period_s, run.n), _GUARD_TICKS)
+    pose = ~dilate(on, _GUARD_TICKS, settle)
+    pose[: min(settle, run.n)] = False
+    if np.count_nonzero(pose) < _QUIET_TICKS:
+        pose = ~dilate(on, _GUARD_TICKS, _GUARD_TICKS)
+    return wrench.astype(bool), pose
 
 
 def measured_block(run: Run6, block: str) -> np.ndarray:
