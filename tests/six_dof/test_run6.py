@@ -358,6 +358,13 @@ def test_an_on_axis_run_is_the_1d_run_it_projects_to(tmp_path, capsys):
     assert doc["runs"][0]["cor_measured"] == pytest.approx(cor6, rel=1e-9)
     assert doc["runs"][0]["cor_model"] == pytest.approx(cor6, abs=0.01)
     assert doc["verdict"].startswith("The model matches"), doc["verdict"]
+    # the 6-DoF compare of the same files: the same errors in the same noise levels
+    assert main(["compare", str(folder), "--json", "-", "--no-progress"]) == 0
+    errors6 = {c["name"]: c for c in json.loads(capsys.readouterr().out)["runs"][0]["components"]}
+    one = doc["runs"][0]
+    for name6, name1 in (("fz_mea", "f_mea_n"), ("pz_act", "p_act_m")):
+        assert errors6[name6]["rms_error"] == pytest.approx(one["rms_error"][name1], rel=1e-6)
+        assert errors6[name6]["noise"] == pytest.approx(one["noise_rms"][name1], rel=1e-6)
     off = tmp_path / "off"
     off.mkdir()
     _write(off, run6_of_docking(simulate6(docking_params(offset_m=0.01)), "off", SCENARIO))
