@@ -46,9 +46,11 @@ __all__ = [
     "FINDING_SIGMAS",
     "FINDING_RELATIVE",
     "LAW_RESIDUAL",
+    "Audit6",
     "AuditFinding6",
     "SpacecraftAudit",
     "audit_runs6",
+    "audit_spacecraft6",
 ]
 
 #: Standard errors a solved value must be off the JSON's to be a finding.
@@ -201,9 +203,50 @@ def _finding(stated, solved, std, scale) -> bool:
     )
 
 
-def audit_runs6(runs: Sequence[Run6]) -> SpacecraftAudit:
-    """Solve the rig computer's spacecraft from ``runs`` (one scenario's;
-    see the module)."""
+@dataclass(frozen=True)
+class Audit6:
+    """:func:`audit_runs6`'s result: one :class:`SpacecraftAudit` for each
+    spacecraft the runs' JSONs state (runs of one spacecraft are solved
+    together)."""
+
+    groups: list[SpacecraftAudit]
+
+    @property
+    def findings(self) -> list[AuditFinding6]:
+        return [f for g in self.groups for f in g.findings]
+
+    @property
+    def effects(self) -> list[str]:
+        """The findings' effect names, each once."""
+        return list(dict.fromkeys(f.effect for f in self.findings))
+
+    def sentence(self) -> str:
+        if len(self.groups) == 1:
+            return self.groups[0].sentence()
+        return "; ".join(f"{', '.join(g.run_ids)}: {g.sentence()}" for g in self.groups)
+
+    def to_dict(self) -> dict:
+        return {
+            "sentence": self.sentence(),
+            "findings": [
+                {**f.to_dict(), "runs": g.run_ids} for g in self.groups for f in g.findings
+            ],
+            "groups": [g.to_dict() for g in self.groups],
+        }
+
+
+def audit_runs6(runs: Sequence[Run6]) -> Audit6:
+    """Solve the rig computer's spacecraft from ``runs`` (see the module),
+    the runs of each spacecraft their JSONs state together."""
+    groups: dict = {}
+    for run in runs:
+        groups.setdefault(run.params.spacecraft, []).append(run)
+    return Audit6([audit_spacecraft6(group) for group in groups.values()])
+
+
+def audit_spacecraft6(runs: Sequence[Run6]) -> SpacecraftAudit:
+    """Solve the rig computer's spacecraft from ``runs`` whose JSONs state
+    one spacecraft (see the module)."""
     body = runs[0].params.spacecraft
     inertia0 = body.inertia
     x0 = np.array(

@@ -59,7 +59,7 @@ from hybridtable.effects.registry import effect_names, get_effect
 from hybridtable.effects.selection import delta_bic
 from hybridtable.effects.workers import pool_map
 from hybridtable.errors import ParameterError, SimulationError
-from hybridtable.six_dof.audit6 import SpacecraftAudit, audit_runs6
+from hybridtable.six_dof.audit6 import Audit6, audit_runs6
 from hybridtable.six_dof.compare6 import COMPONENTS, replay_residuals
 from hybridtable.six_dof.fit6 import Fit6, blocks, fit_runs6
 from hybridtable.six_dof.physics6 import physics_with, rig_scale
@@ -127,7 +127,7 @@ class Diagnosis6:
     #: response on the Stewart platform, whose response is its reference model).
     refused: dict[str, str] = field(default_factory=dict)
     #: The audit of the rig computer's spacecraft (its findings are effects found).
-    audit: SpacecraftAudit | None = None
+    audit: Audit6 | None = None
 
     @property
     def found(self) -> list[str]:

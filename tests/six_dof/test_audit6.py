@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from hybridtable.effects.registry import get_effect
-from hybridtable.six_dof.audit6 import audit_runs6
+from hybridtable.six_dof.audit6 import audit_runs6, audit_spacecraft6
 from hybridtable.six_dof.diagnose6 import diagnose_runs6
 from hybridtable.six_dof.physics6 import NOMINAL_PHYSICS, physics_with, rig_scale
 from hybridtable.six_dof.run6 import run6_csv_text, run6_json, run6_of_docking
@@ -42,7 +42,7 @@ def com_run():
 
 
 def test_the_scenarios_own_computer_has_no_finding(null_run):
-    audit = audit_runs6([null_run])
+    audit = audit_spacecraft6([null_run])
     assert audit.findings == [] and audit.ticks > 100
     assert audit.relative_residual < 1e-10
     body = null_run.params.spacecraft
@@ -85,6 +85,11 @@ def test_a_mass_the_json_misstates_is_a_mass_error(null_run):
     audit = audit_runs6([wrong])
     assert audit.effects == ["mass_error"]
     assert audit.findings[0].values["mass_ratio"] == pytest.approx(1 / 1.01, rel=1e-9)
+    # with a run whose JSON is right: each spacecraft the JSONs state is solved apart
+    both = audit_runs6([null_run, replace(wrong, run_id="wrong")])
+    assert [g.run_ids for g in both.groups] == [["null"], ["wrong"]]
+    assert both.effects == ["mass_error"]
+    assert both.to_dict()["findings"][0]["runs"] == ["wrong"]
 
 
 def test_a_computer_that_steps_otherwise_is_a_model_error(null_run):
@@ -103,7 +108,7 @@ def test_an_on_axis_run_cannot_tell_the_inertia():
     on_axis["contact"] = {**NOISY["contact"], "friction_coefficient": 0.0}
     # no F/T noise either: the noise's moments, fed back, would turn the model and tell it
     on_axis["rig"] = {**NOISY["rig"], "force_noise_n": 0.0, "moment_noise_n_m": 0.0}
-    audit = audit_runs6([_run({}, "axis", on_axis)])
+    audit = audit_spacecraft6([_run({}, "axis", on_axis)])
     assert audit.findings == []
     assert audit.mass_kg is not None
     assert any(i is None for i in audit.inertia_kg_m2)  # no torque: undetermined, not a guess
