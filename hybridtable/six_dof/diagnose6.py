@@ -56,7 +56,7 @@ from hybridtable.diagnosis.settings import (
     MIN_EXCESS_REMOVED,
 )
 from hybridtable.effects.registry import effect_names, get_effect
-from hybridtable.effects.selection import delta_bic
+from hybridtable.effects.selection import delta_bic, lookalikes
 from hybridtable.effects.workers import pool_map
 from hybridtable.errors import ParameterError, SimulationError
 from hybridtable.six_dof.audit6 import Audit6, audit_runs6
@@ -371,8 +371,14 @@ def diagnose_runs6(
         current = blocks(runs, fit.residuals)
         out.lookalikes = [
             r["effect"]
-            for r in scored[1:]
-            if best["delta_bic"] - r["delta_bic"] < INDISTINGUISHABLE_BIC
+            for r in lookalikes(
+                best,
+                scored,
+                INDISTINGUISHABLE_BIC,
+                lambda r: r["delta_bic"],
+                lambda r: (r["effect"],),
+                inclusive=False,
+            )
         ]
     return out
 
