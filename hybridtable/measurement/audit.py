@@ -52,6 +52,7 @@ from hybridtable.measurement.audit_findings import (
     Audit,
     ComputerEstimate,
     Finding,
+    differs,
 )
 from hybridtable.measurement.run_format import Run
 
@@ -76,11 +77,6 @@ def _ls(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
     except np.linalg.LinAlgError:
         se = np.full(p, math.inf)
     return c, se, math.sqrt(float(r @ r) / max(n, 1))
-
-
-def _differs(used: float, se: float, expected: float, scale: float) -> bool:
-    d = abs(used - expected)
-    return math.isfinite(used) and d > SIGNIFICANCE * se and d > RELATIVE_TOLERANCE * abs(scale)
 
 
 def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
@@ -124,7 +120,7 @@ def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
                 "semi-implicit Euler steps by h v_des[k]",
             )
         )
-    if _differs(h, h_se, h_json, h_json):
+    if differs(h, h_se, h_json, h_json):
         found.append(
             Finding(
                 "sample_rate_hz",
@@ -138,7 +134,7 @@ def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
         )
     v_start = v[0] + fc[0] * h / info.spacecraft_mass_kg  # before tick 0's step
     gap = -(p_des[0] - h * (weight * v[0] + (1.0 - weight) * v_start))
-    if _differs(gap, 10 * abs(h_se * v[0]), info.initial_gap_m, max(info.initial_gap_m, 1e-6)):
+    if differs(gap, 10 * abs(h_se * v[0]), info.initial_gap_m, max(info.initial_gap_m, 1e-6)):
         found.append(
             Finding(
                 "initial_gap_m",
@@ -161,7 +157,7 @@ def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
         if b > 0.0:
             m = 1.0 / b
             m_se = b_se / (b * b)
-            if _differs(m, m_se, info.spacecraft_mass_kg, info.spacecraft_mass_kg):
+            if differs(m, m_se, info.spacecraft_mass_kg, info.spacecraft_mass_kg):
                 found.append(
                     Finding(
                         "spacecraft_mass_kg",
@@ -190,7 +186,7 @@ def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
         )
     v0 = v[0] + fc[0] * h / m if math.isfinite(m) else v[0]
     v0_scale = max(abs(info.initial_velocity_m_per_s), 1e-9)
-    if _differs(v0, resolution, info.initial_velocity_m_per_s, v0_scale):
+    if differs(v0, resolution, info.initial_velocity_m_per_s, v0_scale):
         found.append(
             Finding(
                 "initial_velocity_m_per_s",
@@ -232,7 +228,7 @@ def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
                     "stiffness and an offset",
                 )
             )
-        if _differs(lead, lead_se, lead_json, max(lead_json, h)):
+        if differs(lead, lead_se, lead_json, max(lead_json, h)):
             says = (
                 f"JSON says {lead_json * 1e3:.6g} ms"
                 if lead_json > 0.0
@@ -249,7 +245,7 @@ def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
                 )
             )
         k_scale = max(stiff_json, info.contact_stiffness_n_per_m)
-        if _differs(stiff, stiff_se, stiff_json, k_scale):
+        if differs(stiff, stiff_se, stiff_json, k_scale):
             says = (
                 f"JSON says {stiff_json:.6g} N/m"
                 if stiff_json > 0.0
@@ -265,7 +261,7 @@ def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
                     f"the MDC stiffness used {stiff:.6g} N/m, {says}",
                 )
             )
-        if _differs(a, a_se, 1.0, 1.0):
+        if differs(a, a_se, 1.0, 1.0):
             found.append(
                 Finding(
                     "compensation_gain",
@@ -276,7 +272,7 @@ def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
                     f"the computer scales the force reading by {a:.6g} before compensating",
                 )
             )
-        if _differs(off, off_se, 0.0, f_scale):
+        if differs(off, off_se, 0.0, f_scale):
             found.append(
                 Finding(
                     "compensation_offset_n",

@@ -18,6 +18,7 @@ __all__ = [
     "RELATIVE_TOLERANCE",
     "SIGNIFICANCE",
     "FINDING_EFFECTS",
+    "differs",
     "UNITS",
     "Finding",
     "ComputerEstimate",
@@ -31,6 +32,15 @@ RELATIVE_TOLERANCE = 1e-4
 
 #: Standard errors an estimate must differ by to be reported.
 SIGNIFICANCE = 5.0
+
+
+def differs(used: float, se: float, expected: float, scale: float) -> bool:
+    """A value the computer used is a finding: more than :data:`SIGNIFICANCE`
+    standard errors ``se`` and :data:`RELATIVE_TOLERANCE` of ``scale`` off
+    the JSON's ``expected``."""
+    d = abs(used - expected)
+    return math.isfinite(used) and d > SIGNIFICANCE * se and d > RELATIVE_TOLERANCE * abs(scale)
+
 
 #: The name a finding takes in a diagnosis verdict, by the JSON key it concerns.
 FINDING_EFFECTS: dict[str, str] = {

@@ -21,8 +21,8 @@ from the scenario's values, so a quantity the runs do not determine (the
 inertia of a run without torque, the port's distance along a force through
 it) stays the scenario's and is said to be undetermined. A value is a
 finding when it differs from the JSON's by more than
-:data:`FINDING_SIGMAS` standard errors *and* by more than
-:data:`FINDING_RELATIVE` of its scale, as the 1-D audit decides
+:data:`~hybridtable.measurement.audit_findings.SIGNIFICANCE` standard errors *and* by more than
+:data:`~hybridtable.measurement.audit_findings.RELATIVE_TOLERANCE` of its scale, as the 1-D audit decides
 (:mod:`hybridtable.measurement.audit`): ``com_offset`` (the computer's
 centre of mass, the scenario's port position less the solved one),
 ``mass_error`` (the mass over the JSON's) and ``inertia_error``; a residual
@@ -38,13 +38,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from hybridtable.measurement.audit_findings import RELATIVE_TOLERANCE, SIGNIFICANCE, differs
 from hybridtable.six_dof.pose import rotation_exp
 from hybridtable.six_dof.run6 import Run6
 from hybridtable.stewart.geometry import skew
 
 __all__ = [
-    "FINDING_SIGMAS",
-    "FINDING_RELATIVE",
     "LAW_RESIDUAL",
     "Audit6",
     "AuditFinding6",
@@ -52,12 +51,6 @@ __all__ = [
     "audit_runs6",
     "audit_spacecraft6",
 ]
-
-#: Standard errors a solved value must be off the JSON's to be a finding.
-FINDING_SIGMAS = 5.0
-
-#: ... and its fraction of the quantity's scale (the JSON's rounding is not a finding).
-FINDING_RELATIVE = 1e-4
 
 #: The largest RMS residual, over the RMS of what it fits, of a computer that
 #: steps by the format's rule (a CSV at six digits leaves ~1e-4).
@@ -147,8 +140,8 @@ class SpacecraftAudit:
             "relative_residual": self.relative_residual,
             "findings": [f.to_dict() for f in self.findings],
             "thresholds": {
-                "sigmas": FINDING_SIGMAS,
-                "relative": FINDING_RELATIVE,
+                "sigmas": SIGNIFICANCE,
+                "relative": RELATIVE_TOLERANCE,
                 "law_residual": LAW_RESIDUAL,
             },
         }
@@ -195,12 +188,7 @@ def _rms(x: np.ndarray) -> float:
 
 
 def _finding(stated, solved, std, scale) -> bool:
-    return (
-        solved is not None
-        and std is not None
-        and abs(solved - stated) > FINDING_SIGMAS * std
-        and abs(solved - stated) > FINDING_RELATIVE * scale
-    )
+    return solved is not None and std is not None and differs(solved, std, stated, scale)
 
 
 @dataclass(frozen=True)
