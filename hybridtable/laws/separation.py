@@ -180,6 +180,13 @@ class SeparationRule:
                 f"force is 0 while the contact pushes {f_act:.3g} N (every reading at or below "
                 f"force_deadband_n = {self.deadband:g} N), so the model never slows"
             )
+        if f_act == 0.0 and f_comp > 0.0 and f_mea > self.deadband:
+            raise SimulationError(
+                f"the contact did not end within t_max = {self.t_max:.3f} s: the devices are "
+                f"apart, but the readings ({f_mea:.3g} N at the end) stay above force_deadband_n "
+                f"= {self.deadband:g} N, so the compensated force never stops (the sensor's "
+                "noise or bias above the dead band: raise it, or give the run a duration_s)"
+            )
         raise SimulationError(
             f"the contact did not end within t_max = {self.t_max:.3f} s (spacecraft captured "
             "or loop unstable)"

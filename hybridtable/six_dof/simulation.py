@@ -299,6 +299,8 @@ def simulate6(
             finite=bool(np.all(np.isfinite(data[:, -quiet_ticks:]))),
             # quiet for the record's last ticks, counted in ticks
             active_at_s=t - (data.shape[1] - 1 - loud[-1]) * h if touched and loud.size else None,
+            # the contact's, the measured and the compensated force now (named if it never ends)
+            forces_n=tuple(float(np.linalg.norm(data[a : a + 3, -1])) for a in (27, 33, 39)),
         )
         if progress is not None:
             progress(t, rule.t_max)

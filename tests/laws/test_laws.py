@@ -209,6 +209,11 @@ def test_divergence_budget_and_verdicts():
     assert stuck.check(1, 0.0, active=True, forces_n=(10.0, 0.5, 0.0))
     with pytest.raises(SimulationError, match="never slows"):
         stuck.verdict()
+    # the devices apart, the readings' noise above the dead band keeps the compensation on
+    noisy = _rule(t_max_s=0.02, force_deadband_n=1.0)
+    assert noisy.check(1, 3.0, active=True, forces_n=(0.0, 3.0, 3.0))
+    with pytest.raises(SimulationError, match="devices are apart, but the readings"):
+        noisy.verdict()
 
 
 def test_the_end_tolerance_adds_no_chunk():
