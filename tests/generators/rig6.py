@@ -18,11 +18,29 @@ is the command the table follows over the next tick).
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
 import numpy as np
 from scipy.linalg import expm
 
-__all__ = ["log_so3", "exp_so3", "pad_ring", "wrench", "wrench_jacobians", "simulate_rig6"]
+__all__ = [
+    "EFFECT_PARTS",
+    "LIBRARY_EFFECTS",
+    "OUTSIDE_EFFECTS",
+    "PHYSICAL_ARGUMENTS",
+    "STICTION_TOLERANCE_M_PER_S",
+    "TABLE_STARTS",
+    "contact_wrench",
+    "exp_so3",
+    "log_so3",
+    "normalize_hidden",
+    "pad_ring",
+    "replay_rig6",
+    "simulate_rig6",
+    "step5",
+    "wrench",
+    "wrench_jacobians",
+]
 
 COMPENSATORS = ("none", "SDC", "MDC", "SDMDC")
 
@@ -117,6 +135,445 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     )
 
 
+# --- hidden effects: what the rig does that its scenario does not say ----------
+
+#: Drake's stiction tolerance: the slip speed [m/s] at which friction is full.
+STICTION_TOLERANCE_M_PER_S = 1e-4
+
+#: Where the table starts (``simulate_rig6(table_start=...)``): ``"previous_tick"``,
+#: rig6's first reading: at tick -1 the table is at the command less its ramp lag,
+#: and tick 0 reads it one tick later; ``"tick0"``: tick 0 reads the table at the
+#: command less its ramp lag (docs/run6-format.md, "The table starts tracking the
+#: approach: at the command less its ramp lag 2 zeta / omega times the speed,
+#: moving at the speed", read at the record's first tick).
+TABLE_STARTS = ("previous_tick", "tick0")
+
+#: The library's effects of a six-axis rig (docs/run6-format.md, "The effects, as
+#: laws"): each one's parameters and their null values (``None``: the scenario's).
+LIBRARY_EFFECTS: dict[str, dict[str, float | None]] = {
+    "stiffness_error": {"contact_stiffness_n_per_m": None},
+    "hunt_crossley": {"damping_factor_s_per_m": 0.0},
+    "friction_across_face": {"extra_friction_coefficient": 0.0},
+    "extra_delay": {"extra_delay_s": 0.0},
+    "sensor_filter": {"time_constant_s": 0.0},
+    "force_bias": {"bias_n": 0.0},
+    "sensor_misalignment": {"sensor_roll_rad": 0.0, "sensor_pitch_rad": 0.0, "sensor_yaw_rad": 0.0},
+    "sensor_crosstalk": {"fz_to_fx": 0.0, "fz_to_fy": 0.0, "fz_to_mx_m": 0.0, "fz_to_my_m": 0.0},
+    "table_misalignment": {"table_roll_rad": 0.0, "table_pitch_rad": 0.0, "table_yaw_rad": 0.0},
+    "table_response": {"table_response_ratio": 1.0},
+    "table_damping": {"table_damping_factor": 1.0},
+    "com_offset": {"com_x_m": 0.0, "com_y_m": 0.0, "com_z_m": 0.0},
+}
+
+#: Effects outside the library, physically plausible for a six-axis rig, none a
+#: combination of the library's (their laws: :func:`simulate_rig6`).
+OUTSIDE_EFFECTS: dict[str, dict[str, float | None]] = {
+    "mount_resonance": {"mount_frequency_hz": math.inf, "mount_damping_ratio": 0.1},
+    "lateral_backlash": {"backlash_x_m": 0.0, "backlash_y_m": 0.0},
+    "pad_proud": {"proud_m": 0.0, "pad_index": 0},
+    "fz_quadratic_gain": {"gain_per_n": 0.0},
+    "lateral_lag": {"lateral_response_ratio": 1.0},
+}
+
+#: The part of the rig each effect acts on.
+EFFECT_PARTS: dict[str, str] = {
+    "stiffness_error": "contact",
+    "hunt_crossley": "contact",
+    "friction_across_face": "contact",
+    "pad_proud": "contact",
+    "extra_delay": "sensor_dynamics",
+    "sensor_filter": "sensor_dynamics",
+    "mount_resonance": "sensor_dynamics",
+    "force_bias": "sensor_statics",
+    "sensor_misalignment": "sensor_statics",
+    "sensor_crosstalk": "sensor_statics",
+    "fz_quadratic_gain": "sensor_statics",
+    "table_misalignment": "table",
+    "table_response": "table",
+    "table_damping": "table",
+    "lateral_backlash": "table",
+    "lateral_lag": "table",
+    "com_offset": "computer",
+}
+
+
+def normalize_hidden(hidden: Mapping | None) -> dict[str, dict[str, float | None]]:
+    """The hidden effects with every parameter: ``{effect: {parameter: value}}``.
+
+    ``hidden`` maps an effect of :data:`LIBRARY_EFFECTS` or :data:`OUTSIDE_EFFECTS`
+    to its parameters; a parameter not given takes its null value (the effect
+    then does nothing through it). ``None`` or ``{}``: nothing hidden.
+
+    Raises
+    ------
+    ValueError
+        An unknown effect or parameter, a value that is not a finite number
+        (``mount_frequency_hz`` may be ``inf``: no mount resonance), or one out
+        of its range (a ratio, factor or frequency not above 0, a negative time
+        constant, delay, width or height, a damping ratio not above 0).
+    """
+    out: dict[str, dict[str, float | None]] = {}
+    for name, params in (hidden or {}).items():
+        known = LIBRARY_EFFECTS.get(name, OUTSIDE_EFFECTS.get(name))
+        if known is None:
+            raise ValueError(
+                f"hidden effect {name!r}: one of {sorted(LIBRARY_EFFECTS) + sorted(OUTSIDE_EFFECTS)}"
+            )
+        params = dict(params or {})
+        unknown = set(params) - set(known)
+        if unknown:
+            raise ValueError(f"hidden effect {name}: {sorted(unknown)} not among {sorted(known)}")
+        full = dict(known)
+        for key, value in params.items():
+            if value is None:
+                continue
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.number)):
+                raise ValueError(f"hidden effect {name}: {key} = {value!r} is not a number")
+            value = float(value)
+            if math.isnan(value) or (math.isinf(value) and key != "mount_frequency_hz"):
+                raise ValueError(f"hidden effect {name}: {key} = {value} is not finite")
+            full[key] = value
+        out[name] = full
+    _check_ranges(out)
+    return out
+
+
+def _check_ranges(effects: Mapping[str, Mapping[str, float | None]]) -> None:
+    positive = (
+        "contact_stiffness_n_per_m",
+        "table_response_ratio",
+        "table_damping_factor",
+        "mount_frequency_hz",
+        "mount_damping_ratio",
+        "lateral_response_ratio",
+    )
+    non_negative = (
+        "extra_friction_coefficient",
+        "extra_delay_s",
+        "time_constant_s",
+        "backlash_x_m",
+        "backlash_y_m",
+        "proud_m",
+        "pad_index",
+    )
+    for name, params in effects.items():
+        for key, value in params.items():
+            if value is None:
+                continue
+            if key in positive and not value > 0.0:
+                raise ValueError(f"hidden effect {name}: {key} = {value} must be above 0")
+            if key in non_negative and value < 0.0:
+                raise ValueError(f"hidden effect {name}: {key} = {value} must be at least 0")
+
+
+def step5(x):
+    """Drake's smooth step ``x^3 (10 - 15 x + 6 x^2)`` on ``[0, 1]``, 1 above."""
+    x = np.minimum(np.asarray(x, dtype=float), 1.0)
+    return x**3 * (10.0 + x * (6.0 * x - 15.0))
+
+
+def contact_wrench(
+    q,
+    qd,
+    pads,
+    k_pad_n_per_m,
+    d_s_per_m=0.0,
+    pad_radius_m=0.01,
+    friction_coefficient=0.0,
+    stiction_m_per_s=STICTION_TOLERANCE_M_PER_S,
+):
+    """:func:`wrench` with the pads' regularized Coulomb friction across the face.
+
+    Each touching pad's contact point is half-way between its deepest surface
+    point (``delta`` into the plate) and the face: ``x_c = (c_x, c_y, delta / 2)``
+    for a pad centre ``c``. The device's point there moves at ``v_P + omega x
+    (x_c - p_P)``; its slip ``s t`` is that velocity along the face (x, y). The pad
+    pushes the spacecraft with ``-mu(s) f_n t``, ``f_n = k delta (1 + d xdot)``
+    its normal force, ``mu(s) = mu step5(s / v_s)`` (Drake's regularized
+    friction, ``v_s = stiction_m_per_s``), about the port origin with the lever
+    ``x_c - p_P``. Without friction (``friction_coefficient = 0``) this is
+    :func:`wrench`, number for number.
+
+    Returns
+    -------
+    w : array (6,)
+        ``[moment about the port origin (N m); force (N)]`` on the chaser.
+    delta : array (N,)
+        Penetration of each pad [m].
+    """
+    w, delta = wrench(q, qd, pads, k_pad_n_per_m, d_s_per_m, pad_radius_m)
+    on = delta > 0.0
+    if friction_coefficient <= 0.0 or not on.any():
+        return w, delta
+    b = pads[on] @ exp_so3(q[3:]).T
+    dep = delta[on]
+    om = np.asarray(qd[3:], dtype=float)
+    rate = qd[2] + om[0] * b[:, 1] - om[1] * b[:, 0]
+    f_n = k_pad_n_per_m * dep * np.maximum(1.0 + d_s_per_m * rate, 0.0)
+    lever = b.copy()
+    lever[:, 2] = b[:, 2] + pad_radius_m - 0.5 * dep  # x_c - p_P
+    vel = np.asarray(qd[:3], dtype=float) + np.cross(om, lever)
+    slip = vel[:, :2]
+    s = np.hypot(slip[:, 0], slip[:, 1])
+    moving = s > 0.0
+    t = np.zeros_like(slip)
+    t[moving] = slip[moving] / s[moving, None]
+    push = -(friction_coefficient * step5(s / stiction_m_per_s) * f_n)[:, None] * t
+    fx, fy = push[:, 0], push[:, 1]
+    moment = np.array(
+        [
+            -(lever[:, 2] @ fy),
+            lever[:, 2] @ fx,
+            lever[:, 0] @ fy - lever[:, 1] @ fx,
+        ]
+    )
+    return w + np.concatenate([moment, [fx.sum(), fy.sum(), 0.0]]), delta
+
+
+def _first_order_hold_mount(freq_hz: float, zeta: float, h: float):
+    """``F`` (2x2), ``G0``, ``G1`` (2,) of ``y'' = w^2 (u - y) - 2 zeta w y'`` over one
+    tick with ``u`` linear between the ticks: ``s[k] = F s[k-1] + G0 u[k-1] + G1 u[k]``."""
+    w = 2.0 * math.pi * freq_hz
+    a = np.zeros((4, 4))
+    a[0, 1] = 1.0
+    a[1] = [-w * w, -2.0 * zeta * w, w * w, 0.0]
+    a[2, 3] = 1.0  # u(t) = u0 + du t
+    e = expm(a * h)
+    return e[:2, :2], e[:2, 2] - e[:2, 3] / h, e[:2, 3] / h
+
+
+class _Table:
+    """The table's physical part: its response, turned axes, lateral lag and backlash."""
+
+    def __init__(self, response_hz, damping_ratio, h, effects, table_start):
+        self.ideal = math.isinf(response_hz)
+        self.start_at_tick0 = table_start == "tick0"
+        tm = effects.get("table_misalignment")
+        self.rot = None
+        if tm is not None:
+            self.rot = exp_so3(
+                np.array([tm["table_roll_rad"], tm["table_pitch_rad"], tm["table_yaw_rad"]])
+            )
+        bl = effects.get("lateral_backlash")
+        self.backlash = None
+        if bl is not None and (bl["backlash_x_m"] > 0.0 or bl["backlash_y_m"] > 0.0):
+            self.backlash = np.array([bl["backlash_x_m"], bl["backlash_y_m"]])
+        if self.ideal:
+            return
+        freq = response_hz * effects.get("table_response", {}).get("table_response_ratio", 1.0)
+        zeta = damping_ratio * effects.get("table_damping", {}).get("table_damping_factor", 1.0)
+        ratio = effects.get("lateral_lag", {}).get("lateral_response_ratio", 1.0)
+        phi, gam = _table_update(freq, zeta, h)
+        lag = 2.0 * zeta / (2.0 * math.pi * freq)
+        if ratio != 1.0:  # px, py respond at ratio times the frequency
+            phi_xy, gam_xy = _table_update(freq * ratio, zeta, h)
+            phi = np.stack([phi_xy] * 2 + [phi] * 4, axis=-1)  # (2, 2, 6)
+            gam = np.stack([gam_xy] * 2 + [gam] * 4, axis=-1)  # (2, 6)
+            lag = np.array([lag / ratio] * 2 + [lag] * 4)
+        self.phi, self.gam, self.lag = phi, gam, lag
+
+    def _command(self, q_cmd, qd_cmd):
+        if self.rot is None:
+            return q_cmd, qd_cmd
+        r = self.rot
+        return (
+            np.concatenate([r @ q_cmd[:3], r @ q_cmd[3:]]),
+            np.concatenate([r @ qd_cmd[:3], r @ qd_cmd[3:]]),
+        )
+
+    def start(self, q_cmd, qd_cmd):
+        """The table tracking the approach, commanded ``q_cmd`` at ``qd_cmd``."""
+        u, ud = self._command(q_cmd, qd_cmd)
+        if not self.ideal:
+            self.x, self.xd = u - self.lag * ud, ud.copy()
+        self.first = True
+        self.out = None if self.backlash is None else (u if self.ideal else self.x)[:2].copy()
+
+    def advance(self, q_cmd, qd_cmd):
+        """The pose and rate the table reaches at this tick under the command held
+        since the last one (the encoders read the pose)."""
+        hold = self.first and self.start_at_tick0
+        self.first = False
+        if self.ideal:
+            q_act, qd_act = self._command(q_cmd, qd_cmd)
+        else:
+            if not hold:
+                u = self._command(q_cmd, qd_cmd)[0]
+                phi, gam = self.phi, self.gam
+                self.x, self.xd = (
+                    phi[0, 0] * self.x + phi[0, 1] * self.xd + gam[0] * u,
+                    phi[1, 0] * self.x + phi[1, 1] * self.xd + gam[1] * u,
+                )
+            q_act, qd_act = self.x, self.xd
+        if self.backlash is None:
+            return q_act, qd_act
+        q_act, qd_act = q_act.copy(), qd_act.copy()
+        half = 0.5 * self.backlash
+        inner = q_act[:2]
+        self.out = np.clip(self.out, inner - half, inner + half)
+        gap = inner - self.out
+        driven = (gap * qd_act[:2] > 0.0) & (np.abs(gap) >= half * (1.0 - 1e-12))
+        q_act[:2] = self.out
+        qd_act[:2] = np.where(driven | (half == 0.0), qd_act[:2], 0.0)
+        return q_act, qd_act
+
+
+class _Sensor:
+    """The F/T sensor's physical part: low pass and mount, delay line, turn,
+    cross-talk, gain nonlinearity and bias (a reading ``[m; f]`` at each tick)."""
+
+    def __init__(self, n_delay, n_ticks, h, effects):
+        self.n = n_delay
+        self.history = np.zeros((n_delay + n_ticks, 6))  # history[k + n] = chain(w_act[k])
+        tau = effects.get("sensor_filter", {}).get("time_constant_s", 0.0)
+        self.filter = None
+        if tau > 0.0:
+            a = math.exp(-h / tau)
+            c = tau * (1.0 - a) / h
+            self.filter = (a, c - a, 1.0 - c)
+            self.y, self.u_prev = np.zeros(6), np.zeros(6)
+        mount = effects.get("mount_resonance")
+        self.mount = None
+        if mount is not None and math.isfinite(mount["mount_frequency_hz"]):
+            self.mount = _first_order_hold_mount(
+                mount["mount_frequency_hz"], mount["mount_damping_ratio"], h
+            )
+            self.mount_scale = 1.0 / (2.0 * math.pi * mount["mount_frequency_hz"])
+            self.s, self.v_prev = np.zeros((2, 6)), np.zeros(6)
+        sm = effects.get("sensor_misalignment")
+        self.rot = None
+        if sm is not None:
+            self.rot = exp_so3(
+                np.array([sm["sensor_roll_rad"], sm["sensor_pitch_rad"], sm["sensor_yaw_rad"]])
+            )
+        ct = effects.get("sensor_crosstalk")
+        self.crosstalk = None
+        if ct is not None:
+            self.crosstalk = np.array(
+                [ct["fz_to_mx_m"], ct["fz_to_my_m"], 0.0, ct["fz_to_fx"], ct["fz_to_fy"], 0.0]
+            )
+        self.gain = effects.get("fz_quadratic_gain", {}).get("gain_per_n", 0.0)
+        self.bias = effects.get("force_bias", {}).get("bias_n", 0.0)
+        self.static = self.rot is not None or self.crosstalk is not None
+        self.static = self.static or self.gain != 0.0 or self.bias != 0.0
+        self.dynamic = self.filter is not None or self.mount is not None
+        self.peak = 0.0
+
+    def statics(self, w):
+        """The reading of the sensor's channels carrying ``w`` (the delay line's output)."""
+        if not self.static:
+            return w
+        m, f = w[:3], w[3:]
+        if self.rot is not None:
+            m, f = self.rot @ m, self.rot @ f
+        out = np.concatenate([m, f])
+        if self.crosstalk is not None:
+            out = out + self.crosstalk * out[5]
+        if self.gain != 0.0:
+            out[5] = out[5] + self.gain * out[5] * abs(out[5])
+        if self.bias != 0.0:
+            out[5] = out[5] - self.bias
+        return out
+
+    def read(self, k, w_act):
+        """Push the contact's wrench of tick ``k``; the reading of tick ``k``."""
+        u = w_act
+        if self.dynamic:
+            self.peak = max(self.peak, float(np.abs(u).max()))
+        if self.filter is not None:
+            a, b0, b1 = self.filter
+            self.y = a * self.y + b0 * self.u_prev + b1 * u
+            self.u_prev = u
+            u = self.y
+        if self.mount is not None:
+            big_f, g0, g1 = self.mount
+            self.s = big_f @ self.s + np.outer(g0, self.v_prev) + np.outer(g1, u)
+            self.v_prev = u
+            u = self.s[0]
+        self.history[k + self.n] = u
+        return self.statics(self.history[k])
+
+    def pending(self, k) -> bool:
+        """Whether a contact's wrench is still on its way to the reading after tick ``k``."""
+        if not self.dynamic:
+            return bool(self.history[k + 1 : k + self.n + 1].any())
+        tol = 1e-9 * self.peak
+        if np.abs(self.history[k : k + self.n + 1]).max() > tol:
+            return True
+        if self.filter is not None and np.abs(self.y).max() > tol:
+            return True
+        return self.mount is not None and (
+            np.abs(self.s[0]).max() > tol or self.mount_scale * np.abs(self.s[1]).max() > tol
+        )
+
+
+class _Physics:
+    """The rig's physical part (table, contact, sensor) under the hidden effects."""
+
+    def __init__(
+        self,
+        *,
+        pads,
+        k_pad,
+        d,
+        pad_radius,
+        pad_count,
+        stiffness,
+        table_response_hz,
+        table_damping_ratio,
+        h,
+        n_delay,
+        n_ticks,
+        effects,
+        table_start,
+    ):
+        if table_start not in TABLE_STARTS:
+            raise ValueError(f"table_start must be one of {TABLE_STARTS}, not {table_start!r}")
+        true_pads = pads
+        proud = effects.get("pad_proud")
+        if proud is not None and proud["proud_m"] > 0.0:
+            i = int(proud["pad_index"])
+            if i != proud["pad_index"] or not 0 <= i < len(pads):
+                raise ValueError(
+                    f"pad_proud: pad_index {proud['pad_index']} not in 0..{len(pads) - 1}"
+                )
+            true_pads = pads.copy()
+            true_pads[i, 2] += proud["proud_m"]  # its top stands proud towards the face
+        k_true = effects.get("stiffness_error", {}).get("contact_stiffness_n_per_m")
+        k_true_pad = k_pad if k_true is None else k_true / pad_count
+        d_true = max(d + effects.get("hunt_crossley", {}).get("damping_factor_s_per_m", 0.0), 0.0)
+        self.mu = effects.get("friction_across_face", {}).get("extra_friction_coefficient", 0.0)
+        self.args = (true_pads, k_true_pad, d_true, pad_radius)
+        extra = effects.get("extra_delay", {}).get("extra_delay_s", 0.0) / h
+        n_extra = round(extra)
+        if abs(extra - n_extra) > 1e-9 * max(1.0, extra):
+            raise ValueError(f"extra_delay_s {extra * h} is not a whole number of ticks of {h} s")
+        self.table = _Table(table_response_hz, table_damping_ratio, h, effects, table_start)
+        self.sensor = _Sensor(n_delay + n_extra, n_ticks, h, effects)
+
+    def start(self, q_cmd, qd_cmd):
+        self.table.start(q_cmd, qd_cmd)
+
+    def tick(self, k, q_cmd, qd_cmd):
+        """Tick ``k`` under the command of tick ``k - 1``: the table's pose and rate,
+        the contact's wrench, the pads' penetrations and the sensor's reading."""
+        q_act, qd_act = self.table.advance(q_cmd, qd_cmd)
+        if self.mu > 0.0:
+            w_act, delta = contact_wrench(q_act, qd_act, *self.args, self.mu)
+        else:
+            w_act, delta = wrench(q_act, qd_act, *self.args)
+        return q_act, qd_act, w_act, delta, self.sensor.read(k, w_act)
+
+
+def _delay_ticks(sensor_delay_s: float, sample_rate_hz: float) -> int:
+    delay = sensor_delay_s * sample_rate_hz
+    n_delay = round(delay)
+    if abs(delay - n_delay) > 1e-9 * max(1.0, delay):
+        h = 1.0 / sample_rate_hz
+        raise ValueError(f"sensor_delay_s {sensor_delay_s} is not a whole number of ticks of {h} s")
+    return n_delay
+
+
 def simulate_rig6(
     *,
     mass_kg: float = 2533.03,
@@ -140,6 +597,8 @@ def simulate_rig6(
     initial_gap_m: float = 0.001,
     duration_s: float | None = None,
     fd_step: float = 1e-7,
+    hidden: Mapping | None = None,
+    table_start: str = "previous_tick",
 ) -> dict:
     """One contact of the 6-DoF hybrid docking loop (SI units throughout).
 
@@ -149,30 +608,117 @@ def simulate_rig6(
     ``initial_velocity_m_per_s`` along +z, with no angular velocity.
     ``duration_s=None`` stops 0.05 s after the contact ends.
 
+    ``hidden`` gives the rig's physical part (and, for ``com_offset``, the rig
+    computer's spacecraft) effects the arguments do not say: ``{effect:
+    {parameter: value}}`` of :data:`LIBRARY_EFFECTS` (docs/run6-format.md, "The
+    effects, as laws") or :data:`OUTSIDE_EFFECTS` (:func:`normalize_hidden`).
+    The rig computer keeps the arguments' beliefs: its compensator's contact
+    model (the nominal pads, stiffness and dissipation, no friction), its lead
+    time (the nominal ``sensor_delay_s`` unless ``lead_time_s``) and its dead
+    band. The library's laws:
+
+    - ``stiffness_error``: the contact's total stiffness is
+      ``contact_stiffness_n_per_m`` (each pad's ``1 / pad_count`` of it);
+    - ``hunt_crossley``: ``damping_factor_s_per_m`` added to the dissipation
+      (at least 0);
+    - ``friction_across_face``: ``extra_friction_coefficient`` of regularized
+      Coulomb friction at each touching pad (:func:`contact_wrench`);
+    - ``extra_delay``: ``extra_delay_s`` (whole ticks) added to the sensor's delay;
+    - ``sensor_filter``: each channel ``u[k]`` of the contact's wrench is read
+      through ``y[k] = a y[k-1] + b0 u[k-1] + b1 u[k]`` (``a = exp(-h / tau)``,
+      ``c = tau (1 - a) / h``, ``b0 = c - a``, ``b1 = 1 - c``, zero before the
+      record), before the delay;
+    - ``force_bias``: the reading's ``fz`` is ``fz - bias_n`` (every tick);
+    - ``sensor_misalignment``: the reading is ``[R m; R f]``, ``R = exp((roll,
+      pitch, yaw))``;
+    - ``sensor_crosstalk``: ``fx + fz_to_fx fz``, ``fy + fz_to_fy fz``,
+      ``mx + fz_to_mx_m fz``, ``my + fz_to_my_m fz``, with the turned reading's
+      ``fz``;
+    - ``table_misalignment``: commanded ``[p; theta]`` and ``[v; omega]``, the
+      table tracks ``[R p; R theta]`` and ``[R v; R omega]``; the encoders read
+      the pose reached;
+    - ``table_response``, ``table_damping``: the table model's natural
+      frequency times ``table_response_ratio``, its damping ratio times
+      ``table_damping_factor`` (its start's ramp lag is its own);
+    - ``com_offset``: the rig computer's spacecraft has its centre of mass
+      ``(com_x_m, com_y_m, com_z_m)`` (body frame) from the arguments': its port
+      sits at ``[lateral_offset_m - (com_x, com_y), port_distance_m - com_z]``
+      from it; the port's initial pose, the table and the contact are unchanged.
+
+    The sensor chain is, in this order: the low pass, the mount resonance
+    (below), the delay line, the turn, the cross-talk, the gain nonlinearity
+    and the bias.
+
+    The effects outside the library (:data:`OUTSIDE_EFFECTS`):
+
+    - ``mount_resonance`` (``mount_frequency_hz`` ``f``, ``mount_damping_ratio``
+      ``zeta``): the F/T sensor sits on a compliant, lightly damped mount; each
+      channel reads ``y'' = w^2 (u - y) - 2 zeta w y'`` (``w = 2 pi f``) of the
+      contact's wrench ``u``, solved exactly per tick with ``u`` linear between
+      the ticks, zero before the record; before the delay. Outside: the
+      library's sensor dynamics (a delay, a first-order low pass) have real
+      poles only; a mount ringing at tens of Hz has a complex pair.
+    - ``lateral_backlash`` (``backlash_x_m``, ``backlash_y_m``, total widths):
+      a backlash in the table's x (y) axis. The table model's output ``x``
+      drives the stage through play: the stage stays where it is while ``x``
+      moves within ``+- width / 2`` of it, and is dragged at ``x -+ width / 2``
+      beyond (``out[k] = clip(out[k-1], x - width / 2, x + width / 2)``, the
+      play centred at the start); it moves at the model's rate when dragged,
+      else not. The encoders read the stage. Outside: the library's table
+      effects are linear and time-invariant in the command.
+    - ``pad_proud`` (``proud_m``, ``pad_index``): one pad of the ring stands
+      ``proud_m`` proud of the others towards the face (its centre at
+      ``z_P = -pad_radius + proud_m``): it touches first and carries more of
+      the load. The initial gap is the nominal ring's. Outside: the library
+      changes every pad alike (stiffness, dissipation, friction), never the
+      ring's geometry.
+    - ``fz_quadratic_gain`` (``gain_per_n``, 1/N): the normal channel's gain
+      grows with the load: the reading's ``fz`` is ``fz + g fz |fz|`` (after
+      the turn and cross-talk, before the bias). Outside: every library sensor
+      effect is linear in the wrench or constant.
+    - ``lateral_lag`` (``lateral_response_ratio``): the table's lateral axes
+      (``px``, ``py``) respond at the ratio times the table model's natural
+      frequency (same damping ratio), the axial axis and the attitude at the
+      model's own. Outside: ``table_response`` changes every axis alike.
+      A finite table only.
+
+    ``table_start`` (:data:`TABLE_STARTS`): ``"previous_tick"`` (the default,
+    rig6's first reading) puts the table at the command less its ramp lag at
+    tick -1, so tick 0 reads it a tick later; ``"tick0"`` puts it there at
+    tick 0.
+
     Returns
     -------
     dict
         Arrays (one row per tick): ``t_s``, ``port_velocity_z_m_per_s``,
-        ``kinetic_energy_j``, ``total_energy_j``, ``wrench_act`` and
-        ``wrench_comp`` (N, 6), ``q_des`` and ``q_act`` (N, 6),
+        ``kinetic_energy_j``, ``total_energy_j``, ``wrench_act`` (the
+        contact's), ``wrench_mea`` (the sensor's reading the rig computer used,
+        without measurement noise) and ``wrench_comp`` (N, 6), ``q_des``,
+        ``qd_des`` (the port's pose and twist after the tick's update),
+        ``q_act`` and ``qd_act`` (the table's) (N, 6), ``in_contact`` (N,),
         ``com_position_m`` (N, 3), ``angular_momentum_n_m_s`` (N, 3, world frame,
-        about the centre of mass); scalars ``cor_normal``, ``energy_ratio``,
-        ``peak_force_n``, ``peak_moment_n_m``, ``contact_duration_s``.
+        about the centre of mass); ``command_initial`` and
+        ``command_rate_initial`` (6,), the command held before tick 0;
+        ``port_position_model_m`` (3,), the port from the computer's centre of
+        mass; scalars ``cor_normal``, ``energy_ratio``, ``peak_force_n``,
+        ``peak_moment_n_m``, ``contact_duration_s``.
 
     Raises
     ------
     ValueError
-        If the sensor delay is not a whole number of ticks or the compensator is unknown.
+        If the sensor delay (or a hidden extra delay) is not a whole number of
+        ticks, the compensator is unknown or a hidden effect is refused
+        (:func:`normalize_hidden`).
     RuntimeError
         If no contact happens or it does not end within the default duration.
     """
     if compensator not in COMPENSATORS:
         raise ValueError(f"compensator must be one of {COMPENSATORS}, not {compensator!r}")
+    effects = normalize_hidden(hidden)
+    if "lateral_lag" in effects and math.isinf(table_response_hz):
+        raise ValueError("lateral_lag: an ideal table has no response to slow down")
     h = 1.0 / sample_rate_hz
-    delay = sensor_delay_s * sample_rate_hz
-    n_delay = round(delay)
-    if abs(delay - n_delay) > 1e-9 * max(1.0, delay):
-        raise ValueError(f"sensor_delay_s {sensor_delay_s} is not a whole number of ticks of {h} s")
+    n_delay = _delay_ticks(sensor_delay_s, sample_rate_hz)
     lead = sensor_delay_s if lead_time_s is None else lead_time_s
     use_sdc, use_mdc = compensator in ("SDC", "SDMDC"), compensator in ("MDC", "SDMDC")
     m = float(mass_kg)
@@ -180,9 +726,12 @@ def simulate_rig6(
     inertia = np.diag(inertia) if inertia.ndim == 1 else inertia
     inertia_inv = np.linalg.inv(inertia)
     r_port = np.array([lateral_offset_m[0], lateral_offset_m[1], port_distance_m], dtype=float)
+    if "com_offset" in effects:
+        c = effects["com_offset"]
+        r_port = r_port - np.array([c["com_x_m"], c["com_y_m"], c["com_z_m"]])
     pads = pad_ring(pad_count, ring_radius_m, pad_radius_m)
     k_pad, d = contact_stiffness_n_per_m / pad_count, hunt_crossley_dissipation_s_per_m
-    args = (pads, k_pad, d, pad_radius_m)
+    args = (pads, k_pad, d, pad_radius_m)  # the rig computer's contact model
 
     # initial state: the nearest pad top `initial_gap_m` from the plane, port on the axis
     roll, pitch = misalignment_rad
@@ -194,38 +743,40 @@ def simulate_rig6(
     om_b = np.zeros(3)
     q_cmd = np.concatenate([p + rot @ r_port, log_so3(rot)])
     qd_cmd = np.concatenate([v, np.zeros(3)])
-
-    ideal = math.isinf(table_response_hz)
-    if not ideal:  # steady tracking of the approach ramp, held at tick -1
-        phi, gam = _table_update(table_response_hz, table_damping_ratio, h)
-        lag_s = 2.0 * table_damping_ratio / (2.0 * math.pi * table_response_hz)
-        x_tab, xd_tab = q_cmd - lag_s * qd_cmd, qd_cmd.copy()
+    command_initial, command_rate_initial = q_cmd.copy(), qd_cmd.copy()
 
     t_contact = math.pi * math.sqrt(m / contact_stiffness_n_per_m)
     t_max = duration_s if duration_s is not None else initial_gap_m / v0 + 10 * t_contact + 1.0
     n_max = int(round(t_max / h)) + 1
+    physics = _Physics(
+        pads=pads,
+        k_pad=k_pad,
+        d=d,
+        pad_radius=pad_radius_m,
+        pad_count=pad_count,
+        stiffness=contact_stiffness_n_per_m,
+        table_response_hz=table_response_hz,
+        table_damping_ratio=table_damping_ratio,
+        h=h,
+        n_delay=n_delay,
+        n_ticks=n_max,
+        effects=effects,
+        table_start=table_start,
+    )
+    physics.start(q_cmd, qd_cmd)  # steady tracking of the approach ramp
+    sensor = physics.sensor
     hold_ticks = int(math.ceil(0.05 / h))
     names = ("q_act", "q_des", "wrench_act", "wrench_comp", "port_velocity_z_m_per_s")
     names += ("kinetic_energy_j", "total_energy_j", "com_position_m", "angular_momentum_n_m_s")
+    names += ("wrench_mea", "qd_act", "qd_des")
     rows: dict[str, list] = {name: [] for name in names}
     in_contact = []
-    history = np.zeros((n_delay + n_max, 6))  # history[k + n_delay] = w_act[k]
     w_prev = np.zeros(6)
     quiet, touched = 0, False
     for k in range(n_max):
-        # 1. the table's pose under the command sent at tick k-1, and the contact wrench
-        if ideal:
-            q_act, qd_act = q_cmd, qd_cmd
-        else:
-            x_tab, xd_tab = (
-                phi[0, 0] * x_tab + phi[0, 1] * xd_tab + gam[0] * q_cmd,
-                phi[1, 0] * x_tab + phi[1, 1] * xd_tab + gam[1] * q_cmd,
-            )
-            q_act, qd_act = x_tab, xd_tab
-        w_act, delta = wrench(q_act, qd_act, *args)
-        history[k + n_delay] = w_act
-        # 2. the sensor, 3. the compensator
-        w_mea = history[k]
+        # 1. the table's pose under the command sent at tick k-1, the contact, the sensor
+        q_act, qd_act, w_act, delta, w_mea = physics.tick(k, q_cmd, qd_cmd)
+        # 2. the compensator
         w_c = np.zeros(6)
         if np.linalg.norm(w_mea[3:]) > force_deadband_n:
             w_c = w_mea.copy()
@@ -235,7 +786,7 @@ def simulate_rig6(
                 K, C = wrench_jacobians(q_act, qd_act, *args, step=fd_step, damped=d > 0.0)
                 w_c -= K @ (q_cmd - q_act) + C @ (qd_cmd - qd_act)
         w_prev = w_mea
-        # 4. the spacecraft: semi-implicit Euler; its new port pose and rate are the command
+        # 3. the spacecraft: semi-implicit Euler; its new port pose and rate are the command
         f = w_c[3:]
         tau = w_c[:3] + _cross(rot @ r_port, f)
         v = v + h * f / m
@@ -249,11 +800,13 @@ def simulate_rig6(
         own = wrench(q_cmd, qd_cmd, *args)[1]  # penetrations at the spacecraft's own pose
         pe = 0.5 * k_pad * np.sum(np.maximum(own, 0.0) ** 2)
         row = (q_act, q_cmd, w_act, w_c, qd_cmd[2], ke, ke + pe, p, rot @ inertia @ om_b)
+        row += (w_mea, qd_act, qd_cmd)
         for name, value in zip(names, row, strict=True):
             rows[name].append(value)
         in_contact.append(bool((delta > 0.0).any()))
         touched = touched or in_contact[-1]
-        busy = in_contact[-1] or w_c.any() or history[k + 1 : k + n_delay + 1].any()
+        plain = not (sensor.static or sensor.dynamic)  # else w_c may never be exactly 0
+        busy = in_contact[-1] or sensor.pending(k) or (plain and w_c.any())
         quiet = 0 if busy else quiet + 1
         if duration_s is None and touched and quiet >= hold_ticks:
             break
@@ -262,7 +815,96 @@ def simulate_rig6(
             raise RuntimeError(f"the contact did not end within {t_max:.3g} s")
     out = {name: np.array(rows[name]) for name in names}
     out["t_s"] = h * np.arange(len(in_contact))
+    out["in_contact"] = np.array(in_contact)
+    out["command_initial"], out["command_rate_initial"] = command_initial, command_rate_initial
+    out["port_position_model_m"] = r_port
     return out | _metrics(out, np.array(in_contact), h, v0, 0.5 * m * v0 * v0)
+
+
+#: The keyword arguments of :func:`simulate_rig6` the rig's physical part uses.
+PHYSICAL_ARGUMENTS = (
+    "contact_stiffness_n_per_m",
+    "hunt_crossley_dissipation_s_per_m",
+    "pad_count",
+    "ring_radius_m",
+    "pad_radius_m",
+    "table_response_hz",
+    "table_damping_ratio",
+    "sample_rate_hz",
+    "sensor_delay_s",
+)
+
+
+def replay_rig6(
+    command_initial,
+    command_rate_initial,
+    q_des,
+    qd_des,
+    *,
+    hidden: Mapping | None = None,
+    table_start: str = "previous_tick",
+    **rig,
+) -> dict:
+    """The rig's physical part driven by recorded commands (no rig computer).
+
+    Tick ``k`` holds the command of tick ``k - 1`` (``q_des[k-1]``, ``qd_des[k-1]``;
+    ``command_initial``, ``command_rate_initial`` for tick 0), as in
+    :func:`simulate_rig6`, whose physical keyword arguments (:data:`PHYSICAL_ARGUMENTS`,
+    with their defaults; any other is ignored, so a ``simulate_rig6`` argument
+    dict can be passed whole), ``hidden`` and ``table_start`` it takes. The
+    table starts tracking the initial command at its rate.
+
+    Returns
+    -------
+    dict
+        ``q_act``, ``qd_act``, ``wrench_act``, ``wrench_mea`` (N, 6) and
+        ``in_contact`` (N,).
+    """
+    defaults = {
+        "contact_stiffness_n_per_m": 1e5,
+        "hunt_crossley_dissipation_s_per_m": 0.0,
+        "pad_count": 8,
+        "ring_radius_m": 0.3,
+        "pad_radius_m": 0.01,
+        "table_response_hz": math.inf,
+        "table_damping_ratio": 0.8,
+        "sample_rate_hz": 1000.0,
+        "sensor_delay_s": 0.0,
+    }
+    par = defaults | {k: v for k, v in rig.items() if k in PHYSICAL_ARGUMENTS}
+    effects = normalize_hidden(hidden)
+    h = 1.0 / par["sample_rate_hz"]
+    q_des, qd_des = np.asarray(q_des, dtype=float), np.asarray(qd_des, dtype=float)
+    n = len(q_des)
+    pads = pad_ring(par["pad_count"], par["ring_radius_m"], par["pad_radius_m"])
+    physics = _Physics(
+        pads=pads,
+        k_pad=par["contact_stiffness_n_per_m"] / par["pad_count"],
+        d=par["hunt_crossley_dissipation_s_per_m"],
+        pad_radius=par["pad_radius_m"],
+        pad_count=par["pad_count"],
+        stiffness=par["contact_stiffness_n_per_m"],
+        table_response_hz=par["table_response_hz"],
+        table_damping_ratio=par["table_damping_ratio"],
+        h=h,
+        n_delay=_delay_ticks(par["sensor_delay_s"], par["sample_rate_hz"]),
+        n_ticks=n,
+        effects=effects,
+        table_start=table_start,
+    )
+    q_cmd = np.asarray(command_initial, dtype=float)
+    qd_cmd = np.asarray(command_rate_initial, dtype=float)
+    physics.start(q_cmd, qd_cmd)
+    names = ("q_act", "qd_act", "wrench_act", "delta", "wrench_mea")
+    rows: dict[str, list] = {name: [] for name in names}
+    for k in range(n):
+        if k:
+            q_cmd, qd_cmd = q_des[k - 1], qd_des[k - 1]
+        for name, value in zip(names, physics.tick(k, q_cmd, qd_cmd), strict=True):
+            rows[name].append(value)
+    out = {name: np.array(rows[name]) for name in names}
+    out["in_contact"] = np.any(out.pop("delta") > 0.0, axis=1)
+    return out
 
 
 def _metrics(out: dict, in_contact: np.ndarray, h: float, v0: float, ke0: float) -> dict:
