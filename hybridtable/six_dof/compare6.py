@@ -245,16 +245,27 @@ def _touching(run: Run6) -> np.ndarray:
 #: Ticks kept off each side of a contact (the 1-D comparison's guard).
 _GUARD_TICKS = 2
 
+#: Quiet ticks before the first touch enough for the wrench's noise alone
+#: (fewer: every quiet stretch, as the 1-D comparison).
+_BEFORE_TICKS = 50
+
 
 def _quiet(run: Run6) -> tuple[np.ndarray, np.ndarray]:
     """The ticks out of contact, as the 1-D comparison takes them: for the
     wrench, the touching ticks (:func:`_touching`) widened by two each side
     and delayed by the sensor's delay; for the pose, widened by two before
     and the table's settling time after, without the table's first settling
-    time (a record too short for that: two after)."""
+    time (a record too short for that: two after). With at least
+    :data:`_BEFORE_TICKS` quiet ticks before the first touch the wrench's are
+    those alone: the sensor has seen no contact yet, while after the release
+    whatever dynamics it has (a mount's ringing, a filter's tail) would pass
+    for noise and hide itself."""
     on = _touching(run)
     p = run.params
     wrench = delayed_labels((~dilate(on, _GUARD_TICKS, _GUARD_TICKS)).astype(int), p.delay_ticks)
+    first = int(np.argmax(wrench == 0)) if np.any(wrench == 0) else run.n
+    if first >= _BEFORE_TICKS:
+        wrench[first:] = 0
     table = TableParams(p.table_response_hz, p.table_damping_ratio)
     settle = max(settle_ticks(table.settling_time_s, p.sample_period_s, run.n), _GUARD_TICKS)
     pose = ~dilate(on, _GUARD_TICKS, settle)

@@ -20,11 +20,12 @@ the candidates (every registered effect with ``apply6``, or those named):
    :func:`~hybridtable.effects.selection.delta_bic`); a candidate that cannot
    act on the rig (the table's response on the Stewart platform) is left out,
    with why;
-3. the best enters when it is significant (``delta_bic`` above
-   :data:`~hybridtable.diagnosis.settings.BIC_THRESHOLD`) and relevant: it
-   removes at least :data:`~hybridtable.diagnosis.settings.MIN_EXCESS_REMOVED`
+3. the most significant candidate that is relevant enters: significant
+   (``delta_bic`` above :data:`~hybridtable.diagnosis.settings.BIC_THRESHOLD`)
+   and removing at least :data:`~hybridtable.diagnosis.settings.MIN_EXCESS_REMOVED`
    of the worst component's error above the noise (a significant effect that
-   leaves the error where it was explains nothing); candidates within
+   leaves the worst error where it was explains nothing, and does not block
+   one that does); relevant candidates within
    :data:`~hybridtable.diagnosis.settings.INDISTINGUISHABLE_BIC` of it are its
    look-alikes, which the data cannot tell apart;
 4. it stops when the model explains the runs, when no candidate enters, or
@@ -342,10 +343,23 @@ def diagnose_runs6(
         out.steps.append(step)
         if not scored:
             break
-        best = scored[0]
         worst = max(out.final_errors, key=out.final_errors.__getitem__)
         excess = out.final_errors[worst] - 1.0
-        removed = (out.final_errors[worst] - best["errors"][worst]) / excess if excess > 0 else 0.0
+
+        def removed_by(entry: dict, worst: str = worst, excess: float = excess) -> float:
+            gone = out.final_errors[worst] - entry["errors"][worst]
+            return gone / excess if excess > 0 else 0.0
+
+        # the most significant candidate that is also relevant (one that fits
+        # other components better but leaves the worst where it was does not
+        # block the one that explains it)
+        relevant = [
+            r
+            for r in scored
+            if r["delta_bic"] > BIC_THRESHOLD and removed_by(r) >= MIN_EXCESS_REMOVED
+        ]
+        best = relevant[0] if relevant else scored[0]
+        removed = removed_by(best)
         if best["delta_bic"] <= BIC_THRESHOLD:
             step.why = (
                 f"{best['effect']} is the best but not significant (delta BIC "
@@ -373,7 +387,7 @@ def diagnose_runs6(
             r["effect"]
             for r in lookalikes(
                 best,
-                scored,
+                relevant,
                 INDISTINGUISHABLE_BIC,
                 lambda r: r["delta_bic"],
                 lambda r: (r["effect"],),
