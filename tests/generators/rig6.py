@@ -8,6 +8,16 @@ compensators none / SDC / MDC / SDMDC, where the MDC stiffness ``K = -dw/dq``
 (and damping ``C = -dw/dqd``) comes from central finite differences of this
 module's own wrench function at the table's actual pose.
 
+Hidden effects (``simulate_rig6(hidden=...)``): the rig's physical part (the
+table, the contact, the F/T sensor) or the rig computer's spacecraft can do
+what the arguments do not say, by the laws of docs/run6-format.md ("The
+effects, as laws": :data:`LIBRARY_EFFECTS`) or by effects outside the library
+(:data:`OUTSIDE_EFFECTS`: a ringing sensor mount, backlash in a lateral table
+axis, a proud pad, a quadratic gain of the normal force channel, slow lateral
+table axes); the pads' friction across the face is :func:`contact_wrench`.
+:func:`replay_rig6` drives the physical part alone with recorded commands, as
+a replay of a record does.
+
 Conventions: pose ``q = [p_P; theta]`` (port position, rotation vector), rate
 ``qd = [v_P; omega]`` (world frame), wrench ``w = [moment about the port origin;
 force]`` on the chaser. Row k of every array is tick k: what the rig computer
@@ -200,9 +210,17 @@ EFFECT_PARTS: dict[str, str] = {
 def normalize_hidden(hidden: Mapping | None) -> dict[str, dict[str, float | None]]:
     """The hidden effects with every parameter: ``{effect: {parameter: value}}``.
 
-    ``hidden`` maps an effect of :data:`LIBRARY_EFFECTS` or :data:`OUTSIDE_EFFECTS`
-    to its parameters; a parameter not given takes its null value (the effect
-    then does nothing through it). ``None`` or ``{}``: nothing hidden.
+    Parameters
+    ----------
+    hidden : mapping or None
+        An effect of :data:`LIBRARY_EFFECTS` or :data:`OUTSIDE_EFFECTS` to its
+        parameters; a parameter not given takes its null value (the effect then
+        does nothing through it). ``None`` or ``{}``: nothing hidden.
+
+    Returns
+    -------
+    dict
+        Each effect given, with all its parameters as floats.
 
     Raises
     ------
@@ -294,6 +312,15 @@ def contact_wrench(
     ``x_c - p_P``. Without friction (``friction_coefficient = 0``) this is
     :func:`wrench`, number for number.
 
+    Parameters
+    ----------
+    q, qd, pads, k_pad_n_per_m, d_s_per_m, pad_radius_m
+        As :func:`wrench`'s.
+    friction_coefficient : float
+        ``mu`` (1).
+    stiction_m_per_s : float
+        ``v_s`` (m/s), Drake's stiction tolerance by default.
+
     Returns
     -------
     w : array (6,)
@@ -345,8 +372,9 @@ def _first_order_hold_mount(freq_hz: float, zeta: float, h: float):
 class _Table:
     """The table's physical part: its response, turned axes, lateral lag and backlash."""
 
-    def __init__(self, response_hz, damping_ratio, h, effects, table_start):
+    def __init__(self, response_hz, damping_ratio, h, effects, table_start, miss):
         self.ideal = math.isinf(response_hz)
+        self.shift = np.array([miss[0], miss[1], 0.0], dtype=float)
         self.start_at_tick0 = table_start == "tick0"
         tm = effects.get("table_misalignment")
         self.rot = None
@@ -375,9 +403,9 @@ class _Table:
     def _command(self, q_cmd, qd_cmd):
         if self.rot is None:
             return q_cmd, qd_cmd
-        r = self.rot
+        r, s = self.rot, self.shift  # the table is turned about W's origin
         return (
-            np.concatenate([r @ q_cmd[:3], r @ q_cmd[3:]]),
+            np.concatenate([r @ (q_cmd[:3] + s) - s, r @ q_cmd[3:]]),
             np.concatenate([r @ qd_cmd[:3], r @ qd_cmd[3:]]),
         )
 
@@ -494,10 +522,12 @@ class _Sensor:
         return self.statics(self.history[k])
 
     def pending(self, k) -> bool:
-        """Whether a contact's wrench is still on its way to the reading after tick ``k``."""
-        if not self.dynamic:
+        """Whether a contact's wrench is still on its way to the reading after tick
+        ``k`` (with a static effect, or at it: the rig computer's compensated
+        wrench need not fall to zero then)."""
+        if not (self.dynamic or self.static):
             return bool(self.history[k + 1 : k + self.n + 1].any())
-        tol = 1e-9 * self.peak
+        tol = 1e-4 * self.peak  # a tail within the noise of any rig (0 without dynamics)
         if np.abs(self.history[k : k + self.n + 1]).max() > tol:
             return True
         if self.filter is not None and np.abs(self.y).max() > tol:
@@ -518,7 +548,6 @@ class _Physics:
         d,
         pad_radius,
         pad_count,
-        stiffness,
         table_response_hz,
         table_damping_ratio,
         h,
@@ -526,6 +555,7 @@ class _Physics:
         n_ticks,
         effects,
         table_start,
+        miss,
     ):
         if table_start not in TABLE_STARTS:
             raise ValueError(f"table_start must be one of {TABLE_STARTS}, not {table_start!r}")
@@ -548,7 +578,7 @@ class _Physics:
         n_extra = round(extra)
         if abs(extra - n_extra) > 1e-9 * max(1.0, extra):
             raise ValueError(f"extra_delay_s {extra * h} is not a whole number of ticks of {h} s")
-        self.table = _Table(table_response_hz, table_damping_ratio, h, effects, table_start)
+        self.table = _Table(table_response_hz, table_damping_ratio, h, effects, table_start, miss)
         self.sensor = _Sensor(n_delay + n_extra, n_ticks, h, effects)
 
     def start(self, q_cmd, qd_cmd):
@@ -599,6 +629,8 @@ def simulate_rig6(
     fd_step: float = 1e-7,
     hidden: Mapping | None = None,
     table_start: str = "previous_tick",
+    lateral_miss_m=(0.0, 0.0),
+    hold_s: float = 0.05,
 ) -> dict:
     """One contact of the 6-DoF hybrid docking loop (SI units throughout).
 
@@ -606,7 +638,7 @@ def simulate_rig6(
     ``Ry(pitch) Rx(roll)``; the port starts on the docking axis, ``initial_gap_m``
     from the plane (measured at the pad nearest to it), moving at
     ``initial_velocity_m_per_s`` along +z, with no angular velocity.
-    ``duration_s=None`` stops 0.05 s after the contact ends.
+    ``duration_s=None`` stops ``hold_s`` (0.05 s) after the contact ends.
 
     ``hidden`` gives the rig's physical part (and, for ``com_offset``, the rig
     computer's spacecraft) effects the arguments do not say: ``{effect:
@@ -687,6 +719,39 @@ def simulate_rig6(
     tick -1, so tick 0 reads it a tick later; ``"tick0"`` puts it there at
     tick 0.
 
+    ``lateral_miss_m`` is where the port starts across the target's axis
+    (x, y). rig6 runs the loop on the axis, and the record is shifted by it
+    (the plate is infinite and flat: the contact does not change); only a
+    turned table (``table_misalignment``), which turns the commanded position
+    about W's origin, sees it: it tracks ``R (p + miss) - miss`` in rig6's frame.
+
+    Parameters
+    ----------
+    mass_kg, inertia_kg_m2, port_distance_m, lateral_offset_m, misalignment_rad
+        The spacecraft (kg, kg m^2 as three principal values or a 3x3 matrix,
+        m, m, rad) and its initial attitude.
+    contact_stiffness_n_per_m, hunt_crossley_dissipation_s_per_m
+        The contact: total stiffness (N/m), Hunt-Crossley dissipation (s/m).
+    pad_count, ring_radius_m, pad_radius_m
+        The pad ring (m).
+    table_response_hz, table_damping_ratio
+        The table model (``inf``: the ideal table).
+    sample_rate_hz, sensor_delay_s
+        The rig computer's rate (Hz) and the sensor's delay (s, whole ticks).
+    compensator, lead_time_s, force_deadband_n
+        The rig computer's compensator (:data:`COMPENSATORS`), its lead (s;
+        default the delay) and dead band (N, on the measured force's norm).
+    initial_velocity_m_per_s, initial_gap_m, duration_s, hold_s
+        The approach (m/s, m) and the record's length (s; see above).
+    fd_step : float
+        The MDC's central-difference step.
+    hidden : mapping or None
+        The hidden effects (:func:`normalize_hidden`).
+    table_start : str
+        One of :data:`TABLE_STARTS`.
+    lateral_miss_m : pair of float
+        The port's start across the target's axis (m).
+
     Returns
     -------
     dict
@@ -754,7 +819,6 @@ def simulate_rig6(
         d=d,
         pad_radius=pad_radius_m,
         pad_count=pad_count,
-        stiffness=contact_stiffness_n_per_m,
         table_response_hz=table_response_hz,
         table_damping_ratio=table_damping_ratio,
         h=h,
@@ -762,10 +826,11 @@ def simulate_rig6(
         n_ticks=n_max,
         effects=effects,
         table_start=table_start,
+        miss=lateral_miss_m,
     )
     physics.start(q_cmd, qd_cmd)  # steady tracking of the approach ramp
     sensor = physics.sensor
-    hold_ticks = int(math.ceil(0.05 / h))
+    hold_ticks = int(math.ceil(hold_s / h))
     names = ("q_act", "q_des", "wrench_act", "wrench_comp", "port_velocity_z_m_per_s")
     names += ("kinetic_energy_j", "total_energy_j", "com_position_m", "angular_momentum_n_m_s")
     names += ("wrench_mea", "qd_act", "qd_des")
@@ -843,6 +908,7 @@ def replay_rig6(
     *,
     hidden: Mapping | None = None,
     table_start: str = "previous_tick",
+    lateral_miss_m=(0.0, 0.0),
     **rig,
 ) -> dict:
     """The rig's physical part driven by recorded commands (no rig computer).
@@ -851,8 +917,20 @@ def replay_rig6(
     ``command_initial``, ``command_rate_initial`` for tick 0), as in
     :func:`simulate_rig6`, whose physical keyword arguments (:data:`PHYSICAL_ARGUMENTS`,
     with their defaults; any other is ignored, so a ``simulate_rig6`` argument
-    dict can be passed whole), ``hidden`` and ``table_start`` it takes. The
+    dict can be passed whole), ``hidden``, ``table_start`` and ``lateral_miss_m``
+    it takes. The
     table starts tracking the initial command at its rate.
+
+    Parameters
+    ----------
+    command_initial, command_rate_initial : array (6,)
+        The pose and rate commanded before tick 0 (``simulate_rig6``'s).
+    q_des, qd_des : array (N, 6)
+        The commands of the ticks (the port's pose and twist after each update).
+    hidden, table_start, lateral_miss_m
+        As :func:`simulate_rig6`'s.
+    **rig
+        :func:`simulate_rig6`'s keyword arguments (others are ignored).
 
     Returns
     -------
@@ -883,7 +961,6 @@ def replay_rig6(
         d=par["hunt_crossley_dissipation_s_per_m"],
         pad_radius=par["pad_radius_m"],
         pad_count=par["pad_count"],
-        stiffness=par["contact_stiffness_n_per_m"],
         table_response_hz=par["table_response_hz"],
         table_damping_ratio=par["table_damping_ratio"],
         h=h,
@@ -891,6 +968,7 @@ def replay_rig6(
         n_ticks=n,
         effects=effects,
         table_start=table_start,
+        miss=lateral_miss_m,
     )
     q_cmd = np.asarray(command_initial, dtype=float)
     qd_cmd = np.asarray(command_rate_initial, dtype=float)

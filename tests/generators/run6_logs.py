@@ -17,6 +17,15 @@ independent generator :mod:`tests.generators.rig6`, and nothing from
 - :func:`corrupt` breaks one thing of a record, and says the words an error
   line about it should contain; :func:`write_corrupt_run6` writes the broken
   pair (the JSON's own defects too), :func:`message_names` checks a message.
+- Hidden effects: ``generate_run6(..., hidden={effect: {parameter: value}})``
+  runs a rig that does what its scenario (the JSON) does not say, by the laws
+  of the library's effects or of effects outside it (``rig6.simulate_rig6``);
+  :func:`truth_record` says what was hidden. :func:`replay_error6` measures
+  how far the nominal model's replay of such a run is, per channel, in noise
+  levels (and what is left once the library's effects, linearized, are
+  projected off); :func:`size_effect6` scales an effect to a target by it;
+  :func:`draw_set6` draws a rig, 1-3 approaches and the hidden effects of a
+  set (null, single, pair, outside) and :func:`write_set6` writes it.
 
 Conventions of the format (all vectors in W, the target's frame, ``+z`` the
 docking axis towards the target): quaternions ``(qw, qx, qy, qz)``, Hamilton,
@@ -34,6 +43,7 @@ import csv
 import json
 import math
 from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -41,18 +51,31 @@ import numpy as np
 from tests.generators import rig6
 
 __all__ = [
+    "CHANNELS",
     "COLUMNS",
     "CORRUPTIONS",
     "FORMAT",
     "JSON_CORRUPTIONS",
+    "LIBRARY_EFFECTS",
+    "OUTSIDE_EFFECTS",
+    "SET_KINDS",
+    "TARGET_RATIO",
+    "Set6",
     "corrupt",
+    "draw_approach6",
+    "draw_rig6",
+    "draw_set6",
     "generate_run6",
     "message_names",
     "quaternion_of_rotation_vector",
+    "replay_error6",
     "rotation_vector_of_quaternion",
     "scenario",
+    "size_effect6",
+    "truth_record",
     "write_corrupt_run6",
     "write_run6",
+    "write_set6",
 ]
 
 #: The format's name, the JSON's ``"format"``.
@@ -395,6 +418,9 @@ def generate_run6(
     position_noise_m: float = 0.0,
     attitude_noise_rad: float = 0.0,
     duration_s: float | None = None,
+    hidden: Mapping | None = None,
+    table_start: str = "previous_tick",
+    hold_s: float = 0.05,
 ) -> dict[str, np.ndarray]:
     """A closed-loop record of ``scenario`` in the format's 33 columns.
 
@@ -441,24 +467,34 @@ def generate_run6(
     ``misalignment_deg = [roll, pitch]`` is the attitude ``Ry(pitch) Rx(roll)``
     (rig6's; Drake's roll-pitch-yaw with no yaw), the port starting
     ``initial_gap_m`` from the plate at the pad nearest to it.
+
+    ``hidden`` (``{effect: {parameter: value}}``, ``rig6.normalize_hidden``)
+    gives the rig what the scenario does not say: a library effect of
+    ``docs/run6-format.md`` ("The effects, as laws", e.g. ``{"sensor_crosstalk":
+    {"fz_to_fx": 0.01}}``) or one outside the library (``rig6.OUTSIDE_EFFECTS``,
+    e.g. ``{"mount_resonance": {"mount_frequency_hz": 30.0}}``); their laws are
+    ``rig6.simulate_rig6``'s. The rig computer, the scenario (the JSON) and
+    the measurement noise are unchanged; :func:`truth_record` says what was
+    hidden. ``table_start`` is ``rig6.simulate_rig6``'s (``"previous_tick"``,
+    the default, or ``"tick0"``: the table at the command less its ramp lag
+    when tick 0 reads it, as ``hybridtable`` reads the format). ``None`` or
+    ``{}`` and the default start give the record without them, bit for bit.
+    Without ``duration_s`` the record ends ``hold_s`` after the contact.
     """
-    kwargs, miss = _rig6_arguments(scenario)
-    out = rig6.simulate_rig6(**kwargs, duration_s=duration_s)
+    kwargs, miss, out = _closed_loop(scenario, hidden, table_start, duration_s, hold_s)
     rate = kwargs["sample_rate_hz"]
     h = 1.0 / rate
     n = len(out["t_s"])
-    n_delay = round(kwargs["sensor_delay_s"] * rate)
     q_des, q_act = out["q_des"], out["q_act"]
-    w_act, w_comp = out["wrench_act"], out["wrench_comp"]  # [moment; force] on the spacecraft
-    w_mea = np.zeros_like(w_act)
-    w_mea[n_delay:] = w_act[: n - n_delay]
+    w_comp = out["wrench_comp"]  # [moment; force] on the spacecraft
+    w_mea = out["wrench_mea"]  # the reading the rig computer used, before the noise
 
     # the twist after each tick's update
     mass = kwargs["mass_kg"]
     inertia = np.asarray(kwargs["inertia_kg_m2"], dtype=float)
     inertia = np.diag(inertia) if inertia.ndim == 1 else inertia
     inertia_inv = np.linalg.inv(inertia)
-    r_port = np.array([*kwargs["lateral_offset_m"], kwargs["port_distance_m"]], dtype=float)
+    r_port = out["port_position_model_m"]  # from the rig computer's centre of mass
     v = np.array([0.0, 0.0, kwargs["initial_velocity_m_per_s"]])
     v_port, omega = np.zeros((n, 3)), np.zeros((n, 3))
     for k in range(n):
@@ -497,6 +533,26 @@ def generate_run6(
             rows[pattern.format(axis)] = np.array(values[:, i], dtype=float)
     assert tuple(rows) == COLUMNS
     return rows
+
+
+def _closed_loop(
+    scenario: Mapping,
+    hidden: Mapping | None,
+    table_start: str,
+    duration_s: float | None,
+    hold_s: float = 0.05,
+) -> tuple[dict, np.ndarray, dict]:
+    """``rig6.simulate_rig6``'s arguments for ``scenario``, its lateral miss and its run."""
+    kwargs, miss = _rig6_arguments(scenario)
+    out = rig6.simulate_rig6(
+        **kwargs,
+        duration_s=duration_s,
+        hidden=hidden,
+        table_start=table_start,
+        lateral_miss_m=tuple(miss),
+        hold_s=hold_s,
+    )
+    return kwargs, miss, out
 
 
 # --- writing ------------------------------------------------------------------
@@ -552,6 +608,703 @@ def write_run6(
     document.update(json_fields or {})
     json_path.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
     return csv_path, json_path
+
+
+# --- hidden effects: sizing and sets of runs ------------------------------------
+
+#: The channels a replay predicts, in this order (the library's component names).
+CHANNELS: tuple[str, ...] = (
+    "fx_mea",
+    "fy_mea",
+    "fz_mea",
+    "mx_mea",
+    "my_mea",
+    "mz_mea",
+    "px_act",
+    "py_act",
+    "pz_act",
+    "thetax_act",
+    "thetay_act",
+    "thetaz_act",
+)
+
+#: The library's effects of a six-axis rig and the ones outside it (rig6's laws).
+LIBRARY_EFFECTS: tuple[str, ...] = tuple(rig6.LIBRARY_EFFECTS)
+OUTSIDE_EFFECTS: tuple[str, ...] = tuple(rig6.OUTSIDE_EFFECTS)
+
+#: The kinds of set :func:`draw_set6` draws.
+SET_KINDS: tuple[str, ...] = ("null", "single", "pair", "outside")
+
+#: Effects only a finite table (the table model at a finite frequency) shows.
+_NEEDS_TABLE = frozenset({"table_response", "table_damping", "lateral_lag"})
+
+#: Effects a replay cannot see (the rig computer's): drawn, not sized.
+_COMPUTER_EFFECTS = frozenset({"com_offset"})
+
+#: The sizing's target band: the nominal model's worst channel, RMS over the
+#: contact, in that channel's noise levels.
+TARGET_RATIO = (3.75, 6.5)
+_TOLERANCE = 1.2  # a ratio within this factor of the target is taken
+
+
+def truth_record(hidden: Mapping | None, **extra) -> dict:
+    """What a run or set hid, as JSON: every parameter of every effect.
+
+    Parameters
+    ----------
+    hidden : mapping or None
+        ``{effect: {parameter: value}}`` as ``generate_run6`` takes it.
+    **extra
+        Keys written over the record's (the set's kind, seed, sizing, ...).
+
+    Returns
+    -------
+    dict
+        ``{"hidden": {effect: {parameter: value}}, "library": [...], "outside":
+        [...]}``: ``rig6.normalize_hidden``'s values (every parameter), the
+        library's effects and the ones outside it by name, JSON-safe.
+    """
+    effects = rig6.normalize_hidden(hidden)
+    record = {
+        "hidden": effects,
+        "library": [name for name in effects if name in rig6.LIBRARY_EFFECTS],
+        "outside": [name for name in effects if name in rig6.OUTSIDE_EFFECTS],
+    }
+    return _json_safe(record | extra)
+
+
+def _channels(wrench_mea: np.ndarray, q_act: np.ndarray) -> np.ndarray:
+    """``(N, 12)`` in :data:`CHANNELS`' order from rig6's ``[m; f]`` and ``[p; theta]``."""
+    return np.column_stack([wrench_mea[:, 3:], wrench_mea[:, :3], q_act[:, :3], q_act[:, 3:]])
+
+
+def _noise_vector(noise: Mapping[str, float]) -> np.ndarray:
+    """Each channel's noise level (12,) from the four noise sizes."""
+    keys = ("force_noise_n", "moment_noise_n_m", "position_noise_m", "attitude_noise_rad")
+    sizes = [float(noise[k]) for k in keys]
+    if min(sizes) <= 0.0:
+        raise ValueError(f"noise: every size must be above 0, not {dict(noise)}")
+    return np.repeat(sizes, 3)
+
+
+def _contact_window(out: Mapping, model: Mapping, delay_ticks: int) -> slice:
+    """The contact as the library reads it: from the first tick a pad touches
+    (in the run or the replay) to the last, plus the sensor's delay and two
+    ticks (the reading of the last touch)."""
+    ticks = np.flatnonzero(out["in_contact"] | model["in_contact"])
+    if not len(ticks):
+        raise RuntimeError("no contact in the run")
+    return slice(int(ticks[0]), min(int(ticks[-1]) + delay_ticks + 3, len(out["in_contact"])))
+
+
+def _library_probes(kwargs: Mapping) -> list[dict]:
+    """Small library effects whose replays span (to first order) what the
+    library can change in a replay, for :func:`replay_error6`'s projection."""
+    h = 1.0 / kwargs["sample_rate_hz"]
+    k = kwargs["contact_stiffness_n_per_m"]
+    probes: list[dict] = [
+        {"stiffness_error": {"contact_stiffness_n_per_m": 1.01 * k}},
+        {"hunt_crossley": {"damping_factor_s_per_m": 0.05}},
+        {"friction_across_face": {"extra_friction_coefficient": 0.01}},
+        {"force_bias": {"bias_n": 1.0}},
+    ]
+    probes += [{"extra_delay": {"extra_delay_s": n * h}} for n in (1, 2, 4)]
+    probes += [{"sensor_filter": {"time_constant_s": n * h}} for n in (1, 4)]
+    for name in ("sensor_misalignment", "sensor_crosstalk", "table_misalignment"):
+        probes += [{name: {key: 1e-3}} for key in rig6.LIBRARY_EFFECTS[name]]
+    if not math.isinf(kwargs["table_response_hz"]):
+        probes.append({"table_response": {"table_response_ratio": 1.01}})
+        probes.append({"table_damping": {"table_damping_factor": 1.01}})
+    return probes
+
+
+def replay_error6(
+    scenario: Mapping,
+    hidden: Mapping | None,
+    noise: Mapping[str, float],
+    *,
+    table_start: str = "tick0",
+    hold_s: float = 0.05,
+    project: bool = False,
+) -> dict:
+    """How far the nominal model's replay is from a run with ``hidden``, per channel.
+
+    The run is the closed loop of :func:`generate_run6` without measurement
+    noise; the replay drives the scenario's own physical part (table, contact,
+    sensor: ``rig6.replay_rig6``) with the run's commands, as ``hybridtable
+    compare`` replays a record. Each of :data:`CHANNELS` (force, moment,
+    table position, rotation vector) is compared in its noise level
+    (``noise``: ``force_noise_n``, ``moment_noise_n_m``, ``position_noise_m``,
+    ``attitude_noise_rad``), RMS over the contact (from the first tick a pad
+    touches, in the run or the replay, to the last, plus the sensor's delay
+    and two ticks) and over the whole record.
+
+    With ``project``, the difference is also projected off the span of the
+    library's effects, linearized (small ones of each, replayed on the same
+    commands: stiffness, dissipation, friction, bias, delays of 1, 2, 4 ticks,
+    low passes of 1 and 4 ticks, each angle of a turned sensor and table, each
+    cross-talk coefficient, the table's frequency and damping), by least
+    squares over every channel of the contact: what is left is what no
+    combination of small library effects explains (a superset of what the
+    library can fit, so a lower bound of what it leaves, to first order).
+
+    Parameters
+    ----------
+    scenario : mapping
+        The run's scenario (:func:`scenario`'s form).
+    hidden : mapping or None
+        The effects the rig hides.
+    noise : mapping
+        ``force_noise_n`` (N), ``moment_noise_n_m`` (N m), ``position_noise_m``
+        (m), ``attitude_noise_rad`` (rad): each channel's noise level.
+    table_start, hold_s
+        As :func:`generate_run6`'s.
+    project : bool
+        Also project the difference off the library's effects.
+
+    Returns
+    -------
+    dict
+        ``ratios`` (channel -> RMS / noise over the contact), ``ratio`` and
+        ``worst`` (the largest and its channel), ``record_ratio`` (the largest
+        over the whole record), ``window`` (the contact's first and last tick),
+        ``ticks``;
+        with ``project`` also ``residual_ratios``, ``residual_ratio`` and
+        ``residual_worst``.
+    """
+    kwargs, miss, out = _closed_loop(scenario, hidden, table_start, None, hold_s)
+    scale = _noise_vector(noise)
+
+    def replay(probe):
+        return rig6.replay_rig6(
+            out["command_initial"],
+            out["command_rate_initial"],
+            out["q_des"],
+            out["qd_des"],
+            **kwargs,
+            hidden=probe,
+            table_start=table_start,
+            lateral_miss_m=tuple(miss),
+        )
+
+    base = replay(None)
+    model = _channels(base["wrench_mea"], base["q_act"])
+    diff = (_channels(out["wrench_mea"], out["q_act"]) - model) / scale
+    extra = rig6.normalize_hidden(hidden).get("extra_delay", {}).get("extra_delay_s", 0.0)
+    delay_ticks = round((kwargs["sensor_delay_s"] + extra) * kwargs["sample_rate_hz"])
+    window = _contact_window(out, base, delay_ticks)
+    ratios = np.sqrt(np.mean(diff[window] ** 2, axis=0))
+    worst = int(np.argmax(ratios))
+    result = {
+        "ratios": dict(zip(CHANNELS, ratios.tolist(), strict=True)),
+        "ratio": float(ratios[worst]),
+        "worst": CHANNELS[worst],
+        "record_ratio": float(np.sqrt(np.mean(diff**2, axis=0)).max()),
+        "window": [window.start, window.stop - 1],
+        "ticks": len(out["t_s"]),
+    }
+    if project:
+        columns = []
+        for probe in _library_probes(kwargs):
+            rep = replay(probe)
+            change = (_channels(rep["wrench_mea"], rep["q_act"]) - model) / scale
+            columns.append(change[window].ravel())
+        basis = np.column_stack(columns)
+        y = diff[window].ravel()
+        coef = np.linalg.lstsq(basis, y, rcond=None)[0]
+        left = (y - basis @ coef).reshape(-1, len(CHANNELS))
+        residual = np.sqrt(np.mean(left**2, axis=0))
+        worst = int(np.argmax(residual))
+        result["residual_ratios"] = dict(zip(CHANNELS, residual.tolist(), strict=True))
+        result["residual_ratio"] = float(residual[worst])
+        result["residual_worst"] = CHANNELS[worst]
+    return result
+
+
+def _unit(rng: np.random.Generator, n: int, weights=None) -> np.ndarray:
+    u = rng.standard_normal(n) * (1.0 if weights is None else np.asarray(weights))
+    return u / np.linalg.norm(u)
+
+
+def _family(name: str, rng: np.random.Generator, kwargs: Mapping, noise: Mapping, gap_m: float):
+    """How an effect grows with one scale ``s`` (its direction drawn here):
+    ``(make(s) -> parameters, s0, s_max, whole_ticks)``."""
+    h = 1.0 / kwargs["sample_rate_hz"]
+    sign = float(rng.choice([-1.0, 1.0]))
+    keys = tuple(rig6.LIBRARY_EFFECTS.get(name, rig6.OUTSIDE_EFFECTS.get(name, {})))
+
+    def along(u):
+        return lambda s: {key: float(s * x) for key, x in zip(keys, u, strict=True)}
+
+    if name == "stiffness_error":
+        k = kwargs["contact_stiffness_n_per_m"]
+        return (lambda s: {keys[0]: k * (1.0 + sign * s)}), 0.02, (0.8 if sign < 0 else 3.0), False
+    if name == "hunt_crossley":
+        return (lambda s: {keys[0]: s}), 0.1, 30.0, False
+    if name == "friction_across_face":
+        return (lambda s: {keys[0]: s}), 0.02, 1.0, False
+    if name == "extra_delay":
+        return (lambda n: {keys[0]: n * h}), 1, 25, True
+    if name == "sensor_filter":
+        return (lambda s: {keys[0]: s}), 2.0 * h, 0.1, False
+    if name == "force_bias":
+        return (lambda s: {keys[0]: sign * s}), 3.0 * noise["force_noise_n"], 1000.0, False
+    if name in ("sensor_misalignment", "table_misalignment"):
+        return along(_unit(rng, 3)), 1e-3, 0.3, False
+    if name == "sensor_crosstalk":  # the four channels alike in their noise levels
+        lever = noise["moment_noise_n_m"] / noise["force_noise_n"]
+        return along(_unit(rng, 4, [1.0, 1.0, lever, lever])), 1e-3, 0.5, False
+    if name in ("table_response", "table_damping"):
+        return (lambda s: {keys[0]: math.exp(sign * s)}), 0.02, 1.2, False
+    if name == "mount_resonance":
+        zeta = float(rng.uniform(0.1, 0.3))
+        return (lambda s: {keys[0]: 1.0 / s, keys[1]: zeta}), 1.0 / 150.0, 1.0 / 10.0, False
+    if name == "lateral_backlash":
+        axis = keys[int(rng.integers(2))]
+        return (lambda s: {axis: s}), 5.0 * noise["position_noise_m"], 5e-3, False
+    if name == "pad_proud":
+        index = int(rng.integers(kwargs["pad_count"]))
+        return (lambda s: {"proud_m": s, "pad_index": index}), 2e-5, 0.5 * gap_m, False
+    if name == "fz_quadratic_gain":  # s: the gain's change at the undamped peak force
+        peak = kwargs["initial_velocity_m_per_s"] * math.sqrt(
+            kwargs["contact_stiffness_n_per_m"] * kwargs["mass_kg"]
+        )
+        return (lambda s: {keys[0]: sign * s / peak}), 0.005, 0.3, False
+    if name == "lateral_lag":
+        return (lambda s: {keys[0]: math.exp(-s)}), 0.1, 1.6, False
+    raise ValueError(f"no sizing for {name!r}")
+
+
+def size_effect6(
+    scenario: Mapping,
+    name: str,
+    noise: Mapping[str, float],
+    target: float,
+    rng: np.random.Generator,
+    *,
+    table_start: str = "tick0",
+    hold_s: float = 0.05,
+    gap_m: float | None = None,
+) -> tuple[dict, dict] | None:
+    """An effect's parameters sized by the generator's own runs.
+
+    The effect's direction is drawn (a sign, a unit vector of its angles or
+    coefficients, a pad, an axis, a damping ratio) and its size ``s`` scaled
+    until :func:`replay_error6` on ``scenario`` puts the nominal model's worst
+    channel ``target`` noise levels off (RMS over the contact), within a factor
+    1.2; an effect outside the library is scaled on what is left after the
+    projection off the library's effects, so that ``target`` is what no library
+    effect explains. A delay takes whole ticks: the first whose error reaches
+    ``target`` or the one before it, whichever is nearer (in ratio).
+    ``gap_m`` bounds a proud pad (half of it; default the scenario's gap).
+
+    Parameters
+    ----------
+    scenario : mapping
+        The run the effect is sized on.
+    name : str
+        An effect of ``rig6.LIBRARY_EFFECTS`` (not ``com_offset``: a replay
+        does not see it) or ``rig6.OUTSIDE_EFFECTS``.
+    noise : mapping
+        The rig's noise levels (:func:`replay_error6`).
+    target : float
+        The worst channel's RMS error over the contact, in noise levels.
+    rng : numpy.random.Generator
+        Draws the effect's direction.
+    table_start, hold_s
+        As :func:`generate_run6`'s.
+    gap_m : float, optional
+        The smallest initial gap of the set's runs (m).
+
+    Returns
+    -------
+    tuple or None
+        ``(parameters, report)``, the report with ``ratio`` (the sized figure),
+        ``nominal_ratio``, ``worst``, ``target`` and every try; ``None`` when
+        the effect cannot reach the target on this scenario within its range
+        (e.g. a lateral effect on a run that barely moves sideways).
+    """
+    kwargs, _ = _rig6_arguments(scenario)
+    if gap_m is None:
+        gap_m = kwargs["initial_gap_m"]
+    make, s, s_max, whole = _family(name, rng, kwargs, noise, gap_m)
+    outside = name in rig6.OUTSIDE_EFFECTS
+    tried: list[dict] = []
+
+    def evaluate(size):
+        err = replay_error6(
+            scenario,
+            {name: make(size)},
+            noise,
+            table_start=table_start,
+            hold_s=hold_s,
+            project=outside,
+        )
+        ratio = err["residual_ratio"] if outside else err["ratio"]
+        worst = err["residual_worst"] if outside else err["worst"]
+        tried.append(
+            {
+                "s": size,
+                "ratio": ratio,
+                "nominal_ratio": err["ratio"],
+                "worst": worst,
+                "record_ratio": err["record_ratio"],
+            }
+        )
+        return ratio
+
+    def report(size):
+        best = next(t for t in tried if t["s"] == size)
+        return make(size), {**best, "target": target, "tried": tried}
+
+    if whole:
+        previous = None
+        for n in range(1, int(s_max) + 1):
+            r = evaluate(n)
+            if r >= target:
+                choices = [(n, r)]
+                if previous is not None and previous[1] >= 3.0:
+                    choices.append(previous)
+                return report(min(choices, key=lambda c: abs(math.log(c[1] / target)))[0])
+            previous = (n, r)
+        return None
+    for _ in range(12):
+        r = evaluate(s)
+        if r > 0.0 and abs(math.log(r / target)) < math.log(_TOLERANCE):
+            return report(s)
+        if r <= 0.0:
+            s_new = 10.0 * s
+        else:
+            slope = 1.0
+            pts = [(t["s"], t["ratio"]) for t in tried if t["ratio"] > 0.0]
+            if len(pts) >= 2 and pts[-1][0] != pts[-2][0]:
+                slope = math.log(pts[-1][1] / pts[-2][1]) / math.log(pts[-1][0] / pts[-2][0])
+                slope = min(max(slope, 0.3), 3.0)
+            s_new = s * (target / r) ** (1.0 / slope)
+        s_new = min(max(s_new, s / 30.0), 30.0 * s, s_max)
+        if s_new == s:  # at the range's end, short of the target
+            return None
+        s = s_new
+    return None
+
+
+def _log_uniform(rng: np.random.Generator, low: float, high: float) -> float:
+    return float(math.exp(rng.uniform(math.log(low), math.log(high))))
+
+
+def draw_rig6(rng: np.random.Generator, *, finite_table: bool = False) -> dict:
+    """A rig drawn within sensible ranges: ``{"scenario": ..., "noise": ...}``.
+
+    The scenario (no approach yet) of a rig6 can run: the sample rate 500, 1000
+    or 2000 Hz; a sensor delay of 1-8 ms in whole ticks; the compensator none,
+    SDC, MDC or SDMDC (lead: the delay); mass 800-8000 kg and contact stiffness
+    3e4-3e5 N/m (log-uniform) with a contact of 0.15-0.8 s; radii of gyration
+    0.6-1.2 m (a real body's inertia); the port 1-2 m ahead of the centre of
+    mass and up to 20 mm off its axis; 3, 4, 6 or 8 pads of 5-20 mm on a
+    0.15-0.4 m ring; no dissipation or up to 0.5 s/m; the table model at
+    15-40 Hz with damping 0.6-1 (or the ideal table, one rig in seven, unless
+    ``finite_table``). Noise: F/T 0.5-3 N and 0.1-0.3 m times that in N m,
+    encoders 1-10 um and 0.5-5 urad (log-uniform).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The draws.
+    finite_table : bool
+        Never the ideal table (for an effect of the table's response).
+
+    Returns
+    -------
+    dict
+        ``scenario`` (its ``[approach]`` the nominal's) and ``noise``
+        (:func:`replay_error6`'s keys).
+    """
+    rate = float(rng.choice([500.0, 1000.0, 2000.0], p=[0.25, 0.5, 0.25]))
+    n_delay = max(1, round(rng.uniform(1e-3, 8e-3) * rate))
+    while True:
+        mass = _log_uniform(rng, 800.0, 8000.0)
+        k = _log_uniform(rng, 3e4, 3e5)
+        if 0.15 <= math.pi * math.sqrt(mass / k) <= 0.8:
+            break
+    while True:
+        inertia = mass * rng.uniform(0.6, 1.2, size=3) ** 2
+        if all(inertia.sum() - 2 * i >= 0.0 for i in inertia):  # I1 + I2 >= I3, each
+            break
+    ideal = not finite_table and rng.random() < 1.0 / 7.0
+    force_noise = float(rng.uniform(0.5, 3.0))
+    scen = scenario(
+        spacecraft={
+            "contact_frequency_hz": None,
+            "mass_kg": mass,
+            "inertia_kg_m2": inertia.tolist(),
+            "port_distance_m": float(rng.uniform(1.0, 2.0)),
+            "lateral_offset_m": rng.uniform(-0.02, 0.02, size=2).tolist(),
+        },
+        contact={
+            "contact_stiffness_n_per_m": k,
+            "contact_dissipation_s_per_m": 0.0
+            if rng.random() < 0.5
+            else float(rng.uniform(0.05, 0.5)),
+            "pad_count": int(rng.choice([3, 4, 6, 8])),
+            "ring_radius_m": float(rng.uniform(0.15, 0.4)),
+            "pad_radius_m": float(rng.uniform(0.005, 0.02)),
+        },
+        rig={"sample_rate_hz": rate, "sensor_delay_s": n_delay / rate},
+        table={
+            "response_hz": "inf" if ideal else float(rng.uniform(15.0, 40.0)),
+            "damping_ratio": float(rng.uniform(0.6, 1.0)),
+        },
+        compensator={"name": str(rng.choice(rig6.COMPENSATORS))},
+    )
+    noise = {
+        "force_noise_n": force_noise,
+        "moment_noise_n_m": force_noise * float(rng.uniform(0.1, 0.3)),
+        "position_noise_m": _log_uniform(rng, 1e-6, 1e-5),
+        "attitude_noise_rad": _log_uniform(rng, 5e-7, 5e-6),
+    }
+    return {"scenario": scen, "noise": noise}
+
+
+def draw_approach6(rng: np.random.Generator, rate_hz: float) -> dict:
+    """An approach (the scenario's ``[approach]``): 0.04-0.15 m/s, roll and pitch
+    within 3 deg (at least 0.5 deg of tilt: the ring touches on one side and
+    the body turns, so the pads slide), a lateral miss within 30 mm, and a gap
+    of 2-6 mm, at least 100 ticks of free flight.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The draws.
+    rate_hz : float
+        The rig computer's sample rate (Hz).
+
+    Returns
+    -------
+    dict
+        The ``[approach]`` section.
+    """
+    v0 = float(rng.uniform(0.04, 0.15))
+    while True:
+        tilt = rng.uniform(-3.0, 3.0, size=2)
+        if np.hypot(*tilt) >= 0.5:
+            break
+    return {
+        "initial_velocity_m_per_s": v0,
+        "initial_gap_m": max(float(rng.uniform(2e-3, 6e-3)), 100.0 * v0 / rate_hz),
+        "misalignment_deg": tilt.tolist(),
+        "angular_rate_rad_per_s": [0.0, 0.0, 0.0],
+        "lateral_miss_m": rng.uniform(-0.03, 0.03, size=2).tolist(),
+    }
+
+
+def _pick_pair(rng: np.random.Generator) -> list[str]:
+    """Two library effects acting on different parts of the rig."""
+    pairs = [
+        (a, b)
+        for i, a in enumerate(LIBRARY_EFFECTS)
+        for b in LIBRARY_EFFECTS[i + 1 :]
+        if rig6.EFFECT_PARTS[a] != rig6.EFFECT_PARTS[b]
+    ]
+    return list(pairs[int(rng.integers(len(pairs)))])
+
+
+def _scale_noise(noise: dict, factor: float, report: dict) -> None:
+    """Every noise level times ``factor``, and a sizing report's figures over it
+    (a replay's error in noise levels is inversely proportional to the noise)."""
+    for key in noise:
+        noise[key] *= factor
+    report["noise_scaled_by"] = factor
+    for entry in [report, *report["tried"]]:
+        for key in ("ratio", "nominal_ratio", "record_ratio"):
+            entry[key] /= factor
+
+
+@dataclass
+class Set6:
+    """A set: 1-3 runs of one rig at different approaches, and what it hid.
+
+    ``runs`` holds ``(scenario, rows)`` pairs (the JSON's scenario, the CSV's
+    columns); ``truth`` is JSON (:func:`truth_record` with the set's kind,
+    seed, rig, noise, sizing and each run's error figures).
+    """
+
+    kind: str
+    effects: list[str]
+    hidden: dict
+    runs: list[tuple[dict, dict]]
+    truth: dict
+
+
+def draw_set6(
+    seed: int,
+    kind: str,
+    effects: list[str] | tuple[str, ...] | None = None,
+    *,
+    n_runs: int | None = None,
+    table_start: str = "tick0",
+    max_attempts: int = 8,
+) -> Set6:
+    """Draw a rig, its approaches and its hidden effects; size and run them.
+
+    ``kind`` is one of :data:`SET_KINDS`: ``"null"`` hides nothing;
+    ``"single"`` one library effect, ``"pair"`` two on different parts of the
+    rig (``rig6.EFFECT_PARTS``), ``"outside"`` one of ``rig6.OUTSIDE_EFFECTS``:
+    ``effects`` names them (default: drawn). Each effect is sized alone on the
+    set's first run (:func:`size_effect6`, the target drawn in
+    :data:`TARGET_RATIO`), ``com_offset`` drawn (2-10 cm; a replay cannot see
+    it). A delay is sized first: when one tick already puts the model further
+    off than the target, the rig's noise levels are raised to bring it there. A rig on which an effect cannot reach its target is drawn again (up
+    to ``max_attempts``, then ``RuntimeError``). ``n_runs`` (default 1, 2 or 3,
+    weights 1:2:2) runs of the rig at different approaches
+    (:func:`draw_approach6`) are generated with ``table_start`` and noise
+    seeded from ``seed``; each record ends 100 ticks after its contact.
+
+    Parameters
+    ----------
+    seed : int
+        Seeds every draw and the runs' noise: the same seed, the same set.
+    kind : str
+        ``"null"``, ``"single"``, ``"pair"`` or ``"outside"``.
+    effects : list of str, optional
+        The effects to hide (default: drawn for the kind).
+    n_runs : int, optional
+        Runs in the set (default: drawn).
+    table_start : str
+        As :func:`generate_run6`'s (default ``"tick0"``, the library's reading).
+    max_attempts : int
+        Rigs drawn before giving up.
+
+    Returns
+    -------
+    Set6
+        The runs, the hidden effects and the truth record.
+
+    Raises
+    ------
+    ValueError
+        An unknown kind, or effects that do not fit it.
+    RuntimeError
+        No rig of ``max_attempts`` could take the effects at their targets.
+    """
+    if kind not in SET_KINDS:
+        raise ValueError(f"kind {kind!r}: one of {SET_KINDS}")
+    rng = np.random.default_rng(seed)
+    if effects is None:
+        if kind == "single":
+            effects = [str(rng.choice(LIBRARY_EFFECTS))]
+        elif kind == "pair":
+            effects = _pick_pair(rng)
+        elif kind == "outside":
+            effects = [str(rng.choice(OUTSIDE_EFFECTS))]
+        else:
+            effects = []
+    effects = list(effects)
+    want = {"null": 0, "single": 1, "pair": 2, "outside": 1}[kind]
+    pool = OUTSIDE_EFFECTS if kind == "outside" else LIBRARY_EFFECTS
+    if len(effects) != want or any(e not in pool for e in effects):
+        raise ValueError(f"a {kind} set hides {want} of {pool}, not {effects}")
+    if kind == "pair" and rig6.EFFECT_PARTS[effects[0]] == rig6.EFFECT_PARTS[effects[1]]:
+        raise ValueError(f"a pair acts on two parts of the rig, not {effects}")
+    if n_runs is None:
+        n_runs = int(rng.choice([1, 2, 3], p=[0.2, 0.4, 0.4]))
+    finite = any(e in _NEEDS_TABLE for e in effects)
+    failures = []
+    for attempt in range(1, max_attempts + 1):
+        rig = draw_rig6(rng, finite_table=finite)
+        rate = rig["scenario"]["rig"]["sample_rate_hz"]
+        hold_s = 100.0 / rate
+        scens = [
+            copy.deepcopy(rig["scenario"]) | {"approach": draw_approach6(rng, rate)}
+            for _ in range(n_runs)
+        ]
+        gap = min(s["approach"]["initial_gap_m"] for s in scens)
+        hidden, sizing, targets = {}, {}, {}
+        for name in sorted(effects, key=lambda e: e != "extra_delay"):  # the delay first
+            if name in _COMPUTER_EFFECTS:
+                offset = rng.uniform(0.02, 0.1) * _unit(rng, 3)
+                keys = rig6.LIBRARY_EFFECTS[name]
+                hidden[name] = {k: float(x) for k, x in zip(keys, offset, strict=True)}
+                continue
+            targets[name] = float(rng.uniform(*TARGET_RATIO))
+            sized = size_effect6(
+                scens[0],
+                name,
+                rig["noise"],
+                targets[name],
+                rng,
+                table_start=table_start,
+                hold_s=hold_s,
+                gap_m=gap,
+            )
+            if sized is None:
+                failures.append({"attempt": attempt, "effect": name})
+                break
+            hidden[name], sizing[name] = sized
+            excess = sizing[name]["ratio"] / targets[name]
+            if excess > _TOLERANCE:  # a whole tick of delay is already more: a noisier rig
+                _scale_noise(rig["noise"], excess, sizing[name])
+        else:
+            break
+    else:
+        raise RuntimeError(f"seed {seed}: {effects} could not be sized on {max_attempts} rigs")
+    runs, errors = [], []
+    for i, scen in enumerate(scens):
+        rows = generate_run6(
+            scen,
+            seed=seed * 10 + i,
+            **rig["noise"],
+            hidden=hidden,
+            table_start=table_start,
+            hold_s=hold_s,
+        )
+        runs.append((scen, rows))
+        if hidden and set(hidden) - _COMPUTER_EFFECTS:
+            err = replay_error6(scen, hidden, rig["noise"], table_start=table_start, hold_s=hold_s)
+            errors.append({k: err[k] for k in ("ratio", "worst", "record_ratio", "ratios")})
+    truth = truth_record(
+        hidden,
+        kind=kind,
+        seed=seed,
+        effects=effects,
+        noise=rig["noise"],
+        targets=targets,
+        sizing=sizing,
+        run_errors=errors,
+        rig=rig["scenario"],
+        approaches=[s["approach"] for s in scens],
+        attempts=attempt,
+        failures=failures,
+        table_start=table_start,
+    )
+    return Set6(kind=kind, effects=effects, hidden=hidden, runs=runs, truth=truth)
+
+
+def write_set6(folder: Path | str, set6: Set6, *, truth: bool = False) -> list[Path]:
+    """Write a set's runs as ``run1.csv``/``run1.json``, ``run2...`` into ``folder``.
+
+    Parameters
+    ----------
+    folder : path
+        Made if missing (:func:`write_run6`).
+    set6 : Set6
+        The set.
+    truth : bool
+        Also write ``truth.json`` (the set's truth record) beside the runs; a
+        reader of the format skips it.
+
+    Returns
+    -------
+    list of Path
+        The CSV files.
+    """
+    paths = []
+    for i, (scen, rows) in enumerate(set6.runs, 1):
+        paths.append(write_run6(folder, f"run{i}", scen, rows)[0])
+    if truth:
+        (Path(folder) / "truth.json").write_text(
+            json.dumps(set6.truth, indent=2) + "\n", encoding="utf-8"
+        )
+    return paths
 
 
 # --- bad runs -----------------------------------------------------------------
