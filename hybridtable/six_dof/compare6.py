@@ -176,8 +176,9 @@ def _length_m(run: Run6) -> float:
 
 def noise_level(run: Run6, block: str) -> np.ndarray:
     """Each column's noise std of a measured block over the ticks out of
-    contact (before the touch and after the release, at least 20 of them),
-    by the 1-D comparison's estimators: a wrench's pooled std about each
+    contact (:func:`_quiet`: before the touch, and after the release unless
+    there are enough before it; at least 20 of them), by the 1-D comparison's
+    estimators: a wrench's pooled std about each
     quiet stretch's mean (:func:`~hybridtable.measurement.stats.force_noise_rms`),
     a pose's from third differences
     (:func:`~hybridtable.measurement.stats.position_noise_rms`); with fewer
