@@ -67,14 +67,15 @@ from hybridtable.loop.simulation import SimulationResult
 from hybridtable.measurement.noise_model import is_coloured, run_noise, third_difference_gain
 from hybridtable.measurement.phases import (
     PHASES,
+    QUIET_GUARD_TICKS,
     contact_duration,
     contact_mask,
     cor_from_record,
     delayed_labels,
-    dilate,
     loop_energy,
     phase_breakdown,
     phase_labels,
+    quiet_ticks,
     record_cor,
     settle_ticks,
 )
@@ -319,19 +320,13 @@ def compare_run(
     # stretch's mean, the position's third differences (blind to the table's
     # curving motion), corrected for the noise's colour where it has one.
     on = contact_mask(run.p_act_m)
-    guard = 2
-    quiet_phys = ~dilate(on, guard, guard)
-    quiet_f = delayed_labels(quiet_phys.astype(int), m).astype(bool)
-    noise_f, offset_f, n_f = force_noise_rms(run.f_mea_n, quiet_f)
     table = rep.params.plant.table
-    settle = settle_ticks(table.settling_time_s, h, len(run.p_act_m))
-    settle = max(settle, guard)
-    quiet_p = ~dilate(on, guard, settle)
-    quiet_p[: min(settle, len(quiet_p))] = False  # start-up transient of the table
+    settle = max(settle_ticks(table.settling_time_s, h, len(run.p_act_m)), QUIET_GUARD_TICKS)
+    quiet_f, quiet_p, quiet_short = quiet_ticks(on, m, settle)
+    noise_f, offset_f, n_f = force_noise_rms(run.f_mea_n, quiet_f)
     noise_p, n_p = position_noise_rms(run.p_act_m, quiet_p)
     if n_p < 8:
-        quiet_p = ~dilate(on, guard, guard)
-        noise_p, n_p = position_noise_rms(run.p_act_m, quiet_p)
+        noise_p, n_p = position_noise_rms(run.p_act_m, quiet_short)
         notes.append("p_act noise from short quiet segments (table transients not skipped)")
     if n_f < 8:
         notes.append(f"f_mea noise RMS from only {n_f} no-contact ticks")

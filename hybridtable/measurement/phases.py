@@ -22,6 +22,8 @@ __all__ = [
     "true_runs",
     "settle_ticks",
     "dilate",
+    "QUIET_GUARD_TICKS",
+    "quiet_ticks",
 ]
 
 
@@ -112,6 +114,26 @@ def phase_breakdown(residual: np.ndarray, labels: np.ndarray) -> dict[str, dict[
             "time_fraction": n / len(e),
         }
     return out
+
+
+#: Ticks kept off each side of a contact when the noise is read out of it.
+QUIET_GUARD_TICKS = 2
+
+
+def quiet_ticks(
+    on: np.ndarray, delay_ticks: int, settle: int, guard: int = QUIET_GUARD_TICKS
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The ticks out of the contact ``on`` whose readings hold noise alone:
+    ``(force, position, position_short)``. The force's: ``guard`` ticks off
+    the contact each side, delayed by the sensor's ``delay_ticks``; the
+    position's: ``guard`` before and ``settle`` (the table's settling) after,
+    without the record's first ``settle`` ticks (the table's start-up); the
+    position's of a record too short for that: ``guard`` each side."""
+    force = delayed_labels((~dilate(on, guard, guard)).astype(int), delay_ticks).astype(bool)
+    settle = max(settle, guard)
+    position = ~dilate(on, guard, settle)
+    position[: min(settle, len(position))] = False
+    return force, position, ~dilate(on, guard, guard)
 
 
 def dilate(mask: np.ndarray, before: int, after: int) -> np.ndarray:

@@ -39,7 +39,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hybridtable.measurement.audit_findings import RELATIVE_TOLERANCE, SIGNIFICANCE, differs
-from hybridtable.six_dof.pose import rotation_exp
 from hybridtable.six_dof.run6 import Run6
 from hybridtable.stewart.geometry import skew
 
@@ -162,7 +161,7 @@ def _equations(run: Run6) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarra
     wrench: ``(A_t, b_t, A_r, b_r)``, each 3 rows a tick, 10 unknowns
     ``[mu, c (3), inertia (6)]``."""
     h = run.params.sample_period_s
-    R = np.array([rotation_exp(t) for t in run.pose("des")[:, 3:]])
+    R = run.rotations("des")
     omega = run.blocks["w_des"]
     v = run.blocks["v_des"]
     w = run.wrench("comp")

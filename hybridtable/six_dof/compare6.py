@@ -28,17 +28,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hybridtable.measurement.phases import (
-    MERGE_GAP_TICKS,
-    delayed_labels,
-    dilate,
-    settle_ticks,
-    true_runs,
-)
+from hybridtable.measurement.phases import contact_mask, quiet_ticks, settle_ticks
 from hybridtable.measurement.stats import force_noise_rms, position_noise_rms
 from hybridtable.six_dof import drogue
 from hybridtable.six_dof.physics6 import DockingPhysics
-from hybridtable.six_dof.pose import rotation_exp, rotation_vectors_of_quaternions
+from hybridtable.six_dof.pose import rotation_vectors_of_quaternions
 from hybridtable.six_dof.replay6 import replay_run6
 from hybridtable.six_dof.run6 import Run6, noise_levels, run6_of_docking
 from hybridtable.six_dof.simulation import peak_force_n, simulate6
@@ -224,27 +218,20 @@ _QUIET_TICKS = 20
 
 def _touching(run: Run6) -> np.ndarray:
     """The ticks the devices touch at the measured pose, by the contact's
-    geometry (the 1-D comparison's ``p_act > 0``): a pad below the plate's
-    face, the probe's head into the drogue's smooth surface; gaps of a few
-    ticks inside a contact filled (the encoders' noise at its edges)."""
+    geometry: the 1-D comparison's :func:`~hybridtable.measurement.phases.contact_mask`
+    of the deepest penetration (a pad below the plate's face, the probe's
+    head into the drogue's smooth surface)."""
     c = run.params.contact
     q = run.pose("act")
-    R = np.array([rotation_exp(t) for t in q[:, 3:]])
+    R = run.rotations("act")
     if c.is_cone:
         centres = q[:, :3] + R @ c.probe_centre_m
-        on = np.array([drogue.wall_depth_m(c, x) > 0.0 for x in centres])
+        depth = np.array([drogue.wall_depth_m(c, x) for x in centres])
     else:
-        depth = q[:, 2:3] + np.einsum("nj,ij->ni", R[:, 2, :], c.pad_centres_m) + c.pad_radius_m
-        on = np.any(depth > 0.0, axis=1)
-    runs = true_runs(on)
-    for (_, b), (a, _) in zip(runs[:-1], runs[1:], strict=True):
-        if a - b - 1 <= MERGE_GAP_TICKS:
-            on[b + 1 : a] = True
-    return on
+        pads = q[:, 2:3] + np.einsum("nj,ij->ni", R[:, 2, :], c.pad_centres_m) + c.pad_radius_m
+        depth = np.max(pads, axis=1)
+    return contact_mask(depth)
 
-
-#: Ticks kept off each side of a contact (the 1-D comparison's guard).
-_GUARD_TICKS = 2
 
 #: Quiet ticks before the first touch enough for the wrench's noise alone
 #: (fewer: every quiet stretch, as the 1-D comparison).
@@ -252,28 +239,21 @@ _BEFORE_TICKS = 50
 
 
 def _quiet(run: Run6) -> tuple[np.ndarray, np.ndarray]:
-    """The ticks out of contact, as the 1-D comparison takes them: for the
-    wrench, the touching ticks (:func:`_touching`) widened by two each side
-    and delayed by the sensor's delay; for the pose, widened by two before
-    and the table's settling time after, without the table's first settling
-    time (a record too short for that: two after). With at least
-    :data:`_BEFORE_TICKS` quiet ticks before the first touch the wrench's are
-    those alone: the sensor has seen no contact yet, while after the release
-    whatever dynamics it has (a mount's ringing, a filter's tail) would pass
-    for noise and hide itself."""
-    on = _touching(run)
+    """The ticks out of contact (:func:`_touching`), as the 1-D comparison
+    takes them (:func:`~hybridtable.measurement.phases.quiet_ticks`): the
+    wrench's and the pose's (the short one if fewer than
+    :data:`_QUIET_TICKS`). With at least :data:`_BEFORE_TICKS` quiet ticks
+    before the first touch the wrench's are those alone: the sensor has seen
+    no contact yet, while after the release whatever dynamics it has (a
+    mount's ringing, a filter's tail) would pass for noise and hide itself."""
     p = run.params
-    wrench = delayed_labels((~dilate(on, _GUARD_TICKS, _GUARD_TICKS)).astype(int), p.delay_ticks)
-    first = int(np.argmax(wrench == 0)) if np.any(wrench == 0) else run.n
-    if first >= _BEFORE_TICKS:
-        wrench[first:] = 0
     table = TableParams(p.table_response_hz, p.table_damping_ratio)
-    settle = max(settle_ticks(table.settling_time_s, p.sample_period_s, run.n), _GUARD_TICKS)
-    pose = ~dilate(on, _GUARD_TICKS, settle)
-    pose[: min(settle, run.n)] = False
-    if np.count_nonzero(pose) < _QUIET_TICKS:
-        pose = ~dilate(on, _GUARD_TICKS, _GUARD_TICKS)
-    return wrench.astype(bool), pose
+    settle = settle_ticks(table.settling_time_s, p.sample_period_s, run.n)
+    wrench, pose, short = quiet_ticks(_touching(run), p.delay_ticks, settle)
+    first = int(np.argmin(wrench)) if not np.all(wrench) else run.n
+    if first >= _BEFORE_TICKS:
+        wrench[first:] = False
+    return wrench, pose if np.count_nonzero(pose) >= _QUIET_TICKS else short
 
 
 def measured_block(run: Run6, block: str) -> np.ndarray:
@@ -334,11 +314,15 @@ def _replayed(run: Run6, physics: DockingPhysics | None) -> dict[str, np.ndarray
     }
 
 
-def replay_residuals(run: Run6, physics: DockingPhysics | None = None) -> np.ndarray:
-    """Every component's replay residual at every tick, in its noise levels,
-    one component after the other (:data:`COMPONENTS`; the fit's residual)."""
+def replay_residuals(
+    run: Run6, physics: DockingPhysics | None = None, levels: dict | None = None
+) -> np.ndarray:
+    """Every component's replay residual at every tick, in its noise levels
+    (``levels``: the run's :func:`noise_levels_of`, found once by a caller
+    that replays it many times), one component after the other
+    (:data:`COMPONENTS`; the fit's residual)."""
     predicted = _replayed(run, physics)
-    levels = noise_levels_of(run)
+    levels = noise_levels_of(run) if levels is None else levels
     out = []
     for _, block, j, _ in COMPONENTS:
         sigma = float(levels[block][j])

@@ -29,7 +29,7 @@ from hybridtable.effects.fitting import (
 )
 from hybridtable.effects.selection import Block
 from hybridtable.errors import ParameterError
-from hybridtable.six_dof.compare6 import COMPONENTS, replay_residuals
+from hybridtable.six_dof.compare6 import COMPONENTS, noise_levels_of, replay_residuals
 from hybridtable.six_dof.physics6 import DockingPhysics, physics_with, rig_scale
 from hybridtable.six_dof.run6 import Run6
 
@@ -149,17 +149,20 @@ def fit_runs6(
         (e.name, p) for e, _ in effects for p in e.parameters if p.name not in given[e.name]
     )
     evaluations = 0
+    levels = [noise_levels_of(r) for r in runs]  # the runs' own: once, not each replay
 
     def residual(values: Values) -> np.ndarray:
         nonlocal evaluations
         evaluations += 1
         try:
             physics = physics_with([(by_name[n], values[n]) for n in names], scale)
-            return np.concatenate([replay_residuals(r, physics) for r in runs])
+            return np.concatenate(
+                [replay_residuals(r, physics, n) for r, n in zip(runs, levels, strict=True)]
+            )
         except ParameterError as err:  # not a failed polish: the effect cannot act here
             raise _CannotAct(str(err)) from None
 
-    r0 = np.concatenate([replay_residuals(r) for r in runs])
+    r0 = np.concatenate([replay_residuals(r, None, n) for r, n in zip(runs, levels, strict=True)])
     space = Coordinates(free, scale, origin)
     starts = [start] if start else []
     try:

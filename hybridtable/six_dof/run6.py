@@ -144,6 +144,11 @@ class Run6:
         q = self.blocks[f"q_{which}"]
         return np.hstack([self.blocks[f"p_{which}"], rotation_vectors_of_quaternions(q)])
 
+    def rotations(self, which: str) -> np.ndarray:
+        """The attitudes of ``"des"`` or ``"act"`` as rotation matrices (N, 3, 3;
+        port frame to W)."""
+        return np.array([rotation_exp(t) for t in self.pose(which)[:, 3:]])
+
     def wrench(self, which: str) -> np.ndarray:
         """``[moment; force]`` (N, 6; N m, N) of ``"mea"`` or ``"comp"``: the
         loop's wrench layout."""
@@ -155,7 +160,7 @@ class Run6:
         model's body (its centre of mass's velocity and body rate from the
         port's twist and attitude), the contact as the sensor read it."""
         body = self.params.spacecraft
-        R = np.array([rotation_exp(t) for t in self.pose("des")[:, 3:]])
+        R = self.rotations("des")
         omega = self.blocks["w_des"]
         arm = R @ body.port_position_m
         v_com = self.blocks["v_des"] - np.cross(omega, arm)
