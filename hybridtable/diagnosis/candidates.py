@@ -18,7 +18,6 @@ from hybridtable.diagnosis.fit import (
     heldout,
     model_spec,
     pooled_error,
-    starts_for,
 )
 from hybridtable.diagnosis.goodness import FALSE_ALARM_RATE, GoodnessOfFit
 from hybridtable.diagnosis.settings import (
@@ -266,7 +265,7 @@ def evaluate_candidate(
     """
     names = [*base_fit.effects, effect.name]
     start = {**base_fit.values, effect.name: effect.start(ev.scale)}
-    starts = starts_for(effect, ev.scale, residuals)
+    starts = effect.fit_starts(ev.scale, residuals)
     if base_fit.effects:
         # The new effect alone on the fixed base first; jointly only if it helps.
         fit = fit_effects(ev, names, start=start, fixed=base_fit.values, starts=starts)

@@ -36,7 +36,6 @@ __all__ = [
     "HeldOut",
     "heldout",
     "model_spec",
-    "starts_for",
     "residual_probe",
 ]
 
@@ -301,7 +300,7 @@ def fit_given(
             residuals = residual_probe(data, fit_effects(ev, []).evaluations)
             for e, _ in given:
                 if e.name in free:
-                    starts += starts_for(e, scale, residuals)
+                    starts += e.fit_starts(scale, residuals)
         fit = fit_effects(ev, names, fixed=fixed, starts=starts)
     std = (
         parameter_std(ev, fit, fixed)
@@ -323,13 +322,6 @@ def parameter_std(
     residual = _residual(ev, fit.effects, fit.indices, fit.stage, {})
     r0 = np.concatenate([w for i in fit.indices for w in fit.evaluations[i].whitened.values()])
     return standard_errors(residual, space, r0, step=1e-2)
-
-
-def starts_for(effect: Effect, scale: RigScale, residuals) -> list[dict[str, dict[str, float]]]:
-    """Extra starting points of ``effect``'s fit (its ``starts``, from the residuals), as fit starts."""
-    if effect.starts is None:
-        return []
-    return [{effect.name: s} for s in effect.starts(scale, residuals)]
 
 
 def residual_probe(data: Sequence[RunData], evaluations: Mapping[int, Evaluation]):

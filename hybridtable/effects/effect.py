@@ -295,6 +295,15 @@ class Effect:
     def start(self, scale: RigScale) -> dict[str, float]:
         return {p.name: p.start(scale) for p in self.parameters}
 
+    def fit_starts(
+        self, scale: RigScale, residuals: Sequence[Mapping[str, np.ndarray]]
+    ) -> list[dict[str, dict[str, float]]]:
+        """Extra starting points of this effect's fit (its :attr:`starts`, from
+        the nominal residuals ``residuals``), as fit starts ``{name: values}``."""
+        if self.starts is None:
+            return []
+        return [{self.name: s} for s in self.starts(scale, residuals)]
+
     def null_values(self, scale: RigScale) -> dict[str, float] | None:
         """Parameter values at which the effect vanishes (None if it has none)."""
         out = {p.name: p.null_value(scale) for p in self.parameters}

@@ -137,7 +137,8 @@ class ModelSpec:
         as none).
     sensor : mapping
         ``extra_delay_s`` (added to the run's sensor delay),
-        ``time_constant_s``, ``bias_n``
+        ``time_constant_s``, ``bias_n``, ``mount_frequency_hz``,
+        ``mount_damping_ratio``
         (:class:`~hybridtable.systems.measurement_chain.MeasurementChainParams`).
     table : mapping
         ``frequency_hz``, ``damping_ratio`` of a structural mode
@@ -227,7 +228,8 @@ class ModelSpec:
 
         if self.sensor:
             s = dict(self.sensor)
-            unknown = set(s) - {"extra_delay_s", "time_constant_s", "bias_n"}
+            chain = {"time_constant_s", "bias_n", "mount_frequency_hz", "mount_damping_ratio"}
+            unknown = set(s) - chain - {"extra_delay_s"}
             if unknown:
                 raise ParameterError(f"ModelSpec.sensor: unknown field(s) {', '.join(unknown)}")
 
@@ -242,8 +244,7 @@ class ModelSpec:
                     MeasurementChainParams(
                         params.sample_period_s,
                         delay_s=max(delay, 0.0),
-                        time_constant_s=s.get("time_constant_s", 0.0),
-                        bias_n=s.get("bias_n", 0.0),
+                        **{k: v for k, v in s.items() if k in chain},
                     )
                 )
 

@@ -9,6 +9,10 @@ exactly by ``x(t + h) = e^{A h} x(t) + int_0^h e^{A s} ds B u``
 table, the 6-DoF table model, the Stewart servo's reference model and its
 identification, and the sampled stability analysis's plant all take the
 table and the held tick from here.
+
+The force sensor's compliant mount (the effect ``mount_resonance``) is the
+same second-order law on the force, driven by a force that is linear between
+the ticks (:func:`ramp_tick`: the first-order hold).
 """
 
 from __future__ import annotations
@@ -18,7 +22,7 @@ import math
 import numpy as np
 from scipy.linalg import expm
 
-__all__ = ["held_tick", "second_order_matrices", "second_order_tick"]
+__all__ = ["held_tick", "ramp_tick", "second_order_matrices", "second_order_tick"]
 
 
 def second_order_matrices(
@@ -46,6 +50,26 @@ def held_tick(A: np.ndarray, B: np.ndarray, period_s: float) -> tuple[np.ndarray
     big[:n, n:] = B
     e = expm(big * period_s)
     return e[:n, :n], e[:n, n:]
+
+
+def ramp_tick(
+    A: np.ndarray, B: np.ndarray, period_s: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(Phi, G0, G1)``: ``x' = A x + B u`` over a tick ``h`` with ``u``
+    linear between the ticks (the first-order hold),
+    ``x(t + h) = Phi x(t) + G0 u(t) + G1 u(t + h)``: exact, the exponential
+    of ``[[A, B, 0], [0, 0, I], [0, 0, 0]] h`` (the input and its slope as
+    states)."""
+    A = np.atleast_2d(np.asarray(A, dtype=float))
+    B = np.atleast_2d(np.asarray(B, dtype=float))
+    n, m = B.shape
+    big = np.zeros((n + 2 * m, n + 2 * m))
+    big[:n, :n] = A
+    big[:n, n : n + m] = B
+    big[n : n + m, n + m :] = np.eye(m)
+    e = expm(big * period_s)
+    slope = e[:n, n + m :] / period_s  # per unit of u(t + h) - u(t)
+    return e[:n, :n], e[:n, n : n + m] - slope, slope
 
 
 def second_order_tick(

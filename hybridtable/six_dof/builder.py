@@ -41,7 +41,7 @@ from hybridtable.six_dof.sensor import PoseNoise, add_wrench_sensor
 from hybridtable.six_dof.spacecraft import BODY_STATE_SIZE, RigidSpacecraft, port_state
 from hybridtable.six_dof.table import PoseTable, add_pose_table
 from hybridtable.stewart.geometry import rotation_from_rpy
-from hybridtable.systems.measurement_chain import first_order_hold_filter
+from hybridtable.systems.measurement_chain import first_order_hold_filter, mount_system
 
 __all__ = [
     "LOG_LAYOUT",
@@ -156,7 +156,7 @@ def add_rig_part(
     """Wire the rig's physical part between the rig computer's command and
     its reading: ``command`` (an output port, ``[q; qd]``) to ``backend``'s
     ``commanded_state`` through the physics' table gain, and ``backend``'s
-    ``contact_wrench`` through the sensor's gain and low pass, the F/T
+    ``contact_wrench`` through the sensor's gain, low pass and mount, the F/T
     sensor's delay (and its noise, if ``noise``) and bias. Returns the
     measured wrench's and the measured table state's output ports (the
     encoders' noise on the pose, if ``noise``). Drake primitives (``MatrixGain``, a
@@ -185,6 +185,14 @@ def add_rig_part(
         )
         builder.Connect(wrench, low_pass.get_input_port())
         wrench = low_pass.get_output_port()
+    if physics is not None and physics.sensor_mount is not None:
+        # the 1-D measurement chain's mount on each channel (its law)
+        mount = builder.AddNamedSystem(
+            "sensor_mount",
+            LinearSystem(*mount_system(*physics.sensor_mount, h, channels=6), time_period=h),
+        )
+        builder.Connect(wrench, mount.get_input_port())
+        wrench = mount.get_output_port()
     sensor_in, sensor_out = add_wrench_sensor(
         builder, true.rig.sensor, h, true.rig.noise if noise else None
     )

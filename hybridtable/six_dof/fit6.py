@@ -33,7 +33,7 @@ from hybridtable.six_dof.compare6 import COMPONENTS, noise_levels_of, replay_res
 from hybridtable.six_dof.physics6 import DockingPhysics, physics_with, rig_scale
 from hybridtable.six_dof.run6 import Run6
 
-__all__ = ["Fit6", "fit_runs6", "blocks"]
+__all__ = ["Fit6", "fit_runs6", "blocks", "residual_probe"]
 
 
 @dataclass
@@ -106,6 +106,24 @@ def blocks(runs: Sequence[Run6], residuals: np.ndarray) -> list[Block]:
     return out
 
 
+def residual_probe(runs: Sequence[Run6], residuals: np.ndarray) -> list[dict[str, np.ndarray]]:
+    """The nominal residuals as an effect's ``starts`` reads them
+    (:attr:`~hybridtable.effects.effect.Effect.starts`): one mapping per run
+    and axis, ``"f_mea_n"`` the wrench component's and ``"p_act_m"`` the pose
+    component's residual on it (in noise levels: the spectrum's peak, not its
+    unit, is read), ``"time_s"`` the ticks' times."""
+    out, start, m = [], 0, len(COMPONENTS)
+    for run in runs:
+        part = residuals[start : start + m * run.n].reshape(m, run.n)
+        start += m * run.n
+        time_s = run.params.sample_period_s * np.arange(run.n)
+        half = m // 2  # the wrench's components, then the pose's
+        out += [
+            {"time_s": time_s, "f_mea_n": part[j], "p_act_m": part[half + j]} for j in range(half)
+        ]
+    return out
+
+
 def fit_runs6(
     runs: Sequence[Run6],
     effects: Sequence[tuple[Effect, Mapping[str, float]]],
@@ -165,6 +183,10 @@ def fit_runs6(
     r0 = np.concatenate([replay_residuals(r, None, n) for r, n in zip(runs, levels, strict=True)])
     space = Coordinates(free, scale, origin)
     starts = [start] if start else []
+    probe = residual_probe(runs, r0)
+    for effect, values in effects:  # its data-driven starts (a mode's spectral peak)
+        if len(values) < len(effect.parameters):
+            starts += effect.fit_starts(scale, probe)
     try:
         solution = fit_values(residual, space, starts, REPLAY_LEAST_SQUARES, held=given)
         r1 = residual(solution.values)

@@ -21,8 +21,10 @@ A :class:`DockingPhysics` is what the 6-DoF effects change
   coupled;
 - ``sensor_time_constant_s``: the sensor's reading through a first-order low
   pass on each channel (a compliant mount, a filter; the 1-D measurement
-  chain's law, before the delay), and ``sensor_bias`` (6): an offset of the
-  reading (after it);
+  chain's law, before the delay), ``sensor_mount`` (``(f, zeta)``: Hz, 1): the
+  sensor on a compliant mount, each channel ringing as the 1-D chain's mount
+  (after the low pass, before the delay), and ``sensor_bias`` (6): an offset
+  of the reading (after the delay);
 - ``com_offset_m`` (3): the one change of the rig *computer*: its spacecraft
   model's centre of mass this far from the scenario's (body frame), so its
   port sits at ``port_position_m - com_offset_m`` from it
@@ -86,6 +88,8 @@ class DockingPhysics:
     offsets: Mapping[str, float] = field(default_factory=dict)
     factors: Mapping[str, float] = field(default_factory=dict)
     sensor_time_constant_s: float = 0.0
+    #: The sensor mount's natural frequency (Hz) and damping ratio (1), or None.
+    sensor_mount: tuple[float, float] | None = None
     #: The reading's offset ``[m; f]`` (N m, N).
     sensor_bias: tuple[float, ...] | None = None
     #: The rig computer's centre of mass from the scenario's, body frame (m).
@@ -106,6 +110,14 @@ class DockingPhysics:
         if not (math.isfinite(tau) and tau >= 0.0):
             raise ParameterError(f"sensor_time_constant_s must be >= 0 (got {tau!r})")
         object.__setattr__(self, "sensor_time_constant_s", tau)
+        if self.sensor_mount is not None:
+            f, zeta = (float(x) for x in self.sensor_mount)
+            if not (math.isfinite(f) and f > 0.0 and math.isfinite(zeta) and zeta > 0.0):
+                raise ParameterError(
+                    f"sensor_mount must be a frequency > 0 Hz and a damping ratio > 0 "
+                    f"(got {self.sensor_mount!r})"
+                )
+            object.__setattr__(self, "sensor_mount", (f, zeta))
         if self.sensor_bias is not None:
             bias = np.asarray(self.sensor_bias, dtype=float)
             if bias.shape != (6,) or not np.all(np.isfinite(bias)):
@@ -123,6 +135,7 @@ class DockingPhysics:
             self.sensor_gain is None
             and self.table_gain is None
             and self.sensor_time_constant_s == 0.0
+            and self.sensor_mount is None
             and self.sensor_bias is None
             and self.com_offset_m is None
         )
@@ -131,6 +144,12 @@ class DockingPhysics:
         """The sensor's reading through a first-order low pass of this time
         constant (s; the 1-D ``sensor_filter``'s law on each channel)."""
         return replace(self, sensor_time_constant_s=float(time_constant_s))
+
+    def mount(self, frequency_hz: float, damping_ratio: float) -> DockingPhysics:
+        """The sensor on a compliant mount of this natural frequency (Hz) and
+        damping ratio: each channel reads ``y'' = w^2 (u - y) - 2 zeta w y'``
+        (the 1-D ``mount_resonance``'s law)."""
+        return replace(self, sensor_mount=(float(frequency_hz), float(damping_ratio)))
 
     def biased(self, bias: Any) -> DockingPhysics:
         """The sensor's reading offset by ``bias`` (6: N m, N; added to earlier ones)."""
@@ -212,6 +231,7 @@ class DockingPhysics:
             else [list(r) for r in self.sensor_gain],
             "table_gain": None if self.table_gain is None else [list(r) for r in self.table_gain],
             "sensor_time_constant_s": self.sensor_time_constant_s,
+            "sensor_mount": None if self.sensor_mount is None else list(self.sensor_mount),
             "sensor_bias": None if self.sensor_bias is None else list(self.sensor_bias),
             "com_offset_m": None if self.com_offset_m is None else list(self.com_offset_m),
         }

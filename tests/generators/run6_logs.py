@@ -472,7 +472,7 @@ def generate_run6(
     gives the rig what the scenario does not say: a library effect of
     ``docs/run6-format.md`` ("The effects, as laws", e.g. ``{"sensor_crosstalk":
     {"fz_to_fx": 0.01}}``) or one outside the library (``rig6.OUTSIDE_EFFECTS``,
-    e.g. ``{"mount_resonance": {"mount_frequency_hz": 30.0}}``); their laws are
+    e.g. ``{"pad_proud": {"proud_m": 1e-4}}``); their laws are
     ``rig6.simulate_rig6``'s. The rig computer, the scenario (the JSON) and
     the measurement noise are unchanged; :func:`truth_record` says what was
     hidden. ``table_start`` is ``rig6.simulate_rig6``'s (``"previous_tick"``,

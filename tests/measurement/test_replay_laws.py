@@ -36,6 +36,12 @@ SPECS = {
         time_constant_s=0.001, extra_delay_s=0.0013, bias_n=-2.0
     ),
     "table_resonance": ModelSpec().with_table(frequency_hz=40.0, damping_ratio=0.05),
+    "mount_resonance_filter_delay": ModelSpec().with_sensor(
+        mount_frequency_hz=35.0,
+        mount_damping_ratio=0.08,
+        time_constant_s=0.001,
+        extra_delay_s=0.0013,
+    ),
 }
 
 

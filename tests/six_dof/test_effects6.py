@@ -51,13 +51,17 @@ def test_each_effect_vanishes_at_its_null_values_and_acts_away_from_them(nominal
     effect = get_effect(name)
     scale = rig_scale(run.params)
     null = effect.null_values(scale)
-    at_null = replay_run6(run, physics_with([(effect, null)], scale))
-    np.testing.assert_array_equal(at_null.measured_wrench, replay.measured_wrench)
-    np.testing.assert_array_equal(at_null.table_state, replay.table_state)
-    away = {
-        p.name: min(null[p.name] + 5.0 * p.typical(scale), p.bounds(scale)[1])
-        for p in effect.parameters
-    }
+    if null is None:  # a mode: no value at which it vanishes; it acts from its start
+        assert all(p.null is None for p in effect.parameters[:1])
+        away = effect.start(scale)
+    else:
+        at_null = replay_run6(run, physics_with([(effect, null)], scale))
+        np.testing.assert_array_equal(at_null.measured_wrench, replay.measured_wrench)
+        np.testing.assert_array_equal(at_null.table_state, replay.table_state)
+        away = {
+            p.name: min(null[p.name] + 5.0 * p.typical(scale), p.bounds(scale)[1])
+            for p in effect.parameters
+        }
     moved = replay_run6(run, physics_with([(effect, away)], scale))
     if effect.stage == "closed_loop":  # the rig computer's: the replay cannot see it, the loop does
         np.testing.assert_array_equal(moved.measured_wrench, replay.measured_wrench)
@@ -150,3 +154,21 @@ def test_a_low_pass_and_a_bias_read_as_the_1d_chains_law(nominal):
         y[k] = b1 * u[k] + (a * y[k - 1] + b0 * u[k - 1] if k else 0.0)
     y[:, 5] -= 5.0
     np.testing.assert_allclose(filtered.measured_wrench, y, rtol=0, atol=1e-9)
+
+
+def test_a_mount_reads_as_the_1d_chains_mount_on_each_channel(nominal):
+    """The compliant mount is the 1-D measurement chain's mode on each channel
+    (before the whole-tick delay, which it commutes with: zero before the
+    contact), and ringing: the reading overshoots the replayed wrench."""
+    from hybridtable.systems.measurement_chain import MeasurementChain, MeasurementChainParams
+
+    run, replay = nominal
+    h = run.params.sample_period_s
+    mounted = replay_run6(run, DockingPhysics().mount(45.0, 0.1))
+    chain = MeasurementChain(
+        MeasurementChainParams(h, mount_frequency_hz=45.0, mount_damping_ratio=0.1)
+    )
+    u = replay.measured_wrench
+    expected = np.stack([chain.readings(u[:, j]) for j in range(6)], axis=1)
+    np.testing.assert_allclose(mounted.measured_wrench, expected, rtol=0, atol=1e-9)
+    assert mounted.measured_wrench[:, 5].max() > 1.05 * u[:, 5].max()  # it overshoots

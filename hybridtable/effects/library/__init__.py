@@ -37,6 +37,7 @@ from hybridtable.effects.library import (
     hunt_crossley,
     lead_time_error,
     mass_error,
+    mount_resonance,
     nonlinear_stiffness,
     sensor_crosstalk,
     sensor_filter,
@@ -77,6 +78,8 @@ BUILTIN_EFFECTS: tuple[Effect, ...] = (
     table_misalignment.EFFECT,
     sensor_crosstalk.EFFECT,
     com_offset.EFFECT,
+    # both loops, tried by 1-D front ends when named
+    mount_resonance.EFFECT,
 )
 
 

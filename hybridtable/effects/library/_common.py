@@ -8,7 +8,7 @@ gives the nominal magnitudes of the rig the bounds are relative to.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -23,6 +23,7 @@ __all__ = [
     "CONTACT",
     "stiffness_parameter",
     "resonance_starts",
+    "spectral_starts",
     "delay_starts",
     "lag_upper",
     "lag_starts",
@@ -74,52 +75,46 @@ def stiffness_parameter(name: str, description: str) -> EffectParameter:
     )
 
 
-def resonance_starts(
-    scale: RigScale, residuals: Sequence[Mapping[str, np.ndarray]]
-) -> list[dict[str, float]]:
-    """Starts of the mode's fit: the peak of the position residual's spectrum
-    within the bounds, and a coarse grid.
+def spectral_starts(
+    channel: str, names: tuple[str, str], lower, upper
+) -> Callable[[RigScale, Sequence[Mapping[str, np.ndarray]]], list[dict[str, float]]]:
+    """The ``starts`` of a mode's fit (``names``: its frequency in Hz and its
+    damping ratio) from the peak of ``channel``'s residual spectrum.
 
-    Parameters
-    ----------
-    scale : RigScale
-        Nominal magnitudes of the rig (sample period, s; table frequency, Hz).
-    residuals : sequence of mapping
-        Nominal residuals of each run; ``"p_act_m"`` (m) is used.
-
-    Returns
-    -------
-    list of dict
-        ``{"frequency_hz": Hz, "damping_ratio": 1}``: three damping ratios at
-        the spectral peak (if any lies in [:func:`mode_lower`,
-        :func:`mode_upper`]), then four frequencies spaced geometrically
-        between the bounds at a damping ratio of 0.05.
+    The starts are three damping ratios (0.02, 0.08, 0.2) at the peak of the
+    power summed over the residuals given (if it lies in
+    ``[lower(scale), upper(scale)]``, Hz), then four frequencies spaced
+    geometrically between the bounds at a damping ratio of 0.05. A residual
+    shorter than 16 ticks, or of another length than the first one's, adds no
+    power.
     """
-    lo = mode_lower(scale)
-    hi = mode_upper(scale)
-    starts = [
-        {"frequency_hz": f, "damping_ratio": 0.05} for f in np.geomspace(lo * 1.5, hi / 1.5, 4)
-    ]
-    power, freqs = None, None
-    for res in residuals:
-        e = np.asarray(res["p_act_m"], dtype=float)
-        if e.size < 16:
-            continue
-        e = (e - e.mean()) * np.hanning(e.size)
-        n = 1 << int(math.ceil(math.log2(4 * e.size)))
-        spec = np.abs(np.fft.rfft(e, n)) ** 2
-        f = np.fft.rfftfreq(n, scale.sample_period_s)
-        if power is None:
-            power, freqs = spec, f
-        elif len(spec) == len(power):
-            power = power + spec
-    if power is not None:
-        band = (freqs >= lo) & (freqs <= hi)
-        if band.any():
-            peak = float(freqs[band][np.argmax(power[band])])
-            starts = [
-                {"frequency_hz": peak, "damping_ratio": z} for z in (0.02, 0.08, 0.2)
-            ] + starts
+    freq, zeta = names
+
+    def starts(
+        scale: RigScale, residuals: Sequence[Mapping[str, np.ndarray]]
+    ) -> list[dict[str, float]]:
+        lo, hi = lower(scale), upper(scale)
+        out = [{freq: f, zeta: 0.05} for f in np.geomspace(lo * 1.5, hi / 1.5, 4)]
+        power, freqs = None, None
+        for res in residuals:
+            e = np.asarray(res[channel], dtype=float)
+            if e.size < 16:
+                continue
+            e = (e - e.mean()) * np.hanning(e.size)
+            n = 1 << int(math.ceil(math.log2(4 * e.size)))
+            spec = np.abs(np.fft.rfft(e, n)) ** 2
+            f = np.fft.rfftfreq(n, scale.sample_period_s)
+            if power is None:
+                power, freqs = spec, f
+            elif len(spec) == len(power):
+                power = power + spec
+        if power is not None:
+            band = (freqs >= lo) & (freqs <= hi)
+            if band.any():
+                peak = float(freqs[band][np.argmax(power[band])])
+                out = [{freq: peak, zeta: z} for z in (0.02, 0.08, 0.2)] + out
+        return out
+
     return starts
 
 
@@ -182,6 +177,10 @@ def mode_upper(scale: RigScale) -> float:
     """Highest frequency of a structural mode, Hz: 0.45 / h, just below the
     Nyquist frequency of the sample period ``h`` (s)."""
     return 0.45 / scale.sample_period_s
+
+
+#: Starts of a table mode's fit: the peak of the position residual's spectrum.
+resonance_starts = spectral_starts(P_ACT, ("frequency_hz", "damping_ratio"), mode_lower, mode_upper)
 
 
 def ratio_parameter(
