@@ -28,14 +28,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hybridtable.measurement.phases import contact_mask, quiet_ticks, settle_ticks
+from hybridtable.measurement.phases import quiet_ticks, settle_ticks
 from hybridtable.measurement.stats import force_noise_rms, position_noise_rms
-from hybridtable.six_dof import drogue
 from hybridtable.six_dof.physics6 import DockingPhysics
 from hybridtable.six_dof.pose import rotation_vectors_of_quaternions
 from hybridtable.six_dof.replay6 import replay_run6
 from hybridtable.six_dof.run6 import Run6, noise_levels, run6_of_docking
 from hybridtable.six_dof.simulation import peak_force_n, simulate6
+from hybridtable.six_dof.touch import force_from_rest, touching
 from hybridtable.systems.table import TableParams
 
 __all__ = [
@@ -217,20 +217,8 @@ _QUIET_TICKS = 20
 
 
 def _touching(run: Run6) -> np.ndarray:
-    """The ticks the devices touch at the measured pose, by the contact's
-    geometry: the 1-D comparison's :func:`~hybridtable.measurement.phases.contact_mask`
-    of the deepest penetration (a pad below the plate's face, the probe's
-    head into the drogue's smooth surface)."""
-    c = run.params.contact
-    q = run.pose("act")
-    R = run.rotations("act")
-    if c.is_cone:
-        centres = q[:, :3] + R @ c.probe_centre_m
-        depth = np.array([drogue.wall_depth_m(c, x) for x in centres])
-    else:
-        pads = q[:, 2:3] + np.einsum("nj,ij->ni", R[:, 2, :], c.pad_centres_m) + c.pad_radius_m
-        depth = np.max(pads, axis=1)
-    return contact_mask(depth)
+    """The ticks the devices touch at the measured pose (:func:`~hybridtable.six_dof.touch.touching`)."""
+    return touching(run.params.contact, run.pose("act")[:, :3], run.rotations("act"))
 
 
 #: Quiet ticks before the first touch enough for the wrench's noise alone
@@ -270,9 +258,10 @@ def _block(run: Run6, block: str) -> np.ndarray:
 
 def phases(run: Run6) -> tuple[np.ndarray, tuple[float, float]]:
     """Each tick's phase (0 approach, 1 contact, 2 after) and the contact's
-    first and last time, from the measured force (above five noise levels and
-    the dead band)."""
-    force = np.linalg.norm(run.blocks["f_mea"], axis=1)
+    first and last time, from the measured force (from its level at rest,
+    :func:`~hybridtable.six_dof.touch.force_from_rest`: above five noise
+    levels and the dead band)."""
+    force = force_from_rest(run.blocks["f_mea"], _touching(run))
     level = 5.0 * float(np.linalg.norm(noise_level(run, "f_mea"))) + run.params.force_deadband_n
     touching = np.flatnonzero(force > level)
     phase = np.zeros(run.n, dtype=int)

@@ -46,6 +46,7 @@ from hybridtable.six_dof.pose import (
 )
 from hybridtable.six_dof.scenario import parse_scenario
 from hybridtable.six_dof.simulation import DockingRun, peak_force_n
+from hybridtable.six_dof.touch import force_from_rest, touching
 
 __all__ = [
     "FORMAT6",
@@ -60,7 +61,6 @@ __all__ = [
     "is_run6",
     "quaternion_product",
     "noise_levels",
-    "contact_level_n",
 ]
 
 #: Value of the JSON ``format`` key.
@@ -471,29 +471,27 @@ def noise_levels(values: np.ndarray, rows: np.ndarray | None = None) -> np.ndarr
     return np.array([noise_level_of_differences(c) for c in d2.T])
 
 
-def contact_level_n(run: Run6, floor: float) -> float:
-    """The measured force above which the devices touch: five noise levels
-    of the force (estimated over every tick, at least ``floor`` times the
-    undamped head-on peak force) plus the dead band."""
-    noise = max(
-        float(np.linalg.norm(noise_levels(run.blocks["f_mea"]))), floor * peak_force_n(run.params)
-    )
-    return 5.0 * noise + run.params.force_deadband_n
-
-
 def _check_contact(run: Run6) -> None:
-    """A contact in the record (a force above five noise levels and the
-    dead band), and not at its start."""
-    force = np.linalg.norm(run.blocks["f_mea"], axis=1)
-    level = contact_level_n(run, 1e-3)
-    touching = np.flatnonzero(force > level)
-    if touching.size == 0:
+    """The record starts apart (by the measured pose) and holds a contact (a
+    force from its level at rest above five noise levels and the dead band)."""
+    touch = touching(run.params.contact, run.pose("act")[:, :3], run.rotations("act"))
+    if touch[0]:
+        raise MeasurementError(
+            f"{run.csv_path}: the record starts in contact (the measured pose presses the "
+            "devices together at t = 0); the format's record starts with the devices apart"
+        )
+    force = force_from_rest(run.blocks["f_mea"], touch)
+    # five noise levels (over every tick, at least 1e-3 of the head-on peak) and the dead band
+    noise = float(np.linalg.norm(noise_levels(run.blocks["f_mea"])))
+    level = 5.0 * max(noise, 1e-3 * peak_force_n(run.params)) + run.params.force_deadband_n
+    above = np.flatnonzero(force > level)
+    if above.size == 0:
         raise MeasurementError(
             f"{run.csv_path}: no contact in the record: the measured force stays within "
             f"{level:.4g} N (five noise levels and the dead band)"
         )
-    if touching[0] < 3:
+    if above[0] < 3:
         raise MeasurementError(
-            f"{run.csv_path}: the record starts in contact (measured force {force[0]:.4g} N at "
-            "t = 0); the format's record starts with the devices apart"
+            f"{run.csv_path}: the record starts in contact (measured force {force[0]:.4g} N "
+            "from its level at rest at t = 0); the format's record starts with the devices apart"
         )

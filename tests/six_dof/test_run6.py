@@ -404,3 +404,37 @@ def test_a_record_writes_its_truth_and_the_scenarios_inf_as_json_can(tmp_path):
     truth = json.loads((folder / "truth.json").read_text())
     assert truth["hidden"]["effects"] == []  # written without --add too: never stale
     assert read_run6(folder / "run1.csv").params.table_response_hz == float("inf")
+
+
+def test_an_ft_bias_far_above_the_noise_is_read_as_a_bias_not_a_contact(tmp_path):
+    """An F/T sensor's offset (here 40 N, 20 noise levels) is its level at
+    rest: the record is read, its contact starts where the unbiased one's
+    does, and a fit of ``force_bias`` finds it."""
+    from hybridtable.effects.registry import get_effect
+    from hybridtable.six_dof.compare6 import phases
+    from hybridtable.six_dof.fit6 import fit_runs6
+    from hybridtable.six_dof.physics6 import physics_with, rig_scale
+
+    noise = {"force_noise_n": 2.0, "moment_noise_n_m": 0.5, "duration_s": 0.8}  # no dead band
+    scenario = {**SCENARIO, "rig": {**SCENARIO["rig"], **noise}}
+    params = scenario_params(**noise)
+    bias = get_effect("force_bias")
+    hidden = physics_with([(bias, {"bias_n": 40.0})], rig_scale(params))
+    plain = read_run6(_write(tmp_path / "plain", run6_of_docking(simulate6(params), "p", scenario)))
+    biased = run6_of_docking(simulate6(params, physics=hidden), "b", scenario)
+    run = read_run6(_write(tmp_path / "biased", biased))
+    assert phases(run)[1][0] == pytest.approx(phases(plain)[1][0], abs=3e-3)  # s
+    fit = fit_runs6([run], [(bias, {})])
+    found, std = fit.values["force_bias"]["bias_n"], fit.std["force_bias"]["bias_n"]
+    assert abs(found - 40.0) < 4.0 * std
+
+
+def test_a_record_cut_after_the_touch_starts_in_contact_by_its_pose(recorded, tmp_path):
+    text = run6_csv_text(recorded).splitlines()
+    touch = int(np.argmax(np.linalg.norm(recorded.blocks["f_mea"], axis=1) > 1.0))
+    first = touch - recorded.params.delay_ticks + 2  # the pose already pressed, the reading not yet
+    cut = [text[0]] + text[1 + first :]
+    t0 = float(cut[1].split(",")[0])
+    rows = [",".join([repr(float(r.split(",")[0]) - t0), *r.split(",")[1:]]) for r in cut[1:]]
+    with pytest.raises(MeasurementError, match="starts in contact .the measured pose"):
+        read_run6(_write(tmp_path, recorded, csv="\n".join([cut[0], *rows]) + "\n"))
