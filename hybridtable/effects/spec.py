@@ -300,6 +300,8 @@ class ModelSpec:
             changes["sensor_delay_s"] = delay
         if sensor.get("time_constant_s"):
             left.append(f"the sensor's low pass ({sensor['time_constant_s']:g} s)")
+        if math.isfinite(sensor.get("mount_frequency_hz", math.inf)):
+            left.append(f"the sensor's mount ({sensor['mount_frequency_hz']:g} Hz)")
         if exact and sensor.get("bias_n"):
             left.append(f"the sensor's offset ({sensor['bias_n']:g} N)")
         return changes, left
@@ -331,8 +333,8 @@ class ModelSpec:
           ``k / (1 + k s)`` (exact for a massless structure);
         - ``extra_delay_s`` -> added to ``sensor_delay_s``;
         - ``bias_n``: a constant offset moves no pole (nothing to change);
-        - any other change (a nonlinear law, friction, a filter, a mode, a
-          user's wrapped system) is left out and named.
+        - any other change (a nonlinear law, friction, a filter, a mode, the
+          sensor's mount, a user's wrapped system) is left out and named.
 
         The changes of :attr:`loop` are not among them: the caller applies
         them (:class:`~hybridtable.measurement.rig.RigPhysics` ``loop``).
@@ -345,7 +347,7 @@ class ModelSpec:
         """The loop of this model on the stated loop ``params``, for one contact.
 
         Returns the loop's parameters and, when a change is not one of them (a
-        nonlinear contact law, friction, a sensor's filter or offset, a
+        nonlinear contact law, friction, a sensor's filter, mount or offset, a
         structural mode, a user's wrapped system), the
         :class:`~hybridtable.measurement.rig.RigPhysics` whose systems carry it;
         ``None`` when the parameters carry every change, so that the loop's fast

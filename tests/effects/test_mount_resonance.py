@@ -93,3 +93,27 @@ def test_a_fit_finds_the_six_axis_generators_ringing_mount(tmp_path):
     for name, value in truth.items():
         std = fit.std["mount_resonance"][name]
         assert std is not None and abs(fit.values["mount_resonance"][name] - value) < 4.0 * std
+
+
+def test_a_cor_with_a_mount_runs_its_system_and_the_linear_model_names_what_it_leaves():
+    """The fast engine has no mount: a CoR with one runs the Drake diagram
+    (it differs from the nominal one), and the linear model says it leaves
+    the mount out (it used to drop it silently)."""
+    from hybridtable.effects.spec import ModelSpec
+    from hybridtable.explain.model import ln_cor
+    from hybridtable.loop.params import HybridLoopParams
+
+    params = HybridLoopParams(
+        spacecraft_mass_kg=2500.0,
+        contact_stiffness_n_per_m=1.0e5,
+        sensor_delay_s=0.005,
+        table_response_hz=25.0,
+        compensator="SDMDC",
+        sample_rate_hz=1000.0,
+    )
+    spec = ModelSpec().with_sensor(mount_frequency_hz=8.0, mount_damping_ratio=0.1)
+    loop, systems = spec.realize(params)
+    assert systems is not None and systems.sensor is not None
+    assert abs(ln_cor(loop, systems) - ln_cor(params)) > 1e-3
+    _, left = spec.linear_changes(params)
+    assert left == ["the sensor's mount (8 Hz)"]

@@ -22,6 +22,8 @@ and the release; the touch overshoots.
 
 from __future__ import annotations
 
+import math
+
 from hybridtable.effects.effect import Effect, EffectParameter, Signature
 from hybridtable.effects.library._common import F_MEA, mode_upper, spectral_starts
 
@@ -29,6 +31,12 @@ __all__ = ["EFFECT"]
 
 #: The lowest mount frequency a fit tries, Hz.
 LOWEST_HZ = 1.0
+
+#: The largest damping ratio of a mount that rings: ``1 / sqrt(2)``, above
+#: which the mode's frequency response has no peak. A mount more damped is a
+#: low pass (``sensor_filter``), and a fit of both to one would be a look-alike
+#: pair: an overdamped mode at 35 Hz mimics a 9 ms first-order lag.
+RINGING_LIMIT = math.sqrt(0.5)
 
 _NAMES = ("mount_frequency_hz", "mount_damping_ratio")
 
@@ -51,9 +59,10 @@ EFFECT = Effect(
         EffectParameter(
             _NAMES[1],
             "1",
-            "damping ratio zeta of the mount",
+            "damping ratio zeta of the mount (below 1/sqrt(2): above it the mode has no "
+            "resonant peak, a low pass: sensor_filter)",
             lower=0.005,
-            upper=1.0,
+            upper=RINGING_LIMIT,
             scale=0.01,
             initial=0.05,
         ),
