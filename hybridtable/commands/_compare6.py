@@ -7,14 +7,12 @@ from __future__ import annotations
 import argparse
 import sys
 
+from hybridtable.errors import CommandError
+
 __all__ = ["compare6"]
 
 #: compare's options that act on the 1-D runs only, with their defaults.
-_ONE_D_ONLY = {
-    "model": None,
-    "save_model": None,
-    "max_lag_s": None,
-}
+_ONE_D_ONLY = {"max_lag_s": None}
 
 
 def compare6(args: argparse.Namespace) -> int:
@@ -29,10 +27,23 @@ def compare6(args: argparse.Namespace) -> int:
     from hybridtable.six_dof.compare6 import compare_run6
     from hybridtable.six_dof.fit6 import fit_runs6
 
-    runs, layout = read_run6_arguments(args, _ONE_D_ONLY, {"--report": args.report})
+    runs, layout = read_run6_arguments(
+        args, _ONE_D_ONLY, {"--report": args.report}, {"--save-model": args.save_model}
+    )
+    model = base = None
+    if args.model:
+        from hybridtable.six_dof.model6 import load_model6
+
+        model = load_model6(args.model)
+        base = model.physics()
     added = parse_added(args)
     for effect, _ in added:
         require_apply6(effect, "--add")
+        if model is not None and effect.name in model.effect_names:
+            raise CommandError(
+                f"--add {effect.name}: the model {args.model} has it already (its values are "
+                "the model's; fit it again without --model)"
+            )
     # the rig computer's effects are solved by the audit, not fitted to the replays
     audited = [e.name for e, _ in added if e.stage == "closed_loop"]
     added = [(e, v) for e, v in added if e.stage != "closed_loop"]
@@ -44,10 +55,12 @@ def compare6(args: argparse.Namespace) -> int:
         iterator = tqdm(runs, desc="compare", unit="run", file=sys.stderr, leave=False)
     results = [compare_run6(r) for r in iterator]
     audit = audit_runs6(runs)
+    modelled = None if model is None else [compare_run6(r, base) for r in runs]
     fit = fitted = None
     if added:
-        fit = fit_runs6(runs, added)
+        fit = fit_runs6(runs, added, base=base)
         fitted = [compare_run6(r, fit.physics) for r in runs]
+    saved = _save_model(args, runs, model, fit, audit, fitted or modelled or results)
     report = None
     if args.report:
         from hybridtable._files import staged_folder
@@ -68,8 +81,10 @@ def compare6(args: argparse.Namespace) -> int:
         print(f"audit: {audit.sentence()}")
         for name in audited:
             print(f"--add {name}: an effect of the rig computer; the audit above solves for it")
+        if model is not None:
+            _print_model(args.model, model, runs, results, modelled)
         if fit is not None:
-            _print_fit(fit, added, results, fitted)
+            _print_fit(fit, added, modelled or results, fitted)
         for c in results:
             print(
                 f"\n{c.run_id} ({c.n_ticks} ticks): RMS error per component in noise levels, "
@@ -91,6 +106,8 @@ def compare6(args: argparse.Namespace) -> int:
             )
             for note in c.notes:
                 print(f"  note: {note}")
+        if saved:
+            print(f"\nwrote the model to {saved}")
     if args.json:
         out = {
             "format": "hybridtable-run6/1",
@@ -100,6 +117,17 @@ def compare6(args: argparse.Namespace) -> int:
             "log_map": log_map_entry(layout, runs),
             "audit": audit.to_dict(),
             "report": report,
+            "model": None
+            if model is None
+            else {
+                "file": args.model,
+                "description": model.describe(),
+                "other_rig": model.rig_differences([(f"run {r.run_id}", r.params) for r in runs]),
+                "explained": all(c.explained for c in modelled),
+                "verdicts": [c.verdict() for c in modelled],
+                "runs": [c.to_dict() for c in modelled],
+            },
+            "saved_model": args.save_model,
             **(
                 {}
                 if fit is None
@@ -152,3 +180,39 @@ def _print_fit(fit, added, before, after) -> None:
             f"{next(c for c in a.components if c.name == b.worst.name).error_sigma:.3g} noise "
             f"levels; worst now {a.worst.name} {a.worst.error_sigma:.3g}"
         )
+
+
+def _print_model(path, model, runs, before, after) -> None:
+    """The model file's effects and how the replay's error moved with them."""
+    print(f"\nwith the model {path} ({model.describe()}):")
+    for note in model.rig_differences([(f"run {r.run_id}", r.params) for r in runs]):
+        print(f"  note: {note}")
+    for b, a in zip(before, after, strict=True):
+        print(f"  {a.verdict()}")
+        print(
+            f"    the replay's worst component {b.worst.name}: {b.worst.error_sigma:.3g} -> "
+            f"{next(c for c in a.components if c.name == b.worst.name).error_sigma:.3g} noise "
+            f"levels; worst now {a.worst.name} {a.worst.error_sigma:.3g}"
+        )
+
+
+def _save_model(args, runs, model, fit, audit, final) -> str | None:
+    """Write ``--save-model``: the model file's effects (if any), the fitted
+    ones and the audit's, with the final comparison as the evidence; returns
+    the file and what it holds, in words."""
+    if not args.save_model:
+        return None
+    from hybridtable.commands._model_options import write_model
+    from hybridtable.six_dof.model6 import fitted_effects, model6_of_runs
+
+    fitted = {e.name: e for e in (model.effects if model else ())}
+    fitted |= {e.name: e for e in fitted_effects(fit)}
+    evidence = {
+        "explained": all(c.explained for c in final),
+        "verdicts": [c.verdict() for c in final],
+        "worst_error_sigma": max(c.worst.error_sigma for c in final),
+        "error_unit": "RMS replay error of the worst component, in its noise levels",
+    }
+    saved = model6_of_runs(runs, list(fitted.values()), audit, "compare", evidence)
+    write_model(args.save_model, saved)
+    return f"{args.save_model}: {saved.describe()}"

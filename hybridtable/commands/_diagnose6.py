@@ -11,7 +11,7 @@ from hybridtable.errors import CommandError
 __all__ = ["diagnose6"]
 
 #: diagnose's options that act on the 1-D runs only, with their defaults.
-_ONE_D_ONLY = {"save_model": None}
+_ONE_D_ONLY: dict[str, object] = {}
 
 
 def diagnose6(args: argparse.Namespace) -> int:
@@ -23,9 +23,11 @@ def diagnose6(args: argparse.Namespace) -> int:
     from hybridtable.commands._run6 import read_run6_arguments, require_apply6
     from hybridtable.effects.registry import get_effect
     from hybridtable.effects.workers import worker_count
-    from hybridtable.six_dof.diagnose6 import diagnose_runs6
+    from hybridtable.six_dof.diagnose6 import diagnose_runs6, pooled_error
 
-    runs, layout = read_run6_arguments(args, _ONE_D_ONLY, {"--report": args.report})
+    runs, layout = read_run6_arguments(
+        args, _ONE_D_ONLY, {"--report": args.report}, {"--save-model": args.save_model}
+    )
     effects = None
     if args.effects is not None:
         effects = [e.strip() for e in args.effects.split(",") if e.strip()]
@@ -42,6 +44,22 @@ def diagnose6(args: argparse.Namespace) -> int:
         max_effects=args.max_effects,
     )
     report = _report(args.report, runs, result) if args.report else None
+    saved = None
+    if args.save_model:
+        from hybridtable.commands._model_options import write_model
+        from hybridtable.six_dof.model6 import fitted_effects, model6_of_runs
+
+        evidence = {
+            "verdict": result.verdict,
+            "sentence": result.sentence(),
+            "explained": result.explained,
+            "nominal_pooled_error": pooled_error(result.nominal_errors),
+            "final_pooled_error": pooled_error(result.final_errors),
+            "error_unit": "RMS replay error per component in noise levels, pooled",
+        }
+        model = model6_of_runs(runs, fitted_effects(result.fit), result.audit, "diagnose", evidence)
+        write_model(args.save_model, model)
+        saved = args.save_model
     if not quiet:
         print(result.sentence())
         print(
@@ -59,10 +77,13 @@ def diagnose6(args: argparse.Namespace) -> int:
             print(line)
         if report:
             print(f"report: {report[0]}")
+        if saved:
+            print(f"wrote the model to {saved}: {model.describe()}")
     if args.json:
         out = {"format": "hybridtable-run6/1", **result.to_dict()}
         out["log_map"] = log_map_entry(layout, runs)
         out["report"] = report
+        out["saved_model"] = saved
         write_json(args.json, out, args)
     return 0
 

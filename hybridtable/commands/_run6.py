@@ -13,12 +13,15 @@ __all__ = ["read_run6_arguments", "require_apply6"]
 
 
 def read_run6_arguments(
-    args: argparse.Namespace, one_d_only: Mapping[str, object], folders: Mapping | None = None
+    args: argparse.Namespace,
+    one_d_only: Mapping[str, object],
+    folders: Mapping | None = None,
+    files: Mapping | None = None,
 ):
     """Refuse every option of ``one_d_only`` (name -> default) the user gave,
     register ``--plugin``'s effects, read every run of ``RUN...`` (all
-    defects before any work) and check ``--json`` and the output ``folders``
-    (flag -> path): ``(runs, layout)``."""
+    defects before any work) and check ``--json``, the output ``files`` and
+    ``folders`` (flag -> path): ``(runs, layout)``."""
     from hybridtable.commands._common import check_outputs, log_layout_of
     from hybridtable.commands._model_options import load_plugins
     from hybridtable.six_dof.run6 import RUN6_COLUMNS, read_runs6
@@ -31,7 +34,7 @@ def read_run6_arguments(
     layout = log_layout_of(args, RUN6_COLUMNS)
     runs = read_runs6(args.runs, layout)
     inputs = [p.resolve() for r in runs for p in (r.csv_path, r.json_path) if p is not None]
-    check_outputs(args, inputs, files={"--json": args.json}, folders=folders)
+    check_outputs(args, inputs, files={"--json": args.json, **(files or {})}, folders=folders)
     return runs, layout
 
 

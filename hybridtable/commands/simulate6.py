@@ -10,7 +10,11 @@ __all__ = ["register", "run"]
 
 def register(sub) -> None:
     from hybridtable.commands._common import number_type
-    from hybridtable.commands._model_options import add_effect_argument, add_plugin_argument
+    from hybridtable.commands._model_options import (
+        add_effect_argument,
+        add_model_argument,
+        add_plugin_argument,
+    )
 
     p = sub.add_parser(
         "simulate6",
@@ -85,6 +89,11 @@ def register(sub) -> None:
         "along the normal: hybridtable effects, column loops), the rig computer does not know "
         "it; every parameter given; with --record, the run's JSON states the scenario and "
         "truth.json what was hidden",
+    )
+    add_model_argument(
+        p,
+        "the rig's physical part (and computer) as a 6-DoF model file says (diagnose or "
+        "compare --add on 6-DoF runs, --save-model), under this scenario; --add adds to it",
     )
     add_plugin_argument(p)
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -248,14 +257,35 @@ def _hidden_physics(args: argparse.Namespace, params):
     """The rig's physical part with ``--add``'s effects (every parameter
     given, within its bounds at the scenario), and the effects as JSON."""
     from hybridtable.commands._model_options import load_plugins, parse_added_given
-    from hybridtable.six_dof.physics6 import physics_with, rig_scale
+    from hybridtable.errors import CommandError
+    from hybridtable.six_dof.physics6 import NOMINAL_PHYSICS, physics_with, rig_scale
 
     load_plugins(args)
     added = parse_added_given(args, "(the rig's hidden value: nothing to fit it to here)")
     scale = rig_scale(params)
     checked = [(effect, effect.check_values(values, scale)) for effect, values in added]
-    physics = physics_with(checked, scale)
-    hidden = [
+    base, hidden = NOMINAL_PHYSICS, []
+    if args.model:
+        from hybridtable.six_dof.model6 import load_model6
+
+        model = load_model6(args.model)
+        for note in model.rig_differences([("the scenario", params)]):
+            print(f"note: {note}", file=sys.stderr)
+        base = model.physics()
+        for e, _ in checked:
+            if e.name in model.effect_names:
+                raise CommandError(f"--add {e.name}: the model {args.model} has it already")
+        hidden = [
+            {
+                "name": e.name,
+                "values": dict(e.values),
+                "units": {p.name: p.unit for p in e.effect.parameters},
+                "model": args.model,
+            }
+            for e in model.effects
+        ]
+    physics = physics_with(checked, scale, base)
+    hidden += [
         {
             "name": e.name,
             "values": dict(v),

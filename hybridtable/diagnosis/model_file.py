@@ -47,12 +47,15 @@ from hybridtable.measurement.run_format import Run, RunInfo
 
 __all__ = [
     "MODEL_FORMAT",
+    "MODEL6_FORMAT",
     "RIG_KEYS",
     "FittedEffect",
     "ModelRun",
     "RigModel",
     "tool_version",
     "model_from_diagnosis",
+    "describe_effects",
+    "effects_json",
 ]
 
 #: Keys of the run format that describe the rig itself (not one run of it).
@@ -67,6 +70,10 @@ RIG_KEYS: tuple[str, ...] = (
 
 #: Value of the model file's ``format`` key.
 MODEL_FORMAT = "hybridtable-model/1"
+
+#: Value of a six-axis rig's model file's ``format`` key
+#: (:mod:`hybridtable.six_dof.model6`).
+MODEL6_FORMAT = "hybridtable-model6/1"
 
 
 def tool_version() -> str:
@@ -248,20 +255,7 @@ class RigModel:
 
     def describe(self) -> str:
         """One line: the effects and their values with standard errors."""
-        if not self.effects:
-            parts = ["the nominal model (no effect)"]
-        else:
-            parts = []
-            for e in self.effects:
-                units = {p.name: p.unit for p in e.effect.parameters}
-                vals = []
-                for k, v in e.values.items():
-                    s = e.std.get(k)
-                    err = f" +- {s:.3g}" if s is not None else ""
-                    unit = "" if units.get(k, "1") == "1" else f" {units[k]}"
-                    tag = "" if k in e.fitted else " (given)"
-                    vals.append(f"{k} = {v:.6g}{err}{unit}{tag}")
-                parts.append(f"{e.name}: {', '.join(vals)}")
+        parts = [describe_effects(self.effects)]
         if self.computer:
             parts.append(
                 "rig computer: " + ", ".join(f"{k} = {v}" for k, v in self.computer.items())
@@ -270,24 +264,6 @@ class RigModel:
 
     # -- the file ------------------------------------------------------------
     def to_json(self) -> dict:
-        effects = []
-        for e in self.effects:
-            units = {p.name: p.unit for p in e.effect.parameters}
-            effects.append(
-                {
-                    "name": e.name,
-                    "description": e.effect.description,
-                    "parameters": {
-                        k: {
-                            "value": float(v),
-                            "std": e.std.get(k),
-                            "unit": units.get(k, ""),
-                            "fitted": k in e.fitted,
-                        }
-                        for k, v in e.values.items()
-                    },
-                }
-            )
         return {
             "format": MODEL_FORMAT,
             "tool_version": self.tool_version,
@@ -296,7 +272,7 @@ class RigModel:
             "description": self.describe(),
             "nominal": self.nominal.to_dict(),
             "scale": asdict(self.scale),
-            "effects": effects,
+            "effects": effects_json(self.effects),
             "computer": dict(self.computer),
             "runs": [
                 {
@@ -311,6 +287,49 @@ class RigModel:
             ],
             "evidence": dict(self.evidence),
         }
+
+
+def describe_effects(effects: Sequence[FittedEffect]) -> str:
+    """The effects and their values with standard errors and units, one
+    clause an effect ("the nominal model (no effect)" without one)."""
+    if not effects:
+        return "the nominal model (no effect)"
+    parts = []
+    for e in effects:
+        units = {p.name: p.unit for p in e.effect.parameters}
+        vals = []
+        for k, v in e.values.items():
+            s = e.std.get(k)
+            err = f" +- {s:.3g}" if s is not None else ""
+            unit = "" if units.get(k, "1") == "1" else f" {units[k]}"
+            tag = "" if k in e.fitted else " (given)"
+            vals.append(f"{k} = {v:.6g}{err}{unit}{tag}")
+        parts.append(f"{e.name}: {', '.join(vals)}")
+    return "; ".join(parts)
+
+
+def effects_json(effects: Sequence[FittedEffect]) -> list[dict]:
+    """The model file's ``effects``: each effect's name, description and
+    parameters (value, standard error, unit, fitted or given)."""
+    out = []
+    for e in effects:
+        units = {p.name: p.unit for p in e.effect.parameters}
+        out.append(
+            {
+                "name": e.name,
+                "description": e.effect.description,
+                "parameters": {
+                    k: {
+                        "value": float(v),
+                        "std": e.std.get(k),
+                        "unit": units.get(k, ""),
+                        "fitted": k in e.fitted,
+                    }
+                    for k, v in e.values.items()
+                },
+            }
+        )
+    return out
 
 
 def model_from_diagnosis(d: Any) -> RigModel:

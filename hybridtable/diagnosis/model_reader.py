@@ -20,6 +20,7 @@ from hybridtable._files import read_user_json
 from hybridtable._validation import check_choice
 from hybridtable.compensators.registry import compensator_names
 from hybridtable.diagnosis.model_file import (
+    MODEL6_FORMAT,
     MODEL_FORMAT,
     FittedEffect,
     ModelRun,
@@ -35,7 +36,7 @@ from hybridtable.measurement.rig import COMPUTER_PARAMS
 from hybridtable.measurement.run_format import RunInfo
 from hybridtable.measurement.run_reader import run_info_from_dict
 
-__all__ = ["load_model", "model_from_json"]
+__all__ = ["load_model", "model_from_json", "effect_from_json", "scale_from_json"]
 
 
 def model_from_json(data: Any, where: str) -> RigModel:
@@ -50,6 +51,11 @@ def model_from_json(data: Any, where: str) -> RigModel:
         raise ParameterError(f"{where}: not a model file (a JSON object is expected)")
     fmt = data.get("format")
     if fmt != MODEL_FORMAT:
+        if fmt == MODEL6_FORMAT:
+            raise ParameterError(
+                f"{where}: a model of a six-axis rig ({fmt}); it is for 6-DoF runs "
+                "(compare RUNS6 --model) and simulate6 --model"
+            )
         if isinstance(fmt, str) and fmt.startswith("hybridtable-model/"):
             raise ParameterError(
                 f"{where}: model format {fmt!r} is not supported "
@@ -63,13 +69,13 @@ def model_from_json(data: Any, where: str) -> RigModel:
         if key not in data:
             raise ParameterError(f"{where}: missing key {key}")
     nominal = _info(data["nominal"], f"{where}: nominal")
-    scale = _scale(data["scale"], where)
+    scale = scale_from_json(data["scale"], where)
     raw_effects = data["effects"]
     if not isinstance(raw_effects, list):
         raise ParameterError(f"{where}: key effects must be a list")
     effects = []
     for i, raw in enumerate(raw_effects):
-        effects.append(_effect(raw, scale, f"{where}: effects[{i}]"))
+        effects.append(effect_from_json(raw, scale, f"{where}: effects[{i}]"))
     names = [e.name for e in effects]
     if len(set(names)) != len(names):
         raise ParameterError(f"{where}: an effect is listed twice ({', '.join(names)})")
@@ -124,7 +130,8 @@ def _info(raw: Any, where: str) -> RunInfo:
         raise ParameterError(str(err)) from None
 
 
-def _scale(raw: Any, where: str) -> RigScale:
+def scale_from_json(raw: Any, where: str) -> RigScale:
+    """The model file's ``scale`` (every :class:`RigScale` field, each > 0)."""
     names = [f.name for f in fields(RigScale)]
     if not isinstance(raw, dict) or set(raw) != set(names):
         raise ParameterError(f"{where}: key scale must hold {', '.join(names)}")
@@ -165,7 +172,9 @@ def _computer(raw: Any, where: str) -> dict[str, Any]:
     return dict(raw)
 
 
-def _effect(raw: Any, scale: RigScale, where: str) -> FittedEffect:
+def effect_from_json(raw: Any, scale: RigScale, where: str) -> FittedEffect:
+    """One of the model file's ``effects``: a registered effect, every
+    parameter given once, within its bounds at ``scale``."""
     if not isinstance(raw, dict) or not isinstance(raw.get("name"), str):
         raise ParameterError(f"{where}: must be an object with a name")
     name = raw["name"]

@@ -30,7 +30,7 @@ from hybridtable.effects.fitting import (
 from hybridtable.effects.selection import Block
 from hybridtable.errors import ParameterError
 from hybridtable.six_dof.compare6 import COMPONENTS, noise_levels_of, replay_residuals
-from hybridtable.six_dof.physics6 import DockingPhysics, physics_with, rig_scale
+from hybridtable.six_dof.physics6 import NOMINAL_PHYSICS, DockingPhysics, physics_with, rig_scale
 from hybridtable.six_dof.run6 import Run6
 
 __all__ = ["Fit6", "fit_runs6", "blocks", "residual_probe"]
@@ -128,10 +128,13 @@ def fit_runs6(
     runs: Sequence[Run6],
     effects: Sequence[tuple[Effect, Mapping[str, float]]],
     start: Mapping[str, Mapping[str, float]] | None = None,
+    base: DockingPhysics | None = None,
 ) -> Fit6:
     """Fit the parameters of ``effects`` not given (each ``(effect, given
     values)``) to ``runs`` (see the module); ``start``: an informed start
-    (effect -> parameter -> value, e.g. an earlier fit's), besides the null.
+    (effect -> parameter -> value, e.g. an earlier fit's), besides the null;
+    ``base``: the rig's physical part the effects change (default the
+    scenario's; e.g. a model file's), which ``chi2_before`` is of too.
 
     Raises
     ------
@@ -173,14 +176,15 @@ def fit_runs6(
         nonlocal evaluations
         evaluations += 1
         try:
-            physics = physics_with([(by_name[n], values[n]) for n in names], scale)
+            physics = physics_with([(by_name[n], values[n]) for n in names], scale, base)
             return np.concatenate(
                 [replay_residuals(r, physics, n) for r, n in zip(runs, levels, strict=True)]
             )
         except ParameterError as err:  # not a failed polish: the effect cannot act here
             raise _CannotAct(str(err)) from None
 
-    r0 = np.concatenate([replay_residuals(r, None, n) for r, n in zip(runs, levels, strict=True)])
+    base = NOMINAL_PHYSICS if base is None else base
+    r0 = np.concatenate([replay_residuals(r, base, n) for r, n in zip(runs, levels, strict=True)])
     space = Coordinates(free, scale, origin)
     starts = [start] if start else []
     probe = residual_probe(runs, r0)
@@ -202,6 +206,6 @@ def fit_runs6(
         n_residuals=int(r1.size),
         evaluations=evaluations,
         success=solution.success,
-        physics=physics_with([(by_name[n], solution.values[n]) for n in names], scale),
+        physics=physics_with([(by_name[n], solution.values[n]) for n in names], scale, base),
         residuals=r1,
     )
