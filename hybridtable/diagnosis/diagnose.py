@@ -80,6 +80,7 @@ from hybridtable.diagnosis.goodness import goodness_of_fit
 from hybridtable.diagnosis.search import pairs_and_swaps
 from hybridtable.diagnosis.settings import EXPLAINED_MAX_ERROR, FIT_ACCURACY
 from hybridtable.effects.registry import default_effects, get_effect
+from hybridtable.effects.search import forward
 from hybridtable.effects.spec import ModelSpec, RigScale
 from hybridtable.effects.workers import pool_map, worker_count
 from hybridtable.measurement.audit import audit_runs
@@ -127,17 +128,12 @@ def _step(effects: list[str], fit: Fit, error, heldout_error: float, dbic: float
 
 
 def _forward(ev, names, selected, base_fit, staircase, rounds, max_effects, workers, progress):
-    """Forward selection from ``selected`` (fitted as ``base_fit``): add the
-    accepted candidate with the largest ``delta_bic`` until none is accepted."""
-    while len(selected) < max_effects:
-        pool = [
-            n
-            for n in names
-            if n not in selected
-            and not any(get_effect(n).conflicts_with(get_effect(s)) for s in selected)
-        ]
-        if not pool:
-            break
+    """Forward selection from ``selected`` (fitted as ``base_fit``; the effect
+    core's loop, :func:`~hybridtable.effects.search.forward`): add the accepted
+    candidate with the largest ``delta_bic`` until none is accepted."""
+
+    def round_(pool: list[str]) -> str | None:
+        nonlocal base_fit
         base_error = (staircase[-1]["error"], staircase[-1]["channel_error"])
         cands = _run_round(
             ev,
@@ -151,11 +147,10 @@ def _forward(ev, names, selected, base_fit, staircase, rounds, max_effects, work
         rounds.append(cands)
         best = next((c for c in cands if c.accepted), None)
         if best is None:
-            break
+            return None
         for c in cands:
             if c.accepted and c is not best:
                 c.reason += f"; outranked by {best.effect} (delta_bic {best.delta_bic:.1f})"
-        selected.append(best.effect)
         base_fit = best.fit
         held = (
             best.heldout_error_after
@@ -164,7 +159,7 @@ def _forward(ev, names, selected, base_fit, staircase, rounds, max_effects, work
         )
         staircase.append(
             _step(
-                selected,
+                [*selected, best.effect],
                 best.fit,
                 (best.error_after, best.channel_error_after),
                 held,
@@ -172,6 +167,9 @@ def _forward(ev, names, selected, base_fit, staircase, rounds, max_effects, work
                 "forward selection",
             )
         )
+        return best.effect
+
+    forward(names, selected, max_effects, round_)
     return base_fit
 
 

@@ -15,6 +15,9 @@ influence cancels (one dissipates, one adds energy: neither enters alone).
 
 and :func:`swaps` the current selection with one effect replaced by one of
 the best candidates (a look-alike chosen first can block the right effect).
+:func:`forward` is the forward selection itself, every front end's one loop:
+the candidates beside the selection (none changing a part a selected effect
+changes), one round of fits, the one the front end's rule lets in.
 
 Combinations a front end cannot use (two effects that change the same part, a
 pair it holds already) are left out before the screen, and no set of effects
@@ -31,7 +34,9 @@ from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from itertools import combinations
 
-__all__ = ["Proposal", "propose", "swaps"]
+from hybridtable.effects.registry import get_effect
+
+__all__ = ["Proposal", "forward", "beside", "propose", "swaps"]
 
 #: Effect names of one model.
 Names = tuple[str, ...]
@@ -119,3 +124,37 @@ def swaps(
             if c not in selected and frozenset(names) not in seen and allowed(names):
                 seen.add(frozenset(names))
                 yield names
+
+
+def beside(names: Sequence[str], selected: Sequence[str]) -> list[str]:
+    """The candidates of ``names`` a model of ``selected`` can gain: not
+    selected, and changing no part a selected effect changes
+    (:meth:`~hybridtable.effects.effect.Effect.conflicts_with`)."""
+    chosen = [get_effect(s) for s in selected]
+    return [
+        n
+        for n in names
+        if n not in selected and not any(get_effect(n).conflicts_with(s) for s in chosen)
+    ]
+
+
+def forward(
+    names: Sequence[str],
+    selected: list[str],
+    max_effects: int,
+    round_: Callable[[list[str]], str | None],
+) -> list[str]:
+    """Forward selection from ``selected`` (extended in place, and returned):
+    while it holds fewer than ``max_effects``, ``round_(pool)`` fits the
+    candidates :func:`beside` it and names the one its front end's rule lets
+    in (None: none, and the selection ends); it ends too when no candidate is
+    left."""
+    while len(selected) < max_effects:
+        pool = beside(names, selected)
+        if not pool:
+            break
+        chosen = round_(pool)
+        if chosen is None:
+            break
+        selected.append(chosen)
+    return selected

@@ -57,6 +57,7 @@ from hybridtable.diagnosis.settings import (
     MIN_EXCESS_REMOVED,
 )
 from hybridtable.effects.registry import effect_names, get_effect
+from hybridtable.effects.search import forward
 from hybridtable.effects.selection import delta_bic, lookalikes
 from hybridtable.effects.workers import pool_map
 from hybridtable.errors import ParameterError, SimulationError
@@ -267,10 +268,6 @@ def _able(runs: Sequence[Run6], effects: Sequence[str]) -> tuple[list[str], dict
     return able, refused
 
 
-def _touches(name: str) -> set[str]:
-    return set(get_effect(name).touches)
-
-
 def diagnose_runs6(
     runs: Sequence[Run6],
     effects: Sequence[str] | None = None,
@@ -312,11 +309,11 @@ def diagnose_runs6(
     out.final_errors = dict(out.nominal_errors)
     current = blocks(runs, r0)
     fit: Fit6 | None = None
-    while len(out.selected) < max_effects and not out.explained:
-        taken = set().union(*(_touches(n) for n in out.selected)) if out.selected else set()
-        jobs = [n for n in effects if n not in out.selected and not (_touches(n) & taken)]
-        if not jobs:
-            break
+
+    def round_(jobs: list[str]) -> str | None:
+        nonlocal fit, current
+        if out.explained:
+            return None
         start = None if fit is None else fit.values
         results = pool_map(
             _fit_job,
@@ -342,11 +339,11 @@ def diagnose_runs6(
         step = Step6([_public(r) for r in ranking], None, "no candidate could be fitted")
         out.steps.append(step)
         if not scored:
-            break
+            return None
         worst = max(out.final_errors, key=out.final_errors.__getitem__)
         excess = out.final_errors[worst] - 1.0
 
-        def removed_by(entry: dict, worst: str = worst, excess: float = excess) -> float:
+        def removed_by(entry: dict) -> float:
             gone = out.final_errors[worst] - entry["errors"][worst]
             return gone / excess if excess > 0 else 0.0
 
@@ -365,22 +362,20 @@ def diagnose_runs6(
                 f"{best['effect']} is the best but not significant (delta BIC "
                 f"{best['delta_bic']:.3g} <= {BIC_THRESHOLD:g})"
             )
-            break
+            return None
         if removed < MIN_EXCESS_REMOVED:
             step.why = (
                 f"{best['effect']} is significant (delta BIC {best['delta_bic']:.3g}) but removes "
                 f"{100 * removed:.0f} % of {worst}'s error above the noise (at least "
                 f"{100 * MIN_EXCESS_REMOVED:.0f} % needed)"
             )
-            break
+            return None
         step.chosen = best["effect"]
         step.why = (
             f"{best['effect']}: delta BIC {best['delta_bic']:.4g}, removes {100 * removed:.0f} % "
             f"of {worst}'s error above the noise"
         )
-        out.selected.append(best["effect"])
-        fit = best["fit"]
-        out.fit = fit
+        fit = out.fit = best["fit"]
         out.final_errors = best["errors"]
         current = blocks(runs, fit.residuals)
         out.lookalikes = [
@@ -394,6 +389,9 @@ def diagnose_runs6(
                 inclusive=False,
             )
         ]
+        return best["effect"]
+
+    forward(effects, out.selected, max_effects, round_)
     return out
 
 
