@@ -21,7 +21,8 @@ Contact gating (``gate``): ``"measured_force"`` zeroes ``f_comp`` while the
 measured force (its norm on a wrench) is at or below ``force_deadband_n``;
 ``"table_position"`` adds the MDC term only while the table's position says
 the devices touch; ``"none"`` is the linear compensator of the stability
-analysis. ``clamp_nonnegative`` keeps a 1-D ``f_comp`` from pulling.
+analysis. ``clamp_nonnegative`` keeps a 1-D ``f_comp`` (a wrench's force
+along the docking axis) from pulling.
 
 :func:`compensate` is the one definition: the Drake compensators are compiled
 from it (:mod:`hybridtable.compensators.paper`, ``.online``), the fast engine
@@ -32,6 +33,7 @@ arrays (:mod:`hybridtable.six_dof.compensator`).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -67,7 +69,8 @@ class CompensationLaw:
         The measured-force gate's threshold [N].
     gate : {"measured_force", "table_position", "none"}
     clamp_nonnegative : bool
-        Clamp a scalar ``f_comp`` at zero.
+        Clamp a scalar ``f_comp`` at zero (a wrench: zero while its
+        compression is below zero, :func:`compensate`'s ``compression``).
     """
 
     lead_time_s: float = 0.0
@@ -115,9 +118,12 @@ def _times(gain: Any, x: Any) -> Any:
     return gain @ x if getattr(gain, "ndim", 0) >= 2 else gain * x
 
 
-def nonnegative(force: Any) -> Any:
-    """The force clamped at zero: a compensator that never pulls."""
-    return select(force < 0.0, 0.0 * force, force)
+def nonnegative(force: Any, compression: Any = None) -> Any:
+    """The force clamped at zero: a compensator that never pulls. A wrench is
+    zero while its ``compression`` (its force along the axis, pressing) is
+    below zero (default: a scalar force is its own compression)."""
+    compression = force if compression is None else compression
+    return select(compression < 0.0, 0.0 * force, force)
 
 
 def above_deadband(reading: Any, deadband_n: float) -> Any:
@@ -140,6 +146,7 @@ def compensate(
     damping: Any = None,
     touching: Any = True,
     gate_force: Any = None,
+    compression: Callable[[Any], Any] | None = None,
 ) -> Any:
     """The compensated force (or wrench) fed to the spacecraft model.
 
@@ -160,6 +167,9 @@ def compensate(
     gate_force : scalar, optional
         What the measured-force gate compares with the dead band (default
         ``measured``; the norm of the force on a wrench).
+    compression : callable, optional
+        The clamp's compression of the compensated wrench (``lambda w:
+        -w[5]`` on the docking axis); default: a scalar force is its own.
     """
     f = measured
     if law.has_lead:
@@ -170,6 +180,6 @@ def compensate(
             corrected = corrected + _times(damping, rate_error)
         f = select(law.corrects_motion(touching), corrected, f)
     if law.clamp_nonnegative:
-        f = nonnegative(f)
+        f = nonnegative(f, None if compression is None else compression(f))
     level = measured if gate_force is None else gate_force
     return select(law.gate_open(level), f, 0.0 * measured)

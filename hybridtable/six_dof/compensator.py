@@ -26,7 +26,6 @@ a given matrix.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import replace
 
 import numpy as np
 from pydrake.systems.framework import BasicVector, LeafSystem
@@ -104,9 +103,6 @@ class WrenchCompensator(LeafSystem):
             force_deadband_n=float(force_deadband_n),
             clamp_nonnegative=bool(clamp_nonnegative),
         )
-        # the law on the wrench's components, without the scalar clamp (the
-        # wrench's clamp is on its axial force: _clamped)
-        self._law = replace(self.law, clamp_nonnegative=False)
         self._w = self.DeclareVectorInputPort("measured_wrench", 6)
         self._table = self.DeclareVectorInputPort("table_state", 12)
         self._cmd = self.DeclareVectorInputPort("commanded_state", 12)
@@ -126,7 +122,9 @@ class WrenchCompensator(LeafSystem):
         previous = context.get_discrete_state(0).value()
         rate = backward_difference(w, previous, self._h)
         if not self.law.motion_correction:
-            output.SetFromVector(self._clamped(compensate(self._law, w, rate, gate_force=level)))
+            output.SetFromVector(
+                compensate(self.law, w, rate, gate_force=level, compression=_compression)
+            )
             return
         x_act = self._table.Eval(context)
         x_des = self._cmd.Eval(context)
@@ -136,7 +134,7 @@ class WrenchCompensator(LeafSystem):
             K, C = scale * K, scale * C
         # G = dw/dq = -K: the law predicts the wrench at the commanded pose.
         out = compensate(
-            self._law,
+            self.law,
             w,
             rate,
             x_des[:6] - x_act[:6],
@@ -144,12 +142,12 @@ class WrenchCompensator(LeafSystem):
             -K,
             -C if np.any(C) else None,
             gate_force=level,
+            compression=_compression,
         )
-        output.SetFromVector(self._clamped(out))
+        output.SetFromVector(out)
 
-    def _clamped(self, wrench: np.ndarray) -> np.ndarray:
-        """The 1-D clamp on the wrench: zero while its force pulls along the
-        axis (the compression ``-fz`` below zero)."""
-        if self.law.clamp_nonnegative and -wrench[5] < 0.0:
-            return np.zeros(6)
-        return wrench
+
+def _compression(wrench: np.ndarray) -> float:
+    """The wrench's force along the docking axis, pressing (``-fz``): what the
+    1-D clamp keeps from pulling."""
+    return -wrench[5]
