@@ -173,13 +173,7 @@ def _print_fit(fit, added, before, after) -> None:
         f"  replay chi2 {fit.chi2_before:.4g} -> {fit.chi2_after:.4g} over {fit.n_residuals} "
         f"residuals ({fit.evaluations} replays{'' if fit.success else '; a polish did not converge'})"
     )
-    for b, a in zip(before, after, strict=True):
-        print(f"  {a.verdict()}")
-        print(
-            f"    the replay's worst component {b.worst.name}: {b.worst.error_sigma:.3g} -> "
-            f"{next(c for c in a.components if c.name == b.worst.name).error_sigma:.3g} noise "
-            f"levels; worst now {a.worst.name} {a.worst.error_sigma:.3g}"
-        )
+    _print_fall(before, after)
 
 
 def _print_model(path, model, runs, before, after) -> None:
@@ -187,13 +181,7 @@ def _print_model(path, model, runs, before, after) -> None:
     print(f"\nwith the model {path} ({model.describe()}):")
     for note in model.rig_differences([(f"run {r.run_id}", r.params) for r in runs]):
         print(f"  note: {note}")
-    for b, a in zip(before, after, strict=True):
-        print(f"  {a.verdict()}")
-        print(
-            f"    the replay's worst component {b.worst.name}: {b.worst.error_sigma:.3g} -> "
-            f"{next(c for c in a.components if c.name == b.worst.name).error_sigma:.3g} noise "
-            f"levels; worst now {a.worst.name} {a.worst.error_sigma:.3g}"
-        )
+    _print_fall(before, after)
 
 
 def _save_model(args, runs, model, fit, audit, final) -> str | None:
@@ -216,3 +204,14 @@ def _save_model(args, runs, model, fit, audit, final) -> str | None:
     saved = model6_of_runs(runs, list(fitted.values()), audit, "compare", evidence)
     write_model(args.save_model, saved)
     return f"{args.save_model}: {saved.describe()}"
+
+
+def _print_fall(before, after) -> None:
+    """Each run's verdict with the effects, and its worst component's fall."""
+    for b, a in zip(before, after, strict=True):
+        print(f"  {a.verdict()}")
+        print(
+            f"    the replay's worst component {b.worst.name}: {b.worst.error_sigma:.3g} -> "
+            f"{next(c for c in a.components if c.name == b.worst.name).error_sigma:.3g} noise "
+            f"levels; worst now {a.worst.name} {a.worst.error_sigma:.3g}"
+        )

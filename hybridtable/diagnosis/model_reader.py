@@ -36,7 +36,13 @@ from hybridtable.measurement.rig import COMPUTER_PARAMS
 from hybridtable.measurement.run_format import RunInfo
 from hybridtable.measurement.run_reader import run_info_from_dict
 
-__all__ = ["load_model", "model_from_json", "effect_from_json", "scale_from_json"]
+__all__ = [
+    "load_model",
+    "model_from_json",
+    "check_document",
+    "effect_from_json",
+    "scale_from_json",
+]
 
 
 def model_from_json(data: Any, where: str) -> RigModel:
@@ -47,27 +53,18 @@ def model_from_json(data: Any, where: str) -> RigModel:
     ParameterError
         One line naming ``where`` and the key at fault.
     """
-    if not isinstance(data, dict):
-        raise ParameterError(f"{where}: not a model file (a JSON object is expected)")
-    fmt = data.get("format")
-    if fmt != MODEL_FORMAT:
-        if fmt == MODEL6_FORMAT:
-            raise ParameterError(
-                f"{where}: a model of a six-axis rig ({fmt}); it is for 6-DoF runs "
-                "(compare RUNS6 --model) and simulate6 --model"
-            )
-        if isinstance(fmt, str) and fmt.startswith("hybridtable-model/"):
-            raise ParameterError(
-                f"{where}: model format {fmt!r} is not supported "
-                f"(this hybridtable {tool_version()} reads {MODEL_FORMAT!r})"
-            )
-        raise ParameterError(
-            f"{where}: not a model file (key format must be {MODEL_FORMAT!r}, "
-            f"got {json.dumps(fmt)})"
-        )
-    for key in ("nominal", "scale", "effects"):
-        if key not in data:
-            raise ParameterError(f"{where}: missing key {key}")
+    check_document(
+        data,
+        where,
+        MODEL_FORMAT,
+        ("nominal", "scale", "effects"),
+        {
+            MODEL6_FORMAT: "a model of a six-axis rig ({fmt}); it is for 6-DoF runs "
+            "(compare RUNS6 --model) and simulate6 --model",
+            "hybridtable-model/": "model format {fmt!r} is not supported "
+            f"(this hybridtable {tool_version()} reads {MODEL_FORMAT!r})",
+        },
+    )
     nominal = _info(data["nominal"], f"{where}: nominal")
     scale = scale_from_json(data["scale"], where)
     raw_effects = data["effects"]
@@ -119,6 +116,35 @@ def model_from_json(data: Any, where: str) -> RigModel:
 
 
 # -- checks of the file's parts ------------------------------------------------
+def check_document(
+    data: Any,
+    where: str,
+    expected: str,
+    keys: tuple[str, ...],
+    others: dict[str, str],
+    kind: str = "model file",
+) -> None:
+    """``data`` is a ``kind`` of format ``expected`` holding ``keys``, else
+    one line naming ``where``. ``others`` maps another kind's format (or a
+    prefix of formats, ending in ``/``) to what to say of it (``{fmt}``: the
+    format found)."""
+    if not isinstance(data, dict):
+        raise ParameterError(f"{where}: not a {kind} (a JSON object is expected)")
+    fmt = data.get("format")
+    if fmt != expected:
+        for other, words in others.items():
+            if isinstance(fmt, str) and (
+                fmt == other or (other.endswith("/") and fmt.startswith(other))
+            ):
+                raise ParameterError(f"{where}: {words.format(fmt=fmt)}")
+        raise ParameterError(
+            f"{where}: not a {kind} (key format must be {expected!r}, got {json.dumps(fmt)})"
+        )
+    for key in keys:
+        if key not in data:
+            raise ParameterError(f"{where}: missing key {key}")
+
+
 def _finite(x: Any) -> bool:
     return isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x)
 

@@ -26,7 +26,6 @@ from __future__ import annotations
 import copy
 import datetime as _dt
 import hashlib
-import json
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
@@ -41,7 +40,7 @@ from hybridtable.diagnosis.model_file import (
     effects_json,
     tool_version,
 )
-from hybridtable.diagnosis.model_reader import effect_from_json, scale_from_json
+from hybridtable.diagnosis.model_reader import check_document, effect_from_json, scale_from_json
 from hybridtable.effects.registry import effect_names, get_effect
 from hybridtable.effects.spec import RigScale
 from hybridtable.errors import ParameterError
@@ -188,22 +187,17 @@ def model6_from_json(data: Any, where: str) -> RigModel6:
         One line naming ``where`` and the key at fault (a 1-D model file
         says so).
     """
-    if not isinstance(data, dict):
-        raise ParameterError(f"{where}: not a model file (a JSON object is expected)")
-    fmt = data.get("format")
-    if fmt != MODEL6_FORMAT:
-        if isinstance(fmt, str) and fmt.startswith("hybridtable-model/"):
-            raise ParameterError(
-                f"{where}: a model of a 1-D rig ({fmt}); 6-DoF runs take a "
-                f"{MODEL6_FORMAT} model (diagnose or compare --add on 6-DoF runs, --save-model)"
-            )
-        raise ParameterError(
-            f"{where}: not a 6-DoF model file (key format must be {MODEL6_FORMAT!r}, "
-            f"got {json.dumps(fmt)})"
-        )
-    for key in ("scenario", "scale", "effects"):
-        if key not in data:
-            raise ParameterError(f"{where}: missing key {key}")
+    check_document(
+        data,
+        where,
+        MODEL6_FORMAT,
+        ("scenario", "scale", "effects"),
+        {
+            "hybridtable-model/": "a model of a 1-D rig ({fmt}); 6-DoF runs take a "
+            f"{MODEL6_FORMAT} model (diagnose or compare --add on 6-DoF runs, --save-model)"
+        },
+        "6-DoF model file",
+    )
     if not isinstance(data["scenario"], dict):
         raise ParameterError(f"{where}: key scenario must be an object (a scenario's sections)")
     parse_scenario(data["scenario"], f"{where}: scenario")  # checked here, once
