@@ -67,11 +67,16 @@ def compare6(args: argparse.Namespace) -> int:
         from hybridtable.reports.run6 import write_report6
 
         with staged_folder(args.report) as stage:
+            text = _fit_text(fit, added)
+            if model is not None:  # the model's effects, and the fitted ones on top
+                text = "\n".join(
+                    t for t in (f"the model {args.model}: {model.describe()}", text) if t
+                )
             files = write_report6(
                 results,
                 stage.path,
-                fitted,
-                _fit_text(fit, added),
+                fitted or modelled,
+                text,
                 preface=[f"Audit: {audit.sentence()}.", ""],
             )
             report = [str(stage.final(f)) for f in files]

@@ -78,6 +78,11 @@ def test_the_model_explains_another_run_of_the_rig(rig, capsys):
     assert doc["model"]["explained"] and doc["model"]["other_rig"] == []
     worst = max(c["error_sigma"] for c in doc["model"]["runs"][0]["components"])
     assert worst < 3.0
+    report = root / "report"
+    argv = ["compare", str(root / "b"), "--model", str(model), "--report", str(report)]
+    assert main([*argv, "--no-progress"]) == 0
+    text = (report / "report.md").read_text()
+    assert f"the model {model}: sensor_misalignment" in text and "explains the run" in text
     # an effect the model has is not added again, and the model is not written over
     argv = ["compare", str(root / "b"), "--model", str(model)]
     assert main([*argv, "--add", "friction_across_face"]) == 2
