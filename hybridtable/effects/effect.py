@@ -304,6 +304,20 @@ class Effect:
             return []
         return [{self.name: s} for s in self.starts(scale, residuals)]
 
+    def at_bounds(self, values: Mapping[str, float], scale: RigScale) -> list[str]:
+        """The parameters of ``values`` (a fit's) at a bound of theirs (to 1e-6
+        of the range), in words: an effect whose fit ends on its boundary
+        wants to be something it cannot be, and may stand in for another."""
+        out = []
+        for p in self.parameters:
+            if p.name not in values:
+                continue
+            lo, hi = p.bounds(scale)
+            v, tol = float(values[p.name]), 1e-6 * (hi - lo)
+            if abs(v - lo) <= tol or abs(v - hi) <= tol:
+                out.append(f"{p.name} at its bound {v:.4g}")
+        return out
+
     def null_values(self, scale: RigScale) -> dict[str, float] | None:
         """Parameter values at which the effect vanishes (None if it has none)."""
         out = {p.name: p.null_value(scale) for p in self.parameters}

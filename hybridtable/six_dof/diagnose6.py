@@ -59,6 +59,7 @@ from hybridtable.diagnosis.settings import (
 from hybridtable.effects.registry import effect_names, get_effect
 from hybridtable.effects.search import forward
 from hybridtable.effects.selection import delta_bic, lookalikes
+from hybridtable.effects.spec import RigScale
 from hybridtable.effects.workers import pool_map
 from hybridtable.errors import ParameterError, SimulationError
 from hybridtable.six_dof.audit6 import Audit6, audit_runs6
@@ -130,6 +131,8 @@ class Diagnosis6:
     refused: dict[str, str] = field(default_factory=dict)
     #: The audit of the rig computer's spacecraft (its findings are effects found).
     audit: Audit6 | None = None
+    #: The scale the effects' bounds were taken at (the first run's scenario).
+    scale: RigScale | None = None
 
     @property
     def found(self) -> list[str]:
@@ -185,10 +188,12 @@ class Diagnosis6:
         values = self._values()
         if self.explained:
             alike = f"; look-alikes: {', '.join(self.lookalikes)}" if self.lookalikes else ""
+            bounds = self.at_bounds()
+            edge = f"; {', '.join(bounds)}: it may stand in for another effect" if bounds else ""
             return (
                 f"found {named} ({values}): the worst component {worst0} falls from {e0:.3g} to "
                 f"{self.final_errors[worst0]:.3g} noise levels, {pooled_error(self.final_errors):.3g} "
-                f"pooled{alike}"
+                f"pooled{alike}{edge}"
             )
         return (
             f"not explained: {named} is the best the library does ({values or 'no effect'}), "
@@ -196,6 +201,17 @@ class Diagnosis6:
             f"pooled; from {e0:.3g} for {worst0}): an effect outside the candidates, or a rig "
             "unlike its scenario"
         )
+
+    def at_bounds(self) -> list[str]:
+        """The selected effects' fitted parameters that ended at a bound, in
+        words (:meth:`~hybridtable.effects.effect.Effect.at_bounds`)."""
+        if self.fit is None or self.scale is None:
+            return []
+        return [
+            f"{name}'s {said}"
+            for name in self.selected
+            for said in get_effect(name).at_bounds(self.fit.values[name], self.scale)
+        ]
 
     def _values(self) -> str:
         if self.fit is None:
@@ -224,6 +240,7 @@ class Diagnosis6:
             "final_errors": self.final_errors,
             "error_unit": "RMS replay error / noise level, per component, over the runs",
             "lookalikes": self.lookalikes,
+            "at_bounds": self.at_bounds(),
             "rounds": [
                 {"ranking": s.ranking, "chosen": s.chosen, "why": s.why} for s in self.steps
             ],
@@ -306,6 +323,7 @@ def diagnose_runs6(
     out = Diagnosis6([r.run_id for r in runs], list(effects), component_errors(runs, r0))
     out.refused = refused
     out.audit = audit_runs6(runs)
+    out.scale = rig_scale(runs[0].params)
     out.final_errors = dict(out.nominal_errors)
     current = blocks(runs, r0)
     fit: Fit6 | None = None

@@ -120,3 +120,34 @@ def test_a_candidate_that_cannot_act_on_the_rig_is_left_out_with_why():
     assert able == ["stiffness_error"]
     assert set(refused) == {"table_response", "table_damping"}
     assert all("Stewart" in why for why in refused.values())
+
+
+def test_a_fit_that_ends_at_a_bound_is_said():
+    """An effect whose fit ends on its boundary may stand in for another: the
+    verdict says which parameter, and the JSON lists it."""
+    from hybridtable.effects.spec import RigScale
+    from hybridtable.six_dof.diagnose6 import Diagnosis6
+
+    scale = RigScale(1e5, 2533.0, 1e-3, 5e-3, 0.1, 25.0)
+    effect = get_effect("mount_resonance")
+    upper = effect.parameter("mount_damping_ratio").bounds(scale)[1]
+    assert effect.at_bounds({"mount_frequency_hz": 30.0, "mount_damping_ratio": upper}, scale) == [
+        f"mount_damping_ratio at its bound {upper:.4g}"
+    ]
+    assert effect.at_bounds({"mount_frequency_hz": 30.0, "mount_damping_ratio": 0.3}, scale) == []
+
+    class _Fit:
+        values = {"mount_resonance": {"mount_frequency_hz": 30.0, "mount_damping_ratio": upper}}
+        std = {"mount_resonance": {"mount_frequency_hz": 0.1, "mount_damping_ratio": 0.01}}
+
+        def to_dict(self):
+            return {"values": self.values, "std": self.std}
+
+    errors = {"fz_mea": 1.0, "fx_mea": 1.0}
+    d = Diagnosis6(["r"], ["mount_resonance"], {"fz_mea": 9.0, "fx_mea": 1.0})
+    d.selected, d.fit, d.final_errors, d.scale = ["mount_resonance"], _Fit(), errors, scale
+    assert d.verdict == "found"
+    assert "mount_resonance's mount_damping_ratio at its bound 0.7071: it may stand in" in (
+        d.sentence()
+    )
+    assert d.to_dict()["at_bounds"] == ["mount_resonance's mount_damping_ratio at its bound 0.7071"]
