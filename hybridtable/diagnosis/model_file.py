@@ -53,6 +53,7 @@ __all__ = [
     "ModelRun",
     "RigModel",
     "tool_version",
+    "created_now",
     "model_from_diagnosis",
     "describe_effects",
     "effects_json",
@@ -74,6 +75,11 @@ MODEL_FORMAT = "hybridtable-model/1"
 #: Value of a six-axis rig's model file's ``format`` key
 #: (:mod:`hybridtable.six_dof.model6`).
 MODEL6_FORMAT = "hybridtable-model6/1"
+
+
+def created_now() -> str:
+    """Now, as a model file's ``created`` (UTC, ISO 8601, to the second)."""
+    return _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
 
 
 def tool_version() -> str:
@@ -136,9 +142,7 @@ class RigModel:
     source: str = "user"
     evidence: Mapping[str, Any] = field(default_factory=dict)
     tool_version: str = field(default_factory=tool_version)
-    created: str = field(
-        default_factory=lambda: _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
-    )
+    created: str = field(default_factory=created_now)
 
     # -- building ----------------------------------------------------------
     @classmethod

@@ -40,6 +40,7 @@ __all__ = [
     "load_model",
     "model_from_json",
     "check_document",
+    "provenance",
     "effect_from_json",
     "scale_from_json",
 ]
@@ -101,21 +102,29 @@ def model_from_json(data: Any, where: str) -> RigModel:
                 raw.get("sha256"),
             )
         )
-    evidence = data.get("evidence", {})
     return RigModel(
         nominal=nominal,
         scale=scale,
         effects=tuple(effects),
         computer=computer,
         runs=tuple(runs),
-        source=str(data.get("source", "user")),
-        evidence=evidence if isinstance(evidence, dict) else {},
-        tool_version=str(data.get("tool_version", "unknown")),
-        created=str(data.get("created", "")),
+        **provenance(data),
     )
 
 
 # -- checks of the file's parts ------------------------------------------------
+def provenance(data: dict) -> dict[str, Any]:
+    """Where a model file came from, as its dataclass takes it: ``source``,
+    ``evidence`` (an object, else empty), ``tool_version`` and ``created``."""
+    evidence = data.get("evidence", {})
+    return {
+        "source": str(data.get("source", "user")),
+        "evidence": evidence if isinstance(evidence, dict) else {},
+        "tool_version": str(data.get("tool_version", "unknown")),
+        "created": str(data.get("created", "")),
+    }
+
+
 def check_document(
     data: Any,
     where: str,

@@ -24,7 +24,6 @@ cannot take them) are in the evidence. The file is JSON::
 from __future__ import annotations
 
 import copy
-import datetime as _dt
 import hashlib
 import math
 from collections.abc import Mapping, Sequence
@@ -36,11 +35,17 @@ from hybridtable._files import read_user_json
 from hybridtable.diagnosis.model_file import (
     MODEL6_FORMAT,
     FittedEffect,
+    created_now,
     describe_effects,
     effects_json,
     tool_version,
 )
-from hybridtable.diagnosis.model_reader import check_document, effect_from_json, scale_from_json
+from hybridtable.diagnosis.model_reader import (
+    check_document,
+    effect_from_json,
+    provenance,
+    scale_from_json,
+)
 from hybridtable.effects.registry import effect_names, get_effect
 from hybridtable.effects.spec import RigScale
 from hybridtable.errors import ParameterError
@@ -73,9 +78,7 @@ class RigModel6:
     source: str = "user"
     evidence: Mapping[str, Any] = field(default_factory=dict)
     tool_version: str = field(default_factory=tool_version)
-    created: str = field(
-        default_factory=lambda: _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
-    )
+    created: str = field(default_factory=created_now)
 
     @property
     def params(self) -> DockingLoopParams:
@@ -221,16 +224,12 @@ def model6_from_json(data: Any, where: str) -> RigModel6:
         isinstance(r, dict) and isinstance(r.get("run_id"), str) for r in runs
     ):
         raise ParameterError(f"{where}: key runs must be a list of objects with a run_id")
-    evidence = data.get("evidence", {})
     return RigModel6(
         scenario=data["scenario"],
         scale=scale,
         effects=effects,
         runs=tuple(runs),
-        source=str(data.get("source", "user")),
-        evidence=evidence if isinstance(evidence, dict) else {},
-        tool_version=str(data.get("tool_version", "unknown")),
-        created=str(data.get("created", "")),
+        **provenance(data),
     )
 
 
