@@ -35,7 +35,7 @@ from hybridtable.six_dof.pose import rotation_vectors_of_quaternions
 from hybridtable.six_dof.replay6 import replay_run6
 from hybridtable.six_dof.run6 import Run6, noise_levels, run6_of_docking
 from hybridtable.six_dof.simulation import peak_force_n, simulate6
-from hybridtable.six_dof.touch import force_from_rest, touching
+from hybridtable.six_dof.touch import force_from_rest
 from hybridtable.systems.table import TableParams
 
 __all__ = [
@@ -216,18 +216,13 @@ def noise_levels_of(run: Run6) -> dict[str, np.ndarray]:
 _QUIET_TICKS = 20
 
 
-def _touching(run: Run6) -> np.ndarray:
-    """The ticks the devices touch at the measured pose (:func:`~hybridtable.six_dof.touch.touching`)."""
-    return touching(run.params.contact, run.pose("act")[:, :3], run.rotations("act"))
-
-
 #: Quiet ticks before the first touch enough for the wrench's noise alone
 #: (fewer: every quiet stretch, as the 1-D comparison).
 _BEFORE_TICKS = 50
 
 
 def _quiet(run: Run6) -> tuple[np.ndarray, np.ndarray]:
-    """The ticks out of contact (:func:`_touching`), as the 1-D comparison
+    """The ticks out of contact (:attr:`~hybridtable.six_dof.run6.Run6.contact_ticks`), as the 1-D comparison
     takes them (:func:`~hybridtable.measurement.phases.quiet_ticks`): the
     wrench's and the pose's (the short one if fewer than
     :data:`_QUIET_TICKS`). With at least :data:`_BEFORE_TICKS` quiet ticks
@@ -237,7 +232,7 @@ def _quiet(run: Run6) -> tuple[np.ndarray, np.ndarray]:
     p = run.params
     table = TableParams(p.table_response_hz, p.table_damping_ratio)
     settle = settle_ticks(table.settling_time_s, p.sample_period_s, run.n)
-    wrench, pose, short = quiet_ticks(_touching(run), p.delay_ticks, settle)
+    wrench, pose, short = quiet_ticks(run.contact_ticks, p.delay_ticks, settle)
     first = int(np.argmin(wrench)) if not np.all(wrench) else run.n
     if first >= _BEFORE_TICKS:
         wrench[first:] = False
@@ -261,7 +256,7 @@ def phases(run: Run6) -> tuple[np.ndarray, tuple[float, float]]:
     first and last time, from the measured force (from its level at rest,
     :func:`~hybridtable.six_dof.touch.force_from_rest`: above five noise
     levels and the dead band)."""
-    force = force_from_rest(run.blocks["f_mea"], _touching(run))
+    force = force_from_rest(run.blocks["f_mea"], run.contact_ticks)
     level = 5.0 * float(np.linalg.norm(noise_level(run, "f_mea"))) + run.params.force_deadband_n
     touching = np.flatnonzero(force > level)
     phase = np.zeros(run.n, dtype=int)

@@ -23,6 +23,7 @@ __all__ = [
     "rotation_log",
     "pose_coordinates",
     "quaternions_of_rotation_vectors",
+    "quaternion_product",
     "rotation_vectors_of_quaternions",
 ]
 
@@ -79,3 +80,12 @@ def rotation_vectors_of_quaternions(quaternion: np.ndarray) -> np.ndarray:
         s < 1e-8, 2.0 / np.where(w > 0, w, 1.0), 2.0 * np.arctan2(s, w) / np.where(s > 0, s, 1.0)
     )
     return ratio[:, None] * v
+
+
+def quaternion_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise Hamilton products ``a b`` of quaternions ``(w, x, y, z)`` (N, 4)."""
+    aw, av = a[:, :1], a[:, 1:]
+    bw, bv = b[:, :1], b[:, 1:]
+    w = aw * bw - np.sum(av * bv, axis=1, keepdims=True)
+    v = aw * bv + bw * av + np.cross(av, bv)
+    return np.hstack([w, v])

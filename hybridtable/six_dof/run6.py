@@ -23,6 +23,7 @@ commanded state one row later, as the 1-D loop's
 from __future__ import annotations
 
 import copy
+import functools
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -40,6 +41,7 @@ from hybridtable.measurement.run_reader import check_time, check_unique_ids, rea
 from hybridtable.six_dof.metrics import DockingMetrics, docking_metrics
 from hybridtable.six_dof.params import DockingLoopParams
 from hybridtable.six_dof.pose import (
+    quaternion_product,
     quaternions_of_rotation_vectors,
     rotation_exp,
     rotation_vectors_of_quaternions,
@@ -59,7 +61,6 @@ __all__ = [
     "read_run6",
     "read_runs6",
     "is_run6",
-    "quaternion_product",
     "noise_levels",
 ]
 
@@ -143,6 +144,14 @@ class Run6:
         pose coordinates (the rotation vector of the attitude)."""
         q = self.blocks[f"q_{which}"]
         return np.hstack([self.blocks[f"p_{which}"], rotation_vectors_of_quaternions(q)])
+
+    @functools.cached_property
+    def contact_ticks(self) -> np.ndarray:
+        """The ticks the devices touch at the measured pose, found once
+        (:func:`~hybridtable.six_dof.touch.touching`; read only)."""
+        mask = touching(self.params.contact, self.pose("act")[:, :3], self.rotations("act"))
+        mask.flags.writeable = False
+        return mask
 
     def rotations(self, which: str) -> np.ndarray:
         """The attitudes of ``"des"`` or ``"act"`` as rotation matrices (N, 3, 3;
@@ -383,15 +392,6 @@ def _check_quaternions(run: Run6, which: str, lines: Sequence[int]) -> None:
         )
 
 
-def quaternion_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise Hamilton products ``a b`` of quaternions ``(w, x, y, z)`` (N, 4)."""
-    aw, av = a[:, :1], a[:, 1:]
-    bw, bv = b[:, :1], b[:, 1:]
-    w = aw * bw - np.sum(av * bv, axis=1, keepdims=True)
-    v = aw * bv + bw * av + np.cross(av, bv)
-    return np.hstack([w, v])
-
-
 def _slope(measured: np.ndarray, reference: np.ndarray) -> float:
     """Least-squares factor ``s`` of ``measured ~ s reference`` (rows of vectors)."""
     return float(np.sum(measured * reference) / np.sum(reference * reference))
@@ -474,7 +474,7 @@ def noise_levels(values: np.ndarray, rows: np.ndarray | None = None) -> np.ndarr
 def _check_contact(run: Run6) -> None:
     """The record starts apart (by the measured pose) and holds a contact (a
     force from its level at rest above five noise levels and the dead band)."""
-    touch = touching(run.params.contact, run.pose("act")[:, :3], run.rotations("act"))
+    touch = run.contact_ticks
     if touch[0]:
         raise MeasurementError(
             f"{run.csv_path}: the record starts in contact (the measured pose presses the "

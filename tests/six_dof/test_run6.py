@@ -14,6 +14,7 @@ import pytest
 from hybridtable.errors import MeasurementError
 from hybridtable.six_dof.compare6 import EXPLAINED_SIGMA, compare_run6
 from hybridtable.six_dof.pose import (
+    quaternion_product,
     quaternions_of_rotation_vectors,
     rotation_exp,
     rotation_vectors_of_quaternions,
@@ -21,7 +22,6 @@ from hybridtable.six_dof.pose import (
 from hybridtable.six_dof.replay6 import replay_run6
 from hybridtable.six_dof.run6 import (
     RUN6_COLUMNS,
-    quaternion_product,
     read_run6,
     read_runs6,
     run6_csv_text,
