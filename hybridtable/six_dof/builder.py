@@ -41,7 +41,7 @@ from hybridtable.six_dof.sensor import PoseNoise, add_wrench_sensor
 from hybridtable.six_dof.spacecraft import BODY_STATE_SIZE, RigidSpacecraft, port_state
 from hybridtable.six_dof.table import PoseTable, add_pose_table
 from hybridtable.stewart.geometry import rotation_from_rpy
-from hybridtable.systems.measurement_chain import first_order_hold_filter, mount_system
+from hybridtable.systems.measurement_chain import low_pass_system, mount_system
 
 __all__ = [
     "LOG_LAYOUT",
@@ -177,11 +177,11 @@ def add_rig_part(
         wrench = gain.get_output_port()
     if physics is not None and physics.sensor_time_constant_s > 0.0:
         # the 1-D measurement chain's low pass on each channel (its law)
-        a, b0, b1 = first_order_hold_filter(physics.sensor_time_constant_s, h)
-        eye = np.eye(6)
         low_pass = builder.AddNamedSystem(
             "sensor_low_pass",
-            LinearSystem(a * eye, (a * b1 + b0) * eye, eye, b1 * eye, time_period=h),
+            LinearSystem(
+                *low_pass_system(physics.sensor_time_constant_s, h, channels=6), time_period=h
+            ),
         )
         builder.Connect(wrench, low_pass.get_input_port())
         wrench = low_pass.get_output_port()

@@ -26,6 +26,7 @@ __all__ = [
     "MeasurementChainParams",
     "MeasurementChain",
     "first_order_hold_filter",
+    "low_pass_system",
     "mount_system",
 ]
 
@@ -110,6 +111,19 @@ def first_order_hold_filter(
     return a, q - a, 1.0 - q
 
 
+def low_pass_system(
+    time_constant_s: float, sample_period_s: float, channels: int = 1
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(A, B, C, D)`` of the low pass on ``channels`` independent channels
+    as a discrete ``LinearSystem`` with feedthrough
+    (:func:`first_order_hold_filter`): with ``y[k+1] = a y[k] + b0 u[k] + b1
+    u[k+1]`` the state is ``z = y - b1 u``: ``z[k+1] = a z[k] + (a b1 + b0)
+    u[k]``, ``y = z + b1 u``."""
+    a, b0, b1 = first_order_hold_filter(time_constant_s, sample_period_s)
+    eye = np.eye(channels)
+    return a * eye, (a * b1 + b0) * eye, eye, b1 * eye
+
+
 def mount_system(
     frequency_hz: float, damping_ratio: float, sample_period_s: float, channels: int = 1
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -159,11 +173,9 @@ class MeasurementChain(Diagram):
         entry = builder.AddNamedSystem("entry", PassThrough(1))
         signal = entry.get_output_port()
         if params.time_constant_s > 0.0:
-            a, b0, b1 = first_order_hold_filter(params.time_constant_s, h)
-            # z[k] = y[k] - b1 u[k]:  z[k+1] = a z[k] + (a b1 + b0) u[k], y = z + b1 u.
             lowpass = builder.AddNamedSystem(
                 "low_pass",
-                LinearSystem([[a]], [[a * b1 + b0]], [[1.0]], [[b1]], time_period=h),
+                LinearSystem(*low_pass_system(params.time_constant_s, h), time_period=h),
             )
             builder.Connect(signal, lowpass.get_input_port())
             signal = lowpass.get_output_port()
