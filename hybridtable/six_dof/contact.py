@@ -21,7 +21,6 @@ in both), and its 6x6 stiffness and damping in closed form;
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 from pydrake.geometry import HydroelasticContactRepresentation
@@ -31,18 +30,20 @@ from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
 from pydrake.multibody.tree import RigidBody, SpatialInertia
 from pydrake.systems.framework import BasicVector, DiagramBuilder, LeafSystem
 
-from hybridtable._validation import check_choice, check_nonnegative, check_positive
 from hybridtable.errors import ParameterError
-from hybridtable.limits import check_plausible
 from hybridtable.six_dof import drogue
-from hybridtable.six_dof.pads import STICTION_TOLERANCE_M_PER_S, pad_stiffness, register_pads
+from hybridtable.six_dof.devices import DockingContactParams
+from hybridtable.six_dof.pads import (
+    STICTION_TOLERANCE_M_PER_S,
+    pad_law_contacts,
+    pad_law_stiffness,
+    pad_stiffness,
+    register_pads,
+)
 from hybridtable.six_dof.pose import rotation_exp, rotation_jacobian
 from hybridtable.stewart.geometry import cross
 
 __all__ = [
-    "GEOMETRIES",
-    "DEVICE_FIELDS",
-    "DockingContactParams",
     "register_docking_devices",
     "DockingContact",
     "DockingContactSystem",
@@ -50,146 +51,6 @@ __all__ = [
     "peak_press_m",
     "port_start_z_m",
 ]
-
-#: The docking devices: a pad ring on a flat plate, or a probe in a drogue.
-GEOMETRIES: tuple[str, ...] = ("plate", "cone")
-
-#: The fields of each geometry's own devices (the other's are not used).
-DEVICE_FIELDS: dict[str, tuple[str, ...]] = {
-    "plate": ("pad_count", "ring_radius_m", "pad_radius_m"),
-    "cone": (
-        "cone_half_angle_rad",
-        "mouth_radius_m",
-        "throat_radius_m",
-        "socket_depth_m",
-        "probe_radius_m",
-    ),
-}
-
-#: The cone's half angle (its wall from the axis) may lie in this range (rad):
-#: 5 to 75 deg.
-CONE_HALF_ANGLE_RANGE_RAD = (math.radians(5.0), math.radians(75.0))
-
-
-@dataclass(frozen=True)
-class DockingContactParams:
-    """The docking devices and their compliant contact.
-
-    ``geometry = "plate"`` (Drake's point contact): the active device (on the
-    table) is a ring of ``pad_count`` spherical pads of radius
-    ``pad_radius_m`` on a circle of ``ring_radius_m``, their tops in the
-    port's face plane; the passive device is a flat plate.
-
-    ``geometry = "cone"`` (Drake's hydroelastic contact): the active device
-    is a spherical probe head of radius ``probe_radius_m``, its tip at the
-    port origin; the passive device a drogue: a cone of half angle
-    ``cone_half_angle_rad`` from its mouth (radius ``mouth_radius_m``, in
-    the target's face plane) to its throat (``throat_radius_m``), then a
-    socket ``socket_depth_m`` deep (:mod:`~hybridtable.six_dof.drogue`). The
-    pad fields are not used, nor the cone's by a plate.
-
-    Parameters
-    ----------
-    contact_stiffness_n_per_m : float
-        Plate: total normal stiffness k with every pad touching, > 0 (each
-        pad ``k / pad_count``). Cone: the probe's tangent stiffness at a
-        press of a tenth of its radius (its force grows as the press squared:
-        :func:`~hybridtable.six_dof.drogue.probe_modulus_pa`).
-    contact_dissipation_s_per_m : float
-        Hunt–Crossley dissipation d, ``f = f_elastic (1 + d dx/dt)``, >= 0.
-    friction_coefficient : float
-        Coulomb friction mu of the devices, >= 0 (Drake's regularized friction).
-    pad_count : int
-        Number of pads, >= 3.
-    ring_radius_m, pad_radius_m : float
-        Ring and pad radii, > 0, ``pad_radius_m < ring_radius_m``.
-    geometry : {"plate", "cone"}
-    cone_half_angle_rad : float
-        The drogue's wall from the axis (rad), 5 to 75 deg.
-    mouth_radius_m, throat_radius_m, probe_radius_m : float
-        ``probe_radius_m < throat_radius_m < mouth_radius_m``, > 0.
-    socket_depth_m : float
-        Depth of the socket past the throat, > ``probe_radius_m`` (a head
-        whose centre has passed the throat fits in it).
-    """
-
-    contact_stiffness_n_per_m: float
-    contact_dissipation_s_per_m: float = 0.0
-    friction_coefficient: float = 0.0
-    pad_count: int = 8
-    ring_radius_m: float = 0.3
-    pad_radius_m: float = 0.01
-    geometry: str = "plate"
-    cone_half_angle_rad: float = math.radians(30.0)
-    mouth_radius_m: float = 0.3
-    throat_radius_m: float = 0.08
-    socket_depth_m: float = 0.15
-    probe_radius_m: float = 0.05
-
-    def __post_init__(self) -> None:
-        s = object.__setattr__
-        k = check_positive("contact_stiffness_n_per_m", self.contact_stiffness_n_per_m)
-        s(self, "contact_stiffness_n_per_m", check_plausible("contact_stiffness_n_per_m", k))
-        for name in ("contact_dissipation_s_per_m", "friction_coefficient"):
-            s(self, name, check_nonnegative(name, getattr(self, name)))
-        if isinstance(self.pad_count, bool) or int(self.pad_count) != self.pad_count:
-            raise ParameterError(f"pad_count must be a whole number (got {self.pad_count!r})")
-        if not 3 <= int(self.pad_count) <= 64:
-            raise ParameterError(f"pad_count must be in [3, 64] (got {self.pad_count!r})")
-        s(self, "pad_count", int(self.pad_count))
-        for name in ("ring_radius_m", "pad_radius_m"):
-            s(self, name, check_positive(name, getattr(self, name)))
-        if self.pad_radius_m >= self.ring_radius_m:
-            raise ParameterError(
-                f"pad_radius_m {self.pad_radius_m:g} must be < ring_radius_m {self.ring_radius_m:g}"
-            )
-        s(self, "geometry", check_choice("geometry", self.geometry, GEOMETRIES))
-        for name in ("mouth_radius_m", "throat_radius_m", "socket_depth_m", "probe_radius_m"):
-            s(self, name, check_positive(name, getattr(self, name)))
-        alpha = check_positive("cone_half_angle_rad", self.cone_half_angle_rad)
-        lo, hi = CONE_HALF_ANGLE_RANGE_RAD
-        if not lo <= alpha <= hi:
-            raise ParameterError(
-                f"cone_half_angle_rad must be in [{lo:.4g}, {hi:.4g}] rad (5 to 75 deg; "
-                f"got {alpha:g})"
-            )
-        s(self, "cone_half_angle_rad", alpha)
-        r, rt, rm = self.probe_radius_m, self.throat_radius_m, self.mouth_radius_m
-        if not r < rt < rm:
-            raise ParameterError(
-                f"probe_radius_m {r:g} < throat_radius_m {rt:g} < mouth_radius_m {rm:g} must "
-                "hold: the probe head passes the throat, the cone narrows to it"
-            )
-        if self.socket_depth_m <= r:
-            raise ParameterError(
-                f"socket_depth_m {self.socket_depth_m:g} must be > probe_radius_m {r:g}: a head "
-                "whose centre has passed the throat fits in the socket"
-            )
-
-    @property
-    def is_cone(self) -> bool:
-        """The probe and drogue (hydroelastic), not the pads and plate."""
-        return self.geometry == "cone"
-
-    @property
-    def moment_arm_m(self) -> float:
-        """A lever arm of the contact's moments about the port (m): the pads'
-        ring radius, or the probe's radius."""
-        return self.probe_radius_m if self.is_cone else self.ring_radius_m
-
-    @property
-    def pad_centres_m(self) -> np.ndarray:
-        """Pad centres in the port frame, (pad_count, 3) (m)."""
-        a = 2.0 * np.pi * np.arange(self.pad_count) / self.pad_count
-        r = self.ring_radius_m
-        return np.column_stack(
-            [r * np.cos(a), r * np.sin(a), np.full(self.pad_count, -self.pad_radius_m)]
-        )
-
-    @property
-    def probe_centre_m(self) -> np.ndarray:
-        """The probe head's centre in the port frame (m)."""
-        return np.array([0.0, 0.0, -self.probe_radius_m])
 
 
 def register_docking_devices(
@@ -317,6 +178,8 @@ class DockingContact:
         if not params.is_cone:
             self._pad_centres = np.ascontiguousarray(params.pad_centres_m)
             self._pad_stiffness = pad_stiffness()
+            #: The pads' own law where it is not Drake's (None: Drake's query).
+            self._pad_law = None if params.drake_law else params.pad_law
 
     def _evaluate(self, q: np.ndarray, qd: np.ndarray | None):
         """The port origin and Drake's contact results with the device at
@@ -334,9 +197,21 @@ class DockingContact:
         return p, self._results.Eval(ctx)
 
     def _contacts(self, q: np.ndarray, qd: np.ndarray | None):
-        """Drake's point pairs of the pads with the device at ``q`` moving at
+        """The point pairs of the pads with the device at ``q`` moving at
         ``qd``: ``(port origin p, [(contact point, force on the device, the
-        pair's depth, normal out of the plate toward the device), ...])``."""
+        pair's depth, normal out of the plate toward the device), ...])``:
+        Drake's, or where the pads' law is not Drake's
+        (:attr:`DockingContactParams.drake_law`), the same point pairs with
+        the 1-D contact law per pad (:func:`~hybridtable.six_dof.pads.pad_law_contacts`)."""
+        if self._pad_law is not None:
+            q = np.asarray(q, dtype=float)
+            qd = np.zeros(6) if qd is None else np.asarray(qd, dtype=float)
+            c = self.params
+            U, F, X, N = pad_law_contacts(
+                q, qd, self._pad_centres, c.pad_radius_m, self._pad_law, c.friction_coefficient
+            )
+            p = q[:3]
+            return p, [(p + U[i], F[i], X[i], N[i]) for i in range(X.shape[0])]
         p, results = self._evaluate(q, qd)
         pairs = []
         for i in range(results.num_point_pair_contacts()):
@@ -462,6 +337,10 @@ class DockingContact:
                     A, X, N, P, G, p, J, qd, c.contact_dissipation_s_per_m, w_q, w_qd
                 )
             return -w_q, -w_qd
+        if self._pad_law is not None:
+            return pad_law_stiffness(
+                q, qd, self._pad_centres, c.pad_radius_m, self._pad_law, c.friction_coefficient
+            )
         return self._pad_stiffness(
             q,
             qd,

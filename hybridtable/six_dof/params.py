@@ -32,7 +32,8 @@ from hybridtable._validation import (
 from hybridtable.errors import ParameterError
 from hybridtable.limits import LIMITS, check_plausible
 from hybridtable.loop.params import believed
-from hybridtable.six_dof.contact import DEVICE_FIELDS, DockingContactParams, peak_press_m
+from hybridtable.six_dof.contact import peak_press_m
+from hybridtable.six_dof.devices import DEVICE_FIELDS, DockingContactParams
 from hybridtable.six_dof.drogue import floor_depth_m
 from hybridtable.systems.sensor import SensorParams, sample_taps
 from hybridtable.systems.table import TableParams
@@ -307,6 +308,12 @@ class DockingPlant:
         for name, kind in (("spacecraft", RigidBodyParams), ("contact", DockingContactParams)):
             if not isinstance(getattr(self, name), kind):
                 raise ParameterError(f"{name} must be a {kind.__name__}")
+        if self.table.backend == "stewart" and not self.contact.drake_law:
+            raise ParameterError(
+                f"{self.contact.pad_law_terms[0]}: the Stewart platform's MultibodyPlant computes Drake's point "
+                'contact, which has no such term; the table model ([table] backend = "model") '
+                "carries the pads' own law"
+            )
 
 
 @dataclass(frozen=True)

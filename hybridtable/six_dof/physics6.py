@@ -65,6 +65,13 @@ PHYSICAL_FIELDS: tuple[str, ...] = (
     "sensor_delay_s",
     "table_response_hz",
     "table_damping_ratio",
+    # the pads' law beyond Drake's (contact.PAD_LAW_FIELDS)
+    "contact_exponent",
+    "reference_press_m",
+    "contact_damping_n_s_per_m",
+    "series_compliance_m_per_n",
+    "normal_friction_force_n",
+    "normal_friction_velocity_m_per_s",
 )
 
 

@@ -52,7 +52,7 @@ from hybridtable.loop.scenario import (
     table_response_hz,
     top_level,
 )
-from hybridtable.six_dof.contact import DEVICE_FIELDS
+from hybridtable.six_dof.devices import DEVICE_FIELDS
 from hybridtable.six_dof.params import (
     MAX_MISALIGNMENT_RAD,
     ApproachParams,

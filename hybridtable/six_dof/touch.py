@@ -29,7 +29,7 @@ __all__ = ["force_from_rest", "touching"]
 def touching(contact, positions_m: np.ndarray, rotations: np.ndarray) -> np.ndarray:
     """The ticks the devices touch (bool, N) at the port's measured positions
     (N, 3; W, m) and attitudes (N, 3, 3; port frame to W) for ``contact`` (a
-    :class:`~hybridtable.six_dof.contact.DockingContactParams`)."""
+    :class:`~hybridtable.six_dof.devices.DockingContactParams`)."""
     if contact.is_cone:
         centres = positions_m + rotations @ contact.probe_centre_m
         depth = np.array([drogue.wall_depth_m(contact, x) for x in centres])

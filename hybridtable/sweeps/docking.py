@@ -180,7 +180,7 @@ def _choices(name: str) -> tuple[str, ...] | None:
 
         return TABLE_BACKENDS
     if name == "geometry":
-        from hybridtable.six_dof.contact import GEOMETRIES
+        from hybridtable.six_dof.devices import GEOMETRIES
 
         return GEOMETRIES
     if name == "stiffness_model":
@@ -254,7 +254,7 @@ def check_devices(base, geometries: set[str], where: dict[str, str]) -> None:
     ParameterError
         Naming the input, its table and the geometry that reads it.
     """
-    from hybridtable.six_dof.contact import DEVICE_FIELDS
+    from hybridtable.six_dof.devices import DEVICE_FIELDS
 
     used = set(geometries) or {base.contact.geometry}
     for geometry, fields in DEVICE_FIELDS.items():

@@ -12,12 +12,8 @@ import pytest
 
 import hybridtable.six_dof.drogue as drogue_module
 from hybridtable.errors import ParameterError, SpecError
-from hybridtable.six_dof.contact import (
-    DockingContact,
-    DockingContactParams,
-    peak_press_m,
-    port_start_z_m,
-)
+from hybridtable.six_dof.contact import DockingContact, peak_press_m, port_start_z_m
+from hybridtable.six_dof.devices import DockingContactParams
 from hybridtable.six_dof.drogue import (
     probe_energy_j,
     probe_force_n,

@@ -13,6 +13,9 @@ Signature: in ``f_mea_n`` during compression and restitution, the force is
 higher in compression and lower in restitution, with a jump ``c v`` at the
 touch; the force-deflection loop encloses energy.
 
+On a six-axis rig (``apply6``) the pad ring's ``contact_damping_n_s_per_m``
+gains ``c``: each pad a dashpot ``c / pad_count`` beside its spring.
+
 To add an effect of your own, copy this module, edit ``EFFECT`` and add one
 line to ``hybridtable/diagnosis/library/__init__.py``.
 """
@@ -50,4 +53,6 @@ EFFECT = Effect(
     apply=lambda spec, v, s: spec.with_contact(damping_n_s_per_m=v["damping_n_s_per_m"]),
     touches=("contact.damping",),
     separation_hint="a run at another approach velocity (the damping force grows with it)",
+    # on a six-axis rig: a dashpot beside the pads' springs (c / pad_count each)
+    apply6=lambda physics, v, s: physics.plus(contact_damping_n_s_per_m=v["damping_n_s_per_m"]),
 )

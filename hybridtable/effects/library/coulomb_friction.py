@@ -8,6 +8,10 @@ Model: the ``ContactLaw`` of the contact back-end gets
 ``friction_force_n = F`` and ``friction_velocity_m_per_s = v_F``
 (``ModelSpec.contact``); ``F = 0`` is nominal.
 
+On a six-axis rig (``apply6``) the pad ring's ``normal_friction_force_n``
+gains ``F`` (``F / pad_count`` on each touching pad, against its own
+penetration rate), smoothed over the same ``v_F``.
+
 Signature: in ``f_mea_n`` during compression and restitution, a step ``+F``
 at the touch, ``+F`` in compression and ``-F`` in restitution; the contact
 releases early.
@@ -50,4 +54,8 @@ EFFECT = Effect(
     separation_hint="a run at another approach velocity (friction does not grow "
     "with it, damping does)",
     default_for=("diagnose",),  # a CoR table tries it when named (--effects)
+    # on a six-axis rig: F / pad_count on each touching pad, along the normal
+    apply6=lambda physics, v, s: physics.plus(normal_friction_force_n=v["friction_force_n"]).with_(
+        normal_friction_velocity_m_per_s=0.02 * s.velocity_m_per_s
+    ),
 )

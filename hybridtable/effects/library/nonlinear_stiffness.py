@@ -9,6 +9,10 @@ Model: the ``ContactLaw`` of the contact back-end gets ``exponent = n``,
 ``stiffness_n_per_m = k_ref`` and ``reference_deflection_m = d_ref``
 (``ModelSpec.contact``); ``n = 1``, ``k_ref = k`` is the nominal spring.
 
+On a six-axis rig (``apply6``) each pad's spring is the power law, the ring's
+total secant stiffness ``k_ref`` at the press ``d_ref`` (every pad alike on
+the axis).
+
 Signature: in ``f_mea_n`` during compression and restitution, the force pulse
 changes shape (steeper or flatter at small deflection), symmetric in
 compression and restitution.
@@ -54,4 +58,10 @@ EFFECT = Effect(
     separation_hint="runs at two approach velocities (the secant stiffness changes "
     "with the peak deflection only for a power law)",
     default_for=("diagnose",),  # a CoR table tries it when named (--effects)
+    # on a six-axis rig: each pad's spring the power law, the ring's total k_ref
+    apply6=lambda physics, v, s: physics.with_(
+        contact_stiffness_n_per_m=v["reference_stiffness_n_per_m"],
+        contact_exponent=v["exponent"],
+        reference_press_m=s.peak_deflection_m,
+    ),
 )

@@ -9,6 +9,11 @@ Model: the ``ContactLaw`` of the contact back-end gets
 ``series_compliance_m_per_n = s`` (``ModelSpec.contact``); ``s = 0`` is
 nominal.
 
+On a six-axis rig (``apply6``) the pad ring's ``series_compliance_m_per_n``
+gains ``s`` (``s pad_count`` behind each pad). With a linear spring it is a
+softer contact, the same law as ``stiffness_error`` below the nominal: the
+two are look-alikes that no run of one spring tells apart.
+
 Signature: in ``f_mea_n`` during compression and restitution, a softer
 effective contact, never a stiffer one.
 """
@@ -49,4 +54,8 @@ EFFECT = Effect(
     separation_hint="a run with another contact spring, or a measurement of the "
     "contact point's position",
     default_for=("diagnose",),  # a CoR table tries it when named (--effects)
+    # on a six-axis rig: s behind the ring, s pad_count behind each pad
+    apply6=lambda physics, v, s: physics.plus(
+        series_compliance_m_per_n=v["series_compliance_m_per_n"]
+    ),
 )
