@@ -2,7 +2,9 @@
 
 Plain numpy, no Drake and nothing from :mod:`hybridtable`: a rigid spacecraft
 whose docking port carries a ring of ``N`` spherical pads pressed against the
-flat target face z = 0, an ideal or second-order motion table (exact
+flat target face z = 0 (each pad's normal force by the pad law of
+docs/run6-format.md, "The pad law": :class:`PadLaw`, :func:`pad_normal_force`;
+by default Drake's point contact ``k x (1 + d xdot)``), an ideal or second-order motion table (exact
 zero-order-hold update per tick), a sensor delay of whole ticks and the
 compensators none / SDC / MDC / SDMDC, where the MDC stiffness ``K = -dw/dq``
 (and damping ``C = -dw/dqd``) comes from central finite differences of this
@@ -30,6 +32,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.linalg import expm
@@ -38,14 +41,20 @@ __all__ = [
     "EFFECT_PARTS",
     "LIBRARY_EFFECTS",
     "OUTSIDE_EFFECTS",
+    "PAD_LAW_KEYS",
     "PHYSICAL_ARGUMENTS",
+    "PadLaw",
     "STICTION_TOLERANCE_M_PER_S",
     "TABLE_STARTS",
     "contact_wrench",
     "exp_so3",
     "log_so3",
     "normalize_hidden",
+    "pad_energy",
+    "pad_law",
+    "pad_normal_force",
     "pad_ring",
+    "pad_spring_force",
     "replay_rig6",
     "simulate_rig6",
     "step5",
@@ -84,8 +93,192 @@ def pad_ring(pad_count: int, ring_radius_m: float, pad_radius_m: float) -> np.nd
     return np.column_stack([ring_radius_m * np.cos(phi), ring_radius_m * np.sin(phi), z])
 
 
-def wrench(q, qd, pads, k_pad_n_per_m, d_s_per_m=0.0, pad_radius_m=0.01):
+# --- the pad law (docs/run6-format.md, "The pad law") ----------------------------
+
+
+@dataclass(frozen=True)
+class PadLaw:
+    """What one pad's normal force has beyond Drake's point contact ``k x (1 + d xdot)``.
+
+    Per pad (a ring of ``N`` pads shares the contact's totals: :func:`pad_law`):
+    ``f_e = k_pad x_ref ((x - s_pad f_e) / x_ref)^n`` (solved for ``f_e``),
+    ``f_n = f_e (1 + d xdot) + c_pad xdot + F_pad tanh(xdot / v_F)``, nothing
+    where ``f_n <= 0``. The default is Drake's point contact.
+
+    Attributes
+    ----------
+    exponent : float
+        ``n`` (1), above 0.
+    reference_press_m : float or None
+        ``x_ref`` (m), above 0; needed only when ``n != 1``.
+    damping_n_s_per_m : float
+        ``c_pad = c / N`` (N s/m), at least 0.
+    compliance_m_per_n : float
+        ``s_pad = s N`` (m/N), at least 0: the structure behind the pad.
+    friction_force_n : float
+        ``F_pad = F / N`` (N), at least 0.
+    friction_velocity_m_per_s : float or None
+        ``v_F`` (m/s), above 0; needed only when ``F_pad > 0``.
+    """
+
+    exponent: float = 1.0
+    reference_press_m: float | None = None
+    damping_n_s_per_m: float = 0.0
+    compliance_m_per_n: float = 0.0
+    friction_force_n: float = 0.0
+    friction_velocity_m_per_s: float | None = None
+
+    def __post_init__(self):
+        for name in ("exponent", "damping_n_s_per_m", "compliance_m_per_n", "friction_force_n"):
+            value = getattr(self, name)
+            if not math.isfinite(value):
+                raise ValueError(f"pad law: {name} = {value} is not finite")
+        if not self.exponent > 0.0:
+            raise ValueError(f"pad law: exponent = {self.exponent} must be above 0")
+        for name in ("damping_n_s_per_m", "compliance_m_per_n", "friction_force_n"):
+            if getattr(self, name) < 0.0:
+                raise ValueError(f"pad law: {name} = {getattr(self, name)} must be at least 0")
+        x_ref, v_f = self.reference_press_m, self.friction_velocity_m_per_s
+        if self.exponent != 1.0 and not (x_ref is not None and math.isfinite(x_ref) and x_ref > 0):
+            raise ValueError(
+                f"pad law: an exponent {self.exponent} needs a reference press above 0, not {x_ref}"
+            )
+        if self.friction_force_n > 0.0 and not (
+            v_f is not None and math.isfinite(v_f) and v_f > 0.0
+        ):
+            raise ValueError(
+                f"pad law: a normal friction force needs a friction velocity above 0, not {v_f}"
+            )
+
+    @property
+    def plain(self) -> bool:
+        """Drake's point contact: a linear spring, nothing beside or behind it."""
+        return (
+            self.exponent == 1.0
+            and self.damping_n_s_per_m == 0.0
+            and self.compliance_m_per_n == 0.0
+            and self.friction_force_n == 0.0
+        )
+
+    @property
+    def dissipative(self) -> bool:
+        """Whether the law has a term in the penetration rate besides Hunt-Crossley's."""
+        return self.damping_n_s_per_m > 0.0 or self.friction_force_n > 0.0
+
+
+def pad_law(
+    pad_count: int,
+    *,
+    contact_exponent: float = 1.0,
+    reference_press_m: float | None = None,
+    contact_damping_n_s_per_m: float = 0.0,
+    series_compliance_m_per_n: float = 0.0,
+    normal_friction_force_n: float = 0.0,
+    normal_friction_velocity_m_per_s: float | None = None,
+) -> PadLaw:
+    """One pad's :class:`PadLaw` from the contact's totals (the scenario's ``[contact]``
+    keys): ``c / N``, ``s N``, ``F / N`` per pad, ``n``, ``x_ref``, ``v_F`` shared."""
+    n = int(pad_count)
+    return PadLaw(
+        exponent=float(contact_exponent),
+        reference_press_m=None if reference_press_m is None else float(reference_press_m),
+        damping_n_s_per_m=float(contact_damping_n_s_per_m) / n,
+        compliance_m_per_n=float(series_compliance_m_per_n) * n,
+        friction_force_n=float(normal_friction_force_n) / n,
+        friction_velocity_m_per_s=None
+        if normal_friction_velocity_m_per_s is None
+        else float(normal_friction_velocity_m_per_s),
+    )
+
+
+def _spring(y, k_pad, law):
+    """The pad's own spring at deflection ``y >= 0``: ``k_pad x_ref (y / x_ref)^n``."""
+    if law.exponent == 1.0:
+        return k_pad * y
+    x_ref = law.reference_press_m
+    return k_pad * x_ref * (y / x_ref) ** law.exponent
+
+
+def _deflection(x, k_pad, law, max_iter=200):
+    """The pad spring's deflection ``y`` in ``(0, x]`` and force ``f = g(y)`` with
+    ``y + s_pad f = x`` (``g`` the spring), for pads pressed ``x > 0``.
+
+    Newton from the side where it converges monotonically: on ``y`` from ``y = x``
+    for ``n >= 1`` (``y + s g(y) - x`` convex), on ``f`` from ``f = g(x)`` for
+    ``n < 1`` (``g^-1(f) + s f - x`` convex); each iterate stays above the root,
+    so a step that no longer shrinks it ends the search.
+    """
+    x = np.asarray(x, dtype=float)
+    s, n = law.compliance_m_per_n, law.exponent
+    if s == 0.0:
+        return x.copy(), _spring(x, k_pad, law)
+    x_ref = law.reference_press_m
+    eps = 4.0 * np.finfo(float).eps
+    if n >= 1.0:
+        y = x.copy()
+        for _ in range(max_iter):
+            g = _spring(y, k_pad, law)
+            step = (y + s * g - x) / (1.0 + s * n * g / y)
+            if not (step > eps * y).any():
+                break
+            y = np.where(step > 0.0, y - step, y)
+        return y, _spring(y, k_pad, law)
+    f = _spring(x, k_pad, law)
+    for _ in range(max_iter):
+        y = x_ref * (f / (k_pad * x_ref)) ** (1.0 / n)  # g^-1(f)
+        step = (y + s * f - x) / (y / (n * f) + s)
+        if not (step > eps * f).any():
+            break
+        f = np.where(step > 0.0, f - step, f)
+    return x_ref * (f / (k_pad * x_ref)) ** (1.0 / n), f
+
+
+def pad_spring_force(x, k_pad_n_per_m, law: PadLaw | None = None):
+    """``f_e`` (N) of pads pressed ``x > 0`` (m): ``k_pad x_ref ((x - s_pad f_e) / x_ref)^n``
+    solved for ``f_e`` (``n = 1``: ``k_pad x / (1 + k_pad s_pad)``)."""
+    law = PadLaw() if law is None else law
+    x = np.asarray(x, dtype=float)
+    if law.exponent == 1.0:
+        return k_pad_n_per_m * x / (1.0 + k_pad_n_per_m * law.compliance_m_per_n)
+    return _deflection(x, k_pad_n_per_m, law)[1]
+
+
+def pad_normal_force(x, xdot, k_pad_n_per_m, d_s_per_m=0.0, law: PadLaw | None = None):
+    """``f_n`` (N, at least 0) of pads pressed ``x > 0`` (m) at the rate ``xdot`` (m/s):
+    ``f_e (1 + d xdot) + c_pad xdot + F_pad tanh(xdot / v_F)``, 0 where that is not above 0.
+    With the default law this is Drake's ``k x max(1 + d xdot, 0)``, number for number."""
+    x, xdot = np.asarray(x, dtype=float), np.asarray(xdot, dtype=float)
+    if law is None or law.plain:
+        return k_pad_n_per_m * x * np.maximum(1.0 + d_s_per_m * xdot, 0.0)
+    f = pad_spring_force(x, k_pad_n_per_m, law) * (1.0 + d_s_per_m * xdot)
+    if law.damping_n_s_per_m != 0.0:
+        f = f + law.damping_n_s_per_m * xdot
+    if law.friction_force_n != 0.0:
+        f = f + law.friction_force_n * np.tanh(xdot / law.friction_velocity_m_per_s)
+    return np.maximum(f, 0.0)
+
+
+def pad_energy(x, k_pad_n_per_m, law: PadLaw | None = None):
+    """Elastic energy (J) stored in pads pressed ``x > 0``: the spring's
+    ``k_pad x_ref^2 (y / x_ref)^(n+1) / (n + 1)`` at its deflection ``y`` and the
+    structure's ``s_pad f_e^2 / 2`` (``k_pad x^2 / 2`` with the default law)."""
+    x = np.asarray(x, dtype=float)
+    if law is None or law.plain:
+        return 0.5 * k_pad_n_per_m * x**2
+    if law.exponent == 1.0:
+        f = pad_spring_force(x, k_pad_n_per_m, law)
+        y = x - law.compliance_m_per_n * f
+    else:
+        y, f = _deflection(x, k_pad_n_per_m, law)
+    return f * y / (law.exponent + 1.0) + 0.5 * law.compliance_m_per_n * f**2
+
+
+def wrench(q, qd, pads, k_pad_n_per_m, d_s_per_m=0.0, pad_radius_m=0.01, law=None):
     """Contact wrench on the chaser at the port origin, and the pad penetrations.
+
+    Each pad pressed ``x = delta > 0`` at the rate ``xdot`` (the port's velocity
+    at the pad, along +z: into the plate) pushes back along -z with
+    :func:`pad_normal_force` (``law``: docs/run6-format.md, "The pad law").
 
     Parameters
     ----------
@@ -95,6 +288,8 @@ def wrench(q, qd, pads, k_pad_n_per_m, d_s_per_m=0.0, pad_radius_m=0.01):
         Pad centres in the port frame [m].
     k_pad_n_per_m, d_s_per_m, pad_radius_m : float
         Stiffness of one pad [N/m], Hunt-Crossley dissipation [s/m], pad radius [m].
+    law : PadLaw, optional
+        One pad's law beyond Drake's point contact (default: none).
 
     Returns
     -------
@@ -110,7 +305,10 @@ def wrench(q, qd, pads, k_pad_n_per_m, d_s_per_m=0.0, pad_radius_m=0.01):
     if on.any():
         om = qd[3:]
         rate = qd[2] + om[0] * b[on, 1] - om[1] * b[on, 0]  # (v_P + omega x b)_z
-        fz[on] = -k_pad_n_per_m * delta[on] * np.maximum(1.0 + d_s_per_m * rate, 0.0)
+        if law is None or law.plain:
+            fz[on] = -k_pad_n_per_m * delta[on] * np.maximum(1.0 + d_s_per_m * rate, 0.0)
+        else:
+            fz[on] = -pad_normal_force(delta[on], rate, k_pad_n_per_m, d_s_per_m, law)
     w = np.array([b[:, 1] @ fz, -(b[:, 0] @ fz), 0.0, 0.0, 0.0, fz.sum()])
     return w, delta
 
@@ -176,6 +374,12 @@ LIBRARY_EFFECTS: dict[str, dict[str, float | None]] = {
     "com_offset": {"com_x_m": 0.0, "com_y_m": 0.0, "com_z_m": 0.0},
     # outside when this generator was written; the library now has the law
     "mount_resonance": {"mount_frequency_hz": math.inf, "mount_damping_ratio": 0.1},
+    # the pad law's terms (docs/run6-format.md, "The pad law"), appended last so
+    # that the earlier effects keep their places in the draws
+    "contact_damping": {"damping_n_s_per_m": 0.0},
+    "nonlinear_stiffness": {"exponent": 1.0, "reference_stiffness_n_per_m": None},
+    "series_compliance": {"series_compliance_m_per_n": 0.0},
+    "coulomb_friction": {"friction_force_n": 0.0},
 }
 
 #: Effects outside the library, physically plausible for a six-axis rig, none a
@@ -192,6 +396,10 @@ EFFECT_PARTS: dict[str, str] = {
     "stiffness_error": "contact",
     "hunt_crossley": "contact",
     "friction_across_face": "contact",
+    "contact_damping": "contact",
+    "nonlinear_stiffness": "contact",
+    "series_compliance": "contact",
+    "coulomb_friction": "contact",
     "pad_proud": "contact",
     "extra_delay": "sensor_dynamics",
     "sensor_filter": "sensor_dynamics",
@@ -229,8 +437,10 @@ def normalize_hidden(hidden: Mapping | None) -> dict[str, dict[str, float | None
     ValueError
         An unknown effect or parameter, a value that is not a finite number
         (``mount_frequency_hz`` may be ``inf``: no mount resonance), or one out
-        of its range (a ratio, factor or frequency not above 0, a negative time
-        constant, delay, width or height, a damping ratio not above 0).
+        of its range (a ratio, factor, frequency, exponent or reference
+        stiffness not above 0, a negative time constant, delay, width, height,
+        contact damping, series compliance or normal friction force, a damping
+        ratio not above 0).
     """
     out: dict[str, dict[str, float | None]] = {}
     for name, params in (hidden or {}).items():
@@ -266,9 +476,14 @@ def _check_ranges(effects: Mapping[str, Mapping[str, float | None]]) -> None:
         "mount_frequency_hz",
         "mount_damping_ratio",
         "lateral_response_ratio",
+        "exponent",
+        "reference_stiffness_n_per_m",
     )
     non_negative = (
         "extra_friction_coefficient",
+        "damping_n_s_per_m",
+        "series_compliance_m_per_n",
+        "friction_force_n",
         "extra_delay_s",
         "time_constant_s",
         "backlash_x_m",
@@ -301,6 +516,7 @@ def contact_wrench(
     pad_radius_m=0.01,
     friction_coefficient=0.0,
     stiction_m_per_s=STICTION_TOLERANCE_M_PER_S,
+    law=None,
 ):
     """:func:`wrench` with the pads' regularized Coulomb friction across the face.
 
@@ -308,15 +524,16 @@ def contact_wrench(
     point (``delta`` into the plate) and the face: ``x_c = (c_x, c_y, delta / 2)``
     for a pad centre ``c``. The device's point there moves at ``v_P + omega x
     (x_c - p_P)``; its slip ``s t`` is that velocity along the face (x, y). The pad
-    pushes the spacecraft with ``-mu(s) f_n t``, ``f_n = k delta (1 + d xdot)``
-    its normal force, ``mu(s) = mu step5(s / v_s)`` (Drake's regularized
-    friction, ``v_s = stiction_m_per_s``), about the port origin with the lever
-    ``x_c - p_P``. Without friction (``friction_coefficient = 0``) this is
-    :func:`wrench`, number for number.
+    pushes the spacecraft with ``-mu(s) f_n t``, ``f_n`` its normal force
+    (:func:`pad_normal_force`: ``k delta max(1 + d xdot, 0)`` with the default
+    law; none, and so no friction, where it is not above 0), ``mu(s) = mu
+    step5(s / v_s)`` (Drake's regularized friction, ``v_s = stiction_m_per_s``),
+    about the port origin with the lever ``x_c - p_P``. Without friction
+    (``friction_coefficient = 0``) this is :func:`wrench`, number for number.
 
     Parameters
     ----------
-    q, qd, pads, k_pad_n_per_m, d_s_per_m, pad_radius_m
+    q, qd, pads, k_pad_n_per_m, d_s_per_m, pad_radius_m, law
         As :func:`wrench`'s.
     friction_coefficient : float
         ``mu`` (1).
@@ -330,7 +547,7 @@ def contact_wrench(
     delta : array (N,)
         Penetration of each pad [m].
     """
-    w, delta = wrench(q, qd, pads, k_pad_n_per_m, d_s_per_m, pad_radius_m)
+    w, delta = wrench(q, qd, pads, k_pad_n_per_m, d_s_per_m, pad_radius_m, law)
     on = delta > 0.0
     if friction_coefficient <= 0.0 or not on.any():
         return w, delta
@@ -338,7 +555,7 @@ def contact_wrench(
     dep = delta[on]
     om = np.asarray(qd[3:], dtype=float)
     rate = qd[2] + om[0] * b[:, 1] - om[1] * b[:, 0]
-    f_n = k_pad_n_per_m * dep * np.maximum(1.0 + d_s_per_m * rate, 0.0)
+    f_n = pad_normal_force(dep, rate, k_pad_n_per_m, d_s_per_m, law)
     lever = b.copy()
     lever[:, 2] = b[:, 2] + pad_radius_m - 0.5 * dep  # x_c - p_P
     vel = np.asarray(qd[:3], dtype=float) + np.cross(om, lever)
@@ -558,6 +775,9 @@ class _Physics:
         effects,
         table_start,
         miss,
+        contact=None,
+        mass_kg=None,
+        approach_speed=None,
     ):
         if table_start not in TABLE_STARTS:
             raise ValueError(f"table_start must be one of {TABLE_STARTS}, not {table_start!r}")
@@ -575,6 +795,9 @@ class _Physics:
         k_true_pad = k_pad if k_true is None else k_true / pad_count
         d_true = max(d + effects.get("hunt_crossley", {}).get("damping_factor_s_per_m", 0.0), 0.0)
         self.mu = effects.get("friction_across_face", {}).get("extra_friction_coefficient", 0.0)
+        k_true_pad, self.law = _true_pad_law(
+            dict(contact or {}), effects, pad_count, k_pad, k_true_pad, mass_kg, approach_speed
+        )
         self.args = (true_pads, k_true_pad, d_true, pad_radius)
         extra = effects.get("extra_delay", {}).get("extra_delay_s", 0.0) / h
         n_extra = round(extra)
@@ -591,10 +814,56 @@ class _Physics:
         the contact's wrench, the pads' penetrations and the sensor's reading."""
         q_act, qd_act = self.table.advance(q_cmd, qd_cmd)
         if self.mu > 0.0:
-            w_act, delta = contact_wrench(q_act, qd_act, *self.args, self.mu)
+            w_act, delta = contact_wrench(q_act, qd_act, *self.args, self.mu, law=self.law)
         else:
-            w_act, delta = wrench(q_act, qd_act, *self.args)
+            w_act, delta = wrench(q_act, qd_act, *self.args, self.law)
         return q_act, qd_act, w_act, delta, self.sensor.read(k, w_act)
+
+
+#: The scenario's ``[contact]`` keys of the pad law beyond Drake's point contact
+#: (docs/run6-format.md, "The pad law"), and their defaults.
+PAD_LAW_KEYS: dict[str, float | None] = {
+    "contact_exponent": 1.0,
+    "reference_press_m": None,
+    "contact_damping_n_s_per_m": 0.0,
+    "series_compliance_m_per_n": 0.0,
+    "normal_friction_force_n": 0.0,
+    "normal_friction_velocity_m_per_s": None,
+}
+
+
+def _true_pad_law(contact, effects, pad_count, k_pad, k_true_pad, mass_kg, approach_speed):
+    """The rig's own pad stiffness (N/m, one pad) and :class:`PadLaw`: the scenario's
+    ``[contact]`` (``contact``: :data:`PAD_LAW_KEYS` and ``contact_stiffness_n_per_m``)
+    under the hidden pad-law effects (docs/run6-format.md, "The effects, as laws"):
+
+    - ``contact_damping``: ``damping_n_s_per_m`` added to ``contact_damping_n_s_per_m``;
+    - ``nonlinear_stiffness``: the stiffness is ``reference_stiffness_n_per_m``
+      (``None``: the scenario's ``k``), ``contact_exponent`` is ``exponent`` and
+      ``reference_press_m`` is ``v0 sqrt(m / k)`` (``k`` the scenario's);
+    - ``series_compliance``: ``series_compliance_m_per_n`` added to the contact's;
+    - ``coulomb_friction``: ``friction_force_n`` added to ``normal_friction_force_n``,
+      and ``normal_friction_velocity_m_per_s`` is ``0.02 v0``.
+    """
+    law = {key: contact.get(key, default) for key, default in PAD_LAW_KEYS.items()}
+    k_scen = contact.get("contact_stiffness_n_per_m", k_pad * pad_count)
+    cd = effects.get("contact_damping")
+    if cd is not None:
+        law["contact_damping_n_s_per_m"] += cd["damping_n_s_per_m"]
+    ns = effects.get("nonlinear_stiffness")
+    if ns is not None:
+        k_ref = ns["reference_stiffness_n_per_m"]
+        k_true_pad = k_pad if k_ref is None else k_ref / pad_count
+        law["contact_exponent"] = ns["exponent"]
+        law["reference_press_m"] = approach_speed * math.sqrt(mass_kg / k_scen)
+    sc = effects.get("series_compliance")
+    if sc is not None:
+        law["series_compliance_m_per_n"] += sc["series_compliance_m_per_n"]
+    cf = effects.get("coulomb_friction")
+    if cf is not None:
+        law["normal_friction_force_n"] += cf["friction_force_n"]
+        law["normal_friction_velocity_m_per_s"] = 0.02 * approach_speed
+    return k_true_pad, pad_law(pad_count, **law)
 
 
 def _delay_ticks(sensor_delay_s: float, sample_rate_hz: float) -> int:
@@ -618,6 +887,12 @@ def simulate_rig6(
     pad_count: int = 8,
     ring_radius_m: float = 0.3,
     pad_radius_m: float = 0.01,
+    contact_exponent: float = 1.0,
+    reference_press_m: float | None = None,
+    contact_damping_n_s_per_m: float = 0.0,
+    series_compliance_m_per_n: float = 0.0,
+    normal_friction_force_n: float = 0.0,
+    normal_friction_velocity_m_per_s: float | None = None,
     table_response_hz: float = math.inf,
     table_damping_ratio: float = 0.8,
     sample_rate_hz: float = 1000.0,
@@ -647,7 +922,7 @@ def simulate_rig6(
     {parameter: value}}`` of :data:`LIBRARY_EFFECTS` (docs/run6-format.md, "The
     effects, as laws") or :data:`OUTSIDE_EFFECTS` (:func:`normalize_hidden`).
     The rig computer keeps the arguments' beliefs: its compensator's contact
-    model (the nominal pads, stiffness and dissipation, no friction), its lead
+    model (the nominal pads, stiffness, dissipation and pad law, no friction), its lead
     time (the nominal ``sensor_delay_s`` unless ``lead_time_s``) and its dead
     band. The library's laws:
 
@@ -655,6 +930,14 @@ def simulate_rig6(
       ``contact_stiffness_n_per_m`` (each pad's ``1 / pad_count`` of it);
     - ``hunt_crossley``: ``damping_factor_s_per_m`` added to the dissipation
       (at least 0);
+    - ``contact_damping``, ``nonlinear_stiffness``, ``series_compliance``,
+      ``coulomb_friction``: the pad law's terms (:func:`_true_pad_law`): a
+      dashpot ``damping_n_s_per_m`` beside the pads (``c / N`` each); the
+      pads' stiffness ``reference_stiffness_n_per_m`` as a power law of
+      ``exponent`` about ``x_ref = v0 sqrt(m / k)``; a compliance
+      ``series_compliance_m_per_n`` behind the ring (``s N`` behind each pad);
+      a force ``friction_force_n`` against the penetration rate (``F / N``
+      each, ``tanh(xdot / (0.02 v0))``), each added to the arguments' own;
     - ``friction_across_face``: ``extra_friction_coefficient`` of regularized
       Coulomb friction at each touching pad (:func:`contact_wrench`);
     - ``extra_delay``: ``extra_delay_s`` (whole ticks) added to the sensor's delay;
@@ -733,6 +1016,14 @@ def simulate_rig6(
         m, m, rad) and its initial attitude.
     contact_stiffness_n_per_m, hunt_crossley_dissipation_s_per_m
         The contact: total stiffness (N/m), Hunt-Crossley dissipation (s/m).
+    contact_exponent, reference_press_m, contact_damping_n_s_per_m
+        The pad law (docs/run6-format.md, "The pad law"; the ring's totals, as
+        the scenario's ``[contact]`` keys): the springs' exponent ``n`` (1),
+        their reference press ``x_ref`` (m; needed when ``n != 1``), a dashpot
+        ``c`` (N s/m) beside them,
+    series_compliance_m_per_n, normal_friction_force_n, normal_friction_velocity_m_per_s
+        a compliance ``s`` (m/N) behind them, a friction force ``F`` (N) against
+        the penetration rate, smoothed over ``v_F`` (m/s; needed when ``F > 0``).
     pad_count, ring_radius_m, pad_radius_m
         The pad ring (m).
     table_response_hz, table_damping_ratio
@@ -797,7 +1088,17 @@ def simulate_rig6(
         r_port = r_port - np.array([c["com_x_m"], c["com_y_m"], c["com_z_m"]])
     pads = pad_ring(pad_count, ring_radius_m, pad_radius_m)
     k_pad, d = contact_stiffness_n_per_m / pad_count, hunt_crossley_dissipation_s_per_m
-    args = (pads, k_pad, d, pad_radius_m)  # the rig computer's contact model
+    contact = {
+        "contact_stiffness_n_per_m": contact_stiffness_n_per_m,
+        "contact_exponent": contact_exponent,
+        "reference_press_m": reference_press_m,
+        "contact_damping_n_s_per_m": contact_damping_n_s_per_m,
+        "series_compliance_m_per_n": series_compliance_m_per_n,
+        "normal_friction_force_n": normal_friction_force_n,
+        "normal_friction_velocity_m_per_s": normal_friction_velocity_m_per_s,
+    }
+    law = pad_law(pad_count, **{key: contact[key] for key in PAD_LAW_KEYS})
+    args = (pads, k_pad, d, pad_radius_m, law)  # the rig computer's contact model
 
     # initial state: the nearest pad top `initial_gap_m` from the plane, port on the axis
     roll, pitch = misalignment_rad
@@ -828,6 +1129,9 @@ def simulate_rig6(
         effects=effects,
         table_start=table_start,
         miss=lateral_miss_m,
+        contact=contact,
+        mass_kg=m,
+        approach_speed=v0,
     )
     physics.start(q_cmd, qd_cmd)  # steady tracking of the approach ramp
     sensor = physics.sensor
@@ -849,7 +1153,8 @@ def simulate_rig6(
             if use_sdc:
                 w_c += lead * (w_mea - w_prev) / h
             if use_mdc:
-                K, C = wrench_jacobians(q_act, qd_act, *args, step=fd_step, damped=d > 0.0)
+                damped = d > 0.0 or law.dissipative
+                K, C = wrench_jacobians(q_act, qd_act, *args, step=fd_step, damped=damped)
                 w_c -= K @ (q_cmd - q_act) + C @ (qd_cmd - qd_act)
         w_prev = w_mea
         # 3. the spacecraft: semi-implicit Euler; its new port pose and rate are the command
@@ -864,7 +1169,10 @@ def simulate_rig6(
         qd_cmd = np.concatenate([v + _cross(om_w, lever), om_w])
         ke = 0.5 * m * (v @ v) + 0.5 * om_b @ inertia @ om_b
         own = wrench(q_cmd, qd_cmd, *args)[1]  # penetrations at the spacecraft's own pose
-        pe = 0.5 * k_pad * np.sum(np.maximum(own, 0.0) ** 2)
+        if law.plain:
+            pe = 0.5 * k_pad * np.sum(np.maximum(own, 0.0) ** 2)
+        else:
+            pe = float(pad_energy(own[own > 0.0], k_pad, law).sum())
         row = (q_act, q_cmd, w_act, w_c, qd_cmd[2], ke, ke + pe, p, rot @ inertia @ om_b)
         row += (w_mea, qd_act, qd_cmd)
         for name, value in zip(names, row, strict=True):
@@ -888,6 +1196,8 @@ def simulate_rig6(
 
 
 #: The keyword arguments of :func:`simulate_rig6` the rig's physical part uses.
+#: (``mass_kg`` and ``initial_velocity_m_per_s`` only for the scales of the
+#: ``nonlinear_stiffness`` and ``coulomb_friction`` laws: ``v0 sqrt(m / k)``, ``0.02 v0``.)
 PHYSICAL_ARGUMENTS = (
     "contact_stiffness_n_per_m",
     "hunt_crossley_dissipation_s_per_m",
@@ -898,6 +1208,9 @@ PHYSICAL_ARGUMENTS = (
     "table_damping_ratio",
     "sample_rate_hz",
     "sensor_delay_s",
+    *PAD_LAW_KEYS,
+    "mass_kg",
+    "initial_velocity_m_per_s",
 )
 
 
@@ -949,6 +1262,9 @@ def replay_rig6(
         "table_damping_ratio": 0.8,
         "sample_rate_hz": 1000.0,
         "sensor_delay_s": 0.0,
+        **PAD_LAW_KEYS,
+        "mass_kg": 2533.03,
+        "initial_velocity_m_per_s": 0.1,
     }
     par = defaults | {k: v for k, v in rig.items() if k in PHYSICAL_ARGUMENTS}
     effects = normalize_hidden(hidden)
@@ -970,6 +1286,9 @@ def replay_rig6(
         effects=effects,
         table_start=table_start,
         miss=lateral_miss_m,
+        contact={key: par[key] for key in ("contact_stiffness_n_per_m", *PAD_LAW_KEYS)},
+        mass_kg=par["mass_kg"],
+        approach_speed=par["initial_velocity_m_per_s"],
     )
     q_cmd = np.asarray(command_initial, dtype=float)
     qd_cmd = np.asarray(command_rate_initial, dtype=float)

@@ -236,6 +236,7 @@ _KNOWN_KEYS = {
         "pad_count",
         "ring_radius_m",
         "pad_radius_m",
+        *rig6.PAD_LAW_KEYS,  # the pad law's (docs/run6-format.md, "The pad law")
     },
     "approach": {
         "initial_velocity_m_per_s",
@@ -333,6 +334,7 @@ def _rig6_arguments(scen: Mapping) -> tuple[dict, np.ndarray]:
         "pad_count": int(co["pad_count"]),
         "ring_radius_m": _as_float(co["ring_radius_m"], "ring_radius_m"),
         "pad_radius_m": _as_float(co["pad_radius_m"], "pad_radius_m"),
+        **_pad_law_arguments(co),
         "table_response_hz": _as_float(tb["response_hz"], "response_hz"),
         "table_damping_ratio": _as_float(tb["damping_ratio"], "damping_ratio"),
         "sample_rate_hz": _as_float(rg["sample_rate_hz"], "sample_rate_hz"),
@@ -350,6 +352,38 @@ def _rig6_arguments(scen: Mapping) -> tuple[dict, np.ndarray]:
     if len(kwargs["misalignment_rad"]) != 2:
         raise ValueError("approach.misalignment_deg: two angles (roll, pitch)")
     return kwargs, miss
+
+
+def _pad_law_arguments(contact: Mapping) -> dict:
+    """The pad law's ``[contact]`` keys (``rig6.PAD_LAW_KEYS``) as ``simulate_rig6``
+    takes them: each the scenario's, or its default when absent (``reference_press_m``
+    and ``normal_friction_velocity_m_per_s`` have none: ``None``, needed only with
+    an exponent other than 1 or a friction force above 0); ``ValueError`` naming
+    the key for a value out of its range (an exponent, reference press or
+    friction velocity not above 0, a negative damping, compliance or force)."""
+    out = {}
+    for key, default in rig6.PAD_LAW_KEYS.items():
+        value = contact.get(key, default)
+        out[key] = None if value is None else _as_float(value, key)
+        if out[key] is not None and not math.isfinite(out[key]):
+            raise ValueError(f"contact.{key}: {out[key]} is not finite")
+    for key in ("contact_exponent", "reference_press_m", "normal_friction_velocity_m_per_s"):
+        if out[key] is not None and not out[key] > 0.0:
+            raise ValueError(f"contact.{key}: {out[key]} must be above 0")
+    for key in ("contact_damping_n_s_per_m", "series_compliance_m_per_n"):
+        if out[key] < 0.0:
+            raise ValueError(f"contact.{key}: {out[key]} must be at least 0")
+    if out["normal_friction_force_n"] < 0.0:
+        raise ValueError(
+            f"contact.normal_friction_force_n: {out['normal_friction_force_n']} must be at least 0"
+        )
+    if out["contact_exponent"] != 1.0 and out["reference_press_m"] is None:
+        raise ValueError("contact.reference_press_m: needed with a contact_exponent other than 1")
+    if out["normal_friction_force_n"] > 0.0 and out["normal_friction_velocity_m_per_s"] is None:
+        raise ValueError(
+            "contact.normal_friction_velocity_m_per_s: needed with a normal_friction_force_n"
+        )
+    return out
 
 
 # --- rotations ----------------------------------------------------------------
@@ -427,7 +461,10 @@ def generate_run6(
     The loop is ``rig6.simulate_rig6`` (plain numpy): the spacecraft's rigid
     body stepped by the rig computer as the format's step 3 says, the table
     model (second order per pose coordinate, exact per tick; ``"inf"``: the
-    ideal table), the pads' springs (and Hunt-Crossley dissipation) on the
+    ideal table), the pads' springs (and Hunt-Crossley dissipation, and the
+    pad law's ``[contact]`` keys: ``contact_exponent``, ``reference_press_m``,
+    ``contact_damping_n_s_per_m``, ``series_compliance_m_per_n``,
+    ``normal_friction_force_n``, ``normal_friction_velocity_m_per_s``) on the
     plate, a sensor delay of whole ticks and the compensators none / SDC /
     MDC / SDMDC (MDC's ``K`` and ``C`` by finite differences at the table's
     pose, the ``"linearized"`` stiffness model with the contact's stiffness).
@@ -843,6 +880,20 @@ def _family(name: str, rng: np.random.Generator, kwargs: Mapping, noise: Mapping
         return (lambda s: {keys[0]: s}), 0.1, 30.0, False
     if name == "friction_across_face":
         return (lambda s: {keys[0]: s}), 0.02, 1.0, False
+    # the pad law's terms, each in its own scale of the scenario's contact:
+    # the critical damping 2 sqrt(k m), the stiffness's compliance 1 / k, the
+    # undamped peak force v0 sqrt(k m); the exponent about the scenario's k
+    k, mass = kwargs["contact_stiffness_n_per_m"], kwargs["mass_kg"]
+    if name == "contact_damping":
+        critical = 2.0 * math.sqrt(k * mass)
+        return (lambda s: {keys[0]: s * critical}), 0.005, 0.5, False
+    if name == "nonlinear_stiffness":
+        return (lambda s: {keys[0]: 1.0 + sign * s, keys[1]: k}), 0.01, 0.5, False
+    if name == "series_compliance":
+        return (lambda s: {keys[0]: s / k}), 0.005, 1.0, False
+    if name == "coulomb_friction":
+        peak = kwargs["initial_velocity_m_per_s"] * math.sqrt(k * mass)
+        return (lambda s: {keys[0]: s * peak}), 0.002, 0.2, False
     if name == "extra_delay":
         return (lambda n: {keys[0]: n * h}), 1, 25, True
     if name == "sensor_filter":

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from scipy.optimize import brentq
 
 from tests.generators import rig6
 
@@ -177,3 +178,292 @@ def test_rotation_vector_round_trip():
 def test_a_delay_off_the_tick_grid_is_refused():
     with pytest.raises(ValueError, match="whole number of ticks"):
         run(sensor_delay_s=0.0045)
+
+
+# --- the pad law (docs/run6-format.md, "The pad law") ---------------------------------
+
+
+def _ring_force(n_pads, depth, rate, d=0.0, **totals):
+    """The ring's wrench on axis, every pad pressed ``depth`` at ``rate``, under the
+    pad law of the contact's totals ``totals``."""
+    pads = rig6.pad_ring(n_pads, 0.3, 0.01)
+    q = np.array([0.0, 0.0, depth, 0.0, 0.0, 0.0])
+    qd = np.array([0.0, 0.0, rate, 0.0, 0.0, 0.0])
+    law = rig6.pad_law(n_pads, **totals)
+    return rig6.wrench(q, qd, pads, K_N_PER_M / n_pads, d, 0.01, law)
+
+
+ON_AXIS_CASES = {  # name: (pad law's totals, Hunt-Crossley d, depth, rate, the 1-D law's force)
+    "power_law_shallow": (
+        {"contact_exponent": 1.5, "reference_press_m": 0.003},
+        0.0,
+        0.001,
+        0.0,
+        K_N_PER_M * 0.003 * (0.001 / 0.003) ** 1.5,
+    ),
+    "power_law_deep": (
+        {"contact_exponent": 1.5, "reference_press_m": 0.003},
+        0.0,
+        0.006,
+        0.0,
+        K_N_PER_M * 0.003 * (0.006 / 0.003) ** 1.5,
+    ),
+    "power_law_soft": (
+        {"contact_exponent": 0.7, "reference_press_m": 0.003},
+        0.0,
+        0.002,
+        0.0,
+        K_N_PER_M * 0.003 * (0.002 / 0.003) ** 0.7,
+    ),
+    "viscous_pressing": (
+        {"contact_damping_n_s_per_m": 800.0},
+        0.0,
+        0.002,
+        0.05,
+        K_N_PER_M * 0.002 + 800.0 * 0.05,
+    ),
+    "viscous_releasing": (
+        {"contact_damping_n_s_per_m": 800.0},
+        0.0,
+        0.002,
+        -0.02,
+        K_N_PER_M * 0.002 - 800.0 * 0.02,
+    ),
+    "viscous_and_hunt_crossley": (
+        {"contact_damping_n_s_per_m": 800.0},
+        0.3,
+        0.002,
+        0.05,
+        K_N_PER_M * 0.002 * (1.0 + 0.3 * 0.05) + 800.0 * 0.05,
+    ),
+    "series_compliance": (
+        {"series_compliance_m_per_n": 4e-6},
+        0.0,
+        0.002,
+        0.0,
+        K_N_PER_M * 0.002 / (1.0 + K_N_PER_M * 4e-6),
+    ),
+    "normal_friction_pressing": (
+        {"normal_friction_force_n": 30.0, "normal_friction_velocity_m_per_s": 0.002},
+        0.0,
+        0.002,
+        0.001,
+        K_N_PER_M * 0.002 + 30.0 * math.tanh(0.5),
+    ),
+    "normal_friction_releasing": (
+        {"normal_friction_force_n": 30.0, "normal_friction_velocity_m_per_s": 0.002},
+        0.0,
+        0.002,
+        -0.01,
+        K_N_PER_M * 0.002 - 30.0 * math.tanh(5.0),
+    ),
+}
+
+
+@pytest.mark.parametrize("n_pads", [3, 8])
+@pytest.mark.parametrize("case", list(ON_AXIS_CASES))
+def test_on_axis_the_ring_pushes_with_the_one_dimensional_pad_law(case, n_pads):
+    totals, d, depth, rate, force = ON_AXIS_CASES[case]
+    w, delta = _ring_force(n_pads, depth, rate, d, **totals)
+    np.testing.assert_allclose(delta, depth, rtol=1e-12)
+    assert -w[5] == pytest.approx(force, rel=1e-12)  # pushed back out of the plate
+    np.testing.assert_allclose(w[:5], 0.0, atol=1e-12 * force)  # evenly: no moment
+
+
+def test_the_power_law_scales_as_the_depth_to_the_exponent():
+    law = {"contact_exponent": 1.37, "reference_press_m": 0.004}
+    f1 = -_ring_force(8, 0.001, 0.0, **law)[0][5]
+    f2 = -_ring_force(8, 0.0035, 0.0, **law)[0][5]
+    assert f2 / f1 == pytest.approx(3.5**1.37, rel=1e-12)
+    at_ref = -_ring_force(8, 0.004, 0.0, **law)[0][5]
+    assert at_ref == pytest.approx(K_N_PER_M * 0.004, rel=1e-12)  # k x_ref at the reference
+
+
+@pytest.mark.parametrize("exponent", [0.6, 1.4, 2.5])
+@pytest.mark.parametrize("depth", [1e-5, 0.002, 0.01])
+def test_series_compliance_of_a_power_law_solves_its_own_equation(exponent, depth):
+    s, x_ref = 3e-6, 0.003
+    totals = {"contact_exponent": exponent, "reference_press_m": x_ref}
+    f = -_ring_force(8, depth, 0.0, **totals, series_compliance_m_per_n=s)[0][5]
+    stiff = -_ring_force(8, depth, 0.0, **totals)[0][5]
+    assert 0.0 < f < stiff  # a compliance behind the pads only softens them
+    # the 1-D law of the totals: f = k x_ref ((x - s f) / x_ref)^n
+    assert f == pytest.approx(K_N_PER_M * x_ref * ((depth - s * f) / x_ref) ** exponent, rel=1e-9)
+    root = brentq(
+        lambda g: g - K_N_PER_M * x_ref * (max(depth - s * g, 0.0) / x_ref) ** exponent,
+        0.0,
+        min(stiff, depth / s),
+        xtol=1e-300,
+        rtol=1e-15,
+    )
+    assert f == pytest.approx(root, rel=1e-12)
+
+
+def test_a_pad_that_would_pull_pushes_nothing_and_has_no_friction():
+    pads = rig6.pad_ring(8, 0.3, 0.01)
+    q = np.array([0.0, 0.0, 0.001, 0.0, 0.0, 0.0])
+    qd = np.array([0.003, 0.0, -0.2, 0.0, 0.0, 0.0])  # sliding and leaving fast
+    law = rig6.pad_law(8, contact_damping_n_s_per_m=1000.0)  # k x = 100 N < c |xdot| = 200 N
+    w, delta = rig6.wrench(q, qd, pads, K_N_PER_M / 8, 0.0, 0.01, law)
+    assert (delta > 0.0).all() and not w.any()
+    w, _ = rig6.contact_wrench(q, qd, pads, K_N_PER_M / 8, 0.0, 0.01, 0.5, law=law)
+    assert not w.any()
+    qd[2] = -0.05  # leaving slower: 50 N of push, and friction across the face with it
+    w, _ = rig6.contact_wrench(q, qd, pads, K_N_PER_M / 8, 0.0, 0.01, 0.5, law=law)
+    assert w[5] == pytest.approx(-50.0, rel=1e-12)
+    assert w[3] == pytest.approx(-0.5 * 50.0, rel=1e-12)  # mu f_n against the slip
+
+
+def test_the_mdc_stiffness_and_damping_of_the_pad_law_on_axis():
+    n, depth = 8, 0.002
+    pads = rig6.pad_ring(n, 0.3, 0.01)
+    q = np.array([0.0, 0.0, depth, 0.0, 0.0, 0.0])
+    qd = np.zeros(6)
+
+    def kc(**totals):
+        law = rig6.pad_law(n, **totals)
+        args = (pads, K_N_PER_M / n, 0.0, 0.01, law)
+        return rig6.wrench_jacobians(q, qd, *args, damped=True)
+
+    stiffness, _ = kc(series_compliance_m_per_n=2e-6)
+    assert stiffness[5, 2] == pytest.approx(K_N_PER_M / (1.0 + K_N_PER_M * 2e-6), rel=1e-6)
+    stiffness, _ = kc(contact_exponent=1.5, reference_press_m=0.004)
+    assert stiffness[5, 2] == pytest.approx(1.5 * K_N_PER_M * (depth / 0.004) ** 0.5, rel=1e-6)
+    _, damping = kc(contact_damping_n_s_per_m=700.0)
+    assert damping[5, 2] == pytest.approx(700.0, rel=1e-6)
+    # tanh(xdot / v_F) is F / v_F steep at rest (the step: well inside v_F)
+    _, damping = kc(normal_friction_force_n=20.0, normal_friction_velocity_m_per_s=0.01)
+    assert damping[5, 2] == pytest.approx(20.0 / 0.01, rel=1e-6)
+
+
+@pytest.mark.slow  # a whole loop at 10 kHz
+@pytest.mark.parametrize("zeta", [0.02, 0.05])
+def test_a_viscous_damper_gives_the_damped_oscillators_cor(zeta):
+    c = 2.0 * zeta * math.sqrt(K_N_PER_M * M_KG)
+    r = run(sample_rate_hz=10000.0, contact_damping_n_s_per_m=c)
+    # the pad never pulls: it lets go where k x + c xdot = 0, at omega_d t = pi - 2 asin(zeta),
+    # and leaves at exactly exp(-zeta omega t) of the speed it came in with
+    release = math.exp(-zeta * (math.pi - 2.0 * math.asin(zeta)) / math.sqrt(1.0 - zeta**2))
+    assert r["cor_normal"] == pytest.approx(release, abs=1e-4)
+    # to first order in the damping, the damped oscillator's half period
+    classic = math.exp(-zeta * math.pi / math.sqrt(1.0 - zeta**2))
+    assert r["cor_normal"] / classic - 1.0 == pytest.approx(2.0 * zeta**2, rel=0.1)
+
+
+@pytest.mark.slow  # a whole loop at 10 kHz
+def test_a_normal_friction_force_dissipates_two_f_over_the_peak_press():
+    force = 0.02 * V0 * math.sqrt(K_N_PER_M * M_KG)  # 2 % of the undamped peak force
+    r = run(
+        sample_rate_hz=10000.0,
+        normal_friction_force_n=force,
+        normal_friction_velocity_m_per_s=0.02 * V0,
+    )
+    x_peak = r["q_act"][:, 2].max()  # on axis every pad is pressed by the port's z
+    lost = 0.5 * M_KG * V0**2 - r["kinetic_energy_j"][-1]
+    assert lost == pytest.approx(2.0 * force * x_peak, rel=0.01)
+    # exactly: F on the way in, F on the way out until k x = F, where the pads let go
+    assert lost == pytest.approx(2.0 * force * x_peak - force**2 / (2.0 * K_N_PER_M), rel=1e-4)
+
+
+@pytest.mark.parametrize("extra", [{}, OFFSET], ids=["on_axis", "offset"])
+def test_total_energy_is_conserved_by_a_power_law_behind_a_compliance(extra):
+    law = {
+        "contact_exponent": 1.4,
+        "reference_press_m": V0 * math.sqrt(M_KG / K_N_PER_M),
+        "series_compliance_m_per_n": 0.5 / K_N_PER_M,
+    }
+    r = run(sample_rate_hz=2000.0, **extra, **law)
+    e = r["total_energy_j"]
+    assert np.abs(e / (0.5 * M_KG * V0**2) - 1.0).max() < 5e-3
+    assert r["energy_ratio"] == pytest.approx(1.0, abs=1e-4)
+    assert r["peak_force_n"] < 0.9 * V0 * math.sqrt(K_N_PER_M * M_KG)  # softened
+
+
+DEFAULT_LAW = {
+    "contact_exponent": 1.0,
+    "reference_press_m": 0.002,  # no matter with a linear spring
+    "contact_damping_n_s_per_m": 0.0,
+    "series_compliance_m_per_n": 0.0,
+    "normal_friction_force_n": 0.0,
+    "normal_friction_velocity_m_per_s": 0.001,  # no matter without a force
+}
+
+
+@pytest.mark.slow  # two whole loops with SDMDC
+def test_the_pad_law_at_its_defaults_is_the_old_contact_bit_for_bit():
+    kw = RIG | OFFSET | {"compensator": "SDMDC", "hunt_crossley_dissipation_s_per_m": 0.2}
+    old, new = run(**kw), run(**kw, **DEFAULT_LAW)
+    assert old.keys() == new.keys()
+    for name, value in old.items():
+        np.testing.assert_array_equal(new[name], value, err_msg=name)
+    pads = rig6.pad_ring(8, 0.3, 0.01)
+    q = np.array([0.001, 0.0, 0.004, 0.01, -0.02, 0.0])
+    qd = np.array([0.01, 0.0, 0.05, 0.0, 0.03, 0.0])
+    law = rig6.pad_law(8, **DEFAULT_LAW)
+    assert law.plain
+    for fn, tail in ((rig6.wrench, ()), (rig6.contact_wrench, (0.3,))):
+        plain = fn(q, qd, pads, K_N_PER_M / 8, 0.2, 0.01, *tail)
+        with_law = fn(q, qd, pads, K_N_PER_M / 8, 0.2, 0.01, *tail, law=law)
+        np.testing.assert_array_equal(with_law[0], plain[0])
+
+
+PAD_LAW_EFFECTS = {  # effect: (hidden parameters, the scenario's keys it amounts to)
+    "contact_damping": (
+        {"damping_n_s_per_m": 900.0},
+        {"contact_damping_n_s_per_m": 300.0 + 900.0},
+    ),
+    "series_compliance": (
+        {"series_compliance_m_per_n": 3e-6},
+        {"series_compliance_m_per_n": 1e-6 + 3e-6},
+    ),
+    "coulomb_friction": (
+        {"friction_force_n": 40.0},
+        {"normal_friction_force_n": 10.0 + 40.0, "normal_friction_velocity_m_per_s": 0.02 * V0},
+    ),
+    "nonlinear_stiffness": (
+        {"exponent": 1.3, "reference_stiffness_n_per_m": 1.2e5},
+        {
+            "contact_stiffness_n_per_m": 1.2e5,
+            "contact_exponent": 1.3,
+            "reference_press_m": V0 * math.sqrt(M_KG / K_N_PER_M),
+        },
+    ),
+}
+#: The scenario's own pad law the effects act on (each effect adds to its term).
+SCENARIO_LAW = {
+    "contact_damping_n_s_per_m": 300.0,
+    "series_compliance_m_per_n": 1e-6,
+    "normal_friction_force_n": 10.0,
+    "normal_friction_velocity_m_per_s": 0.05,
+}
+
+
+@pytest.mark.parametrize("name", list(PAD_LAW_EFFECTS))
+def test_a_pad_law_effect_is_the_scenarios_contact_with_its_term_added(name):
+    hidden, keys = PAD_LAW_EFFECTS[name]
+    own = {k: v for k, v in SCENARIO_LAW.items() if name != "nonlinear_stiffness"}
+    kw = RIG | OFFSET | own | {"mass_kg": M_KG, "contact_stiffness_n_per_m": K_N_PER_M}
+    out = rig6.simulate_rig6(**kw)
+    args = (out["command_initial"], out["command_rate_initial"], out["q_des"], out["qd_des"])
+    hid = rig6.replay_rig6(*args, **kw, hidden={name: hidden})
+    said = rig6.replay_rig6(*args, **(kw | keys))
+    for part in ("q_act", "wrench_act", "wrench_mea"):
+        np.testing.assert_array_equal(hid[part], said[part], err_msg=part)
+    nominal = rig6.replay_rig6(*args, **kw)
+    assert np.abs(hid["wrench_act"] - nominal["wrench_act"]).max() > 10.0  # N: it shows
+
+
+@pytest.mark.parametrize(
+    "name, params, words",
+    [
+        ("contact_damping", {"damping_n_s_per_m": -1.0}, "at least 0"),
+        ("series_compliance", {"series_compliance_m_per_n": -1e-7}, "at least 0"),
+        ("coulomb_friction", {"friction_force_n": -2.0}, "at least 0"),
+        ("nonlinear_stiffness", {"exponent": 0.0}, "above 0"),
+        ("nonlinear_stiffness", {"reference_stiffness_n_per_m": -1e5}, "above 0"),
+    ],
+)
+def test_pad_law_effects_out_of_their_range_are_refused(name, params, words):
+    with pytest.raises(ValueError, match=words):
+        rig6.normalize_hidden({name: params})
+    assert rig6.EFFECT_PARTS[name] == "contact"

@@ -466,6 +466,36 @@ def test_sizing_puts_the_nominal_model_at_the_target(name):
         assert err["ratio"] == pytest.approx(5.0, rel=0.2)
 
 
+@pytest.mark.parametrize(
+    "name, seed",
+    [
+        ("contact_damping", 1),
+        ("nonlinear_stiffness", 1),  # the sign drawn: an exponent below 1
+        ("nonlinear_stiffness", 2),  # and above 1
+        ("series_compliance", 1),
+        ("coulomb_friction", 1),
+    ],
+)
+def test_sizing_grows_a_pad_law_effect_to_the_target(name, seed):
+    scen = g.scenario(**{"approach.initial_gap_m": 0.004})
+    sized = g.size_effect6(scen, name, NOISE, 5.0, np.random.default_rng(seed))
+    assert sized is not None
+    params, report = sized
+    assert report["ratio"] == pytest.approx(5.0, rel=0.2)
+    assert g.replay_error6(scen, {name: params}, NOISE)["ratio"] == report["ratio"]
+    k, mass, v0 = RIG["contact_stiffness_n_per_m"], RIG["mass_kg"], 0.1
+    scale = {  # the family's scale s, within its range
+        "contact_damping": params.get("damping_n_s_per_m", 0.0) / (2.0 * math.sqrt(k * mass)),
+        "series_compliance": params.get("series_compliance_m_per_n", 0.0) * k,
+        "coulomb_friction": params.get("friction_force_n", 0.0) / (v0 * math.sqrt(k * mass)),
+        "nonlinear_stiffness": abs(params.get("exponent", 1.0) - 1.0),
+    }[name]
+    assert 0.0 < scale < 0.5
+    if name == "nonlinear_stiffness":
+        assert params["reference_stiffness_n_per_m"] == k  # the scenario's stiffness
+        assert (params["exponent"] < 1.0) == (seed == 1)
+
+
 def test_the_library_cannot_explain_an_outside_effect_it_is_sized_by():
     scen = g.scenario(**{"approach.initial_gap_m": 0.004})
     sized = g.size_effect6(scen, "pad_proud", NOISE, 4.0, np.random.default_rng(2))

@@ -295,6 +295,45 @@ def test_what_rig6_cannot_run_is_refused(override, words):
         g.generate_run6(g.scenario(**override))
 
 
+def test_the_pad_law_keys_are_read_from_the_contact_with_their_defaults():
+    kw, _ = g._rig6_arguments(g.scenario())
+    assert {key: kw[key] for key in rig6.PAD_LAW_KEYS} == rig6.PAD_LAW_KEYS  # absent: defaults
+    law = {
+        "contact_exponent": 1.3,
+        "reference_press_m": 0.006,
+        "contact_damping_n_s_per_m": 250.0,
+        "series_compliance_m_per_n": 2e-6,
+        "normal_friction_force_n": 15.0,
+        "normal_friction_velocity_m_per_s": 0.002,
+    }
+    scen = g.scenario(contact=law)
+    kw, _ = g._rig6_arguments(scen)
+    assert {key: kw[key] for key in law} == law
+    rows = g.generate_run6(scen)  # the scenario's own contact, in the loop and its record
+    out = rig6.simulate_rig6(**kw)
+    np.testing.assert_array_equal(rows["fz_mea_n"], out["wrench_mea"][:, 5])
+    plain = rig6.simulate_rig6(**(kw | rig6.PAD_LAW_KEYS))
+    assert abs(out["peak_force_n"] - plain["peak_force_n"]) > 10.0  # N: the law shows
+
+
+@pytest.mark.parametrize(
+    "contact, words",
+    [
+        ({"contact_exponent": 1.5}, "reference_press_m"),
+        ({"normal_friction_force_n": 5.0}, "normal_friction_velocity_m_per_s"),
+        ({"contact_exponent": 0.0, "reference_press_m": 0.01}, "contact_exponent.*above 0"),
+        ({"reference_press_m": -0.01}, "reference_press_m.*above 0"),
+        ({"contact_damping_n_s_per_m": -1.0}, "contact_damping_n_s_per_m.*at least 0"),
+        ({"series_compliance_m_per_n": -1e-6}, "series_compliance_m_per_n.*at least 0"),
+        ({"normal_friction_force_n": -1.0}, "normal_friction_force_n.*at least 0"),
+        ({"contact_damping_n_s_per_m": "lots"}, "not a number"),
+    ],
+)
+def test_a_pad_law_out_of_its_range_is_refused_by_its_key(contact, words):
+    with pytest.raises(ValueError, match=words):
+        g._rig6_arguments(g.scenario(contact=contact))
+
+
 def test_write_run6_writes_the_pair(tmp_path, noisy):
     scen = g.scenario(**IDEAL)
     csv_path, json_path = g.write_run6(tmp_path / "runs", "run1", scen, noisy)
