@@ -98,6 +98,12 @@ def _rounds(result) -> list[str]:
             reverse=True,
         )
         listed = ", ".join(f"{r['effect']} {r['delta_bic']:.4g}" for r in ranked[:4])
+        if step.kind == "swap":
+            listed = ", ".join(
+                f"{r['effect']} for {r['replaces']} {r['delta_bic']:.4g}" for r in ranked[:4]
+            )
+            lines.append(f"swap: {step.why} (delta BIC against the selection: {listed})")
+            continue
         lines.append(f"round {i}: {step.why} (delta BIC: {listed})")
     return lines
 

@@ -29,7 +29,16 @@ the candidates (every registered effect with ``apply6``, or those named):
    :data:`~hybridtable.diagnosis.settings.INDISTINGUISHABLE_BIC` of it are its
    look-alikes, which the data cannot tell apart;
 4. it stops when the model explains the runs, when no candidate enters, or
-   after ``max_effects`` (:data:`MAX_EFFECTS`).
+   after ``max_effects`` (:data:`MAX_EFFECTS`);
+5. a swap step (the 1-D diagnose's, :func:`~hybridtable.effects.search.swaps`):
+   the selection with one effect replaced by one of the first round's
+   :data:`~hybridtable.diagnosis.settings.PAIR_POOL` best, each fitted
+   jointly; the best swap whose information criterion beats the selection's
+   replaces it: by :data:`~hybridtable.diagnosis.settings.BIC_THRESHOLD`, or
+   by anything at all when it has fewer parameters (the simpler model, no
+   worse: a power law whose exponent came back to 1 is a stiffness). A
+   look-alike chosen first (one that fitted the others' misfit in the first
+   round) cannot block the right effect so.
 
 Effects of the rig computer (``stage="closed_loop"``: ``com_offset``) act
 on no replay: the audit of the computer's spacecraft
@@ -55,9 +64,10 @@ from hybridtable.diagnosis.settings import (
     EXPLAINED_MAX_ERROR,
     INDISTINGUISHABLE_BIC,
     MIN_EXCESS_REMOVED,
+    PAIR_POOL,
 )
 from hybridtable.effects.registry import effect_names, get_effect
-from hybridtable.effects.search import forward
+from hybridtable.effects.search import forward, swaps
 from hybridtable.effects.selection import delta_bic, lookalikes
 from hybridtable.effects.spec import RigScale
 from hybridtable.effects.workers import pool_map
@@ -106,11 +116,14 @@ def component_errors(runs: Sequence[Run6], residuals: np.ndarray) -> dict[str, f
 
 @dataclass
 class Step6:
-    """One round of forward selection: every candidate's score, the chosen one."""
+    """One round of forward selection (``kind="round"``: every candidate's
+    score, the chosen one), or the swap step (``"swap"``: every swap's
+    score against the selection, the one that replaced it)."""
 
     ranking: list[dict]
     chosen: str | None
     why: str
+    kind: str = "round"
 
 
 @dataclass
@@ -242,7 +255,8 @@ class Diagnosis6:
             "lookalikes": self.lookalikes,
             "at_bounds": self.at_bounds(),
             "rounds": [
-                {"ranking": s.ranking, "chosen": s.chosen, "why": s.why} for s in self.steps
+                {"kind": s.kind, "ranking": s.ranking, "chosen": s.chosen, "why": s.why}
+                for s in self.steps
             ],
             "fits": self.fits,
             "refused": self.refused,
@@ -258,10 +272,106 @@ class Diagnosis6:
 
 def _fit_job(shared, job) -> Fit6 | str:
     runs, selected, start = shared
+    return _fit_names(runs, (*selected, job), start)
+
+
+def _fit_names(runs, names, start) -> Fit6 | str:
+    """The joint fit of the effects ``names``, or why it failed."""
     try:
-        return fit_runs6(runs, [(get_effect(n), {}) for n in (*selected, job)], start)
+        return fit_runs6(runs, [(get_effect(n), {}) for n in names], start)
     except (SimulationError, ParameterError) as err:
         return f"{type(err).__name__}: {err}"
+
+
+def _swap_job(shared, job) -> Fit6 | str:
+    runs = shared
+    names, start = job
+    return _fit_names(runs, names, start)
+
+
+def _parameters(names) -> int:
+    return sum(len(get_effect(n).parameters) for n in names)
+
+
+def _swap_step(runs, out: Diagnosis6, r0: np.ndarray, workers: int, progress: bool) -> None:
+    """The swap step (see the module): ``out``'s selection, fit, errors and
+    look-alikes replaced by the best swap that beats them, if one does."""
+    first = sorted(
+        (r for r in out.steps[0].ranking if "delta_bic" in r),
+        key=lambda r: r["delta_bic"],
+        reverse=True,
+    )
+    fitted = {r["effect"]: r["values"][r["effect"]] for r in first}
+    pool = [r["effect"] for r in first[:PAIR_POOL]]
+    selected = tuple(out.selected)
+
+    def conflict_free(names) -> bool:
+        effects = [get_effect(n) for n in names]
+        return not any(a.conflicts_with(b) for i, a in enumerate(effects) for b in effects[i + 1 :])
+
+    jobs = []
+    for names in swaps(selected, pool, conflict_free, {frozenset(selected)}):
+        start = {n: out.fit.values[n] for n in names[:-1]}
+        start[names[-1]] = fitted[names[-1]]
+        jobs.append((names, start))
+    if not jobs:
+        return
+    results = pool_map(
+        _swap_job, jobs, workers, progress=progress, label="swaps", shared=list(runs)
+    )
+    out.fits += len(jobs)
+    current = blocks(runs, out.fit.residuals)
+    k0 = _parameters(selected)
+    ranking = []
+    for (names, _), result in zip(jobs, results, strict=True):
+        gone = next(n for n in selected if n not in names)
+        entry = {"effect": names[-1], "replaces": gone, "effects": list(names)}
+        if isinstance(result, str):
+            ranking.append({**entry, "failed": result})
+            continue
+        gain = delta_bic(current, blocks(runs, result.residuals), _parameters(names) - k0, True)
+        errors = component_errors(runs, result.residuals)
+        ranking.append({**entry, "delta_bic": gain, "errors": errors, "fit": result})
+    scored = sorted(
+        (r for r in ranking if "delta_bic" in r), key=lambda r: r["delta_bic"], reverse=True
+    )
+
+    def beats(r: dict) -> bool:
+        simpler = _parameters(r["effects"]) < k0
+        return r["delta_bic"] > (0.0 if simpler else BIC_THRESHOLD)
+
+    better = [r for r in scored if beats(r)]
+    step = Step6(
+        [_public(r) for r in ranking],
+        None,
+        "no swap beats the selection (by "
+        f"{BIC_THRESHOLD:g} in delta BIC, or by any with fewer parameters)",
+        kind="swap",
+    )
+    out.steps.append(step)
+    if not better:
+        return
+    best = better[0]
+    step.chosen = best["effect"]
+    step.why = (
+        f"{best['effect']} for {best['replaces']}: delta BIC {best['delta_bic']:.4g} against "
+        f"{' + '.join(selected)}"
+        + (" with fewer parameters" if _parameters(best["effects"]) < k0 else "")
+    )
+    out.selected[:] = [best["effect"] if n == best["replaces"] else n for n in selected]
+    out.fit = best["fit"]
+    out.final_errors = best["errors"]
+    # what the data cannot tell from it: the replaced effect and the other
+    # replacements of the same effect, within the margin
+    alike = [best["replaces"]] if best["delta_bic"] < INDISTINGUISHABLE_BIC else []
+    alike += [
+        r["effect"]
+        for r in scored
+        if r is not best
+        and r["replaces"] == best["replaces"]
+        and best["delta_bic"] - r["delta_bic"] < INDISTINGUISHABLE_BIC
+    ]
+    out.lookalikes = alike
 
 
 def _able(runs: Sequence[Run6], effects: Sequence[str]) -> tuple[list[str], dict[str, str]]:
@@ -291,6 +401,7 @@ def diagnose_runs6(
     workers: int = 1,
     progress: bool = False,
     max_effects: int = MAX_EFFECTS,
+    swap: bool = True,
 ) -> Diagnosis6:
     """Forward selection of the effects the runs' model misses (see the module).
 
@@ -303,6 +414,8 @@ def diagnose_runs6(
         Processes for the candidates' fits.
     max_effects : int
         The most effects the model gains.
+    swap : bool
+        Try the swap step after the forward selection (step 5 of the module).
 
     Raises
     ------
@@ -410,6 +523,8 @@ def diagnose_runs6(
         return best["effect"]
 
     forward(effects, out.selected, max_effects, round_)
+    if out.selected and out.fit is not None and swap:
+        _swap_step(runs, out, r0, workers, progress)
     return out
 
 
