@@ -23,7 +23,8 @@ def diagnose6(args: argparse.Namespace) -> int:
     from hybridtable.commands._run6 import read_run6_arguments, require_apply6
     from hybridtable.effects.registry import get_effect
     from hybridtable.effects.workers import worker_count
-    from hybridtable.six_dof.diagnose6 import diagnose_runs6, pooled_error
+    from hybridtable.six_dof.diagnose6 import diagnose_runs6
+    from hybridtable.six_dof.verdict6 import pooled_error
 
     runs, layout = read_run6_arguments(
         args, _ONE_D_ONLY, {"--report": args.report}, {"--save-model": args.save_model}

@@ -32,6 +32,7 @@ from pydrake.systems.primitives import (
     VectorLogSink,
 )
 
+from hybridtable.errors import ParameterError
 from hybridtable.six_dof.compensator import constant_stiffness
 from hybridtable.six_dof.contact import DockingContact, DockingContactSystem, port_start_z_m
 from hybridtable.six_dof.params import DockingLoopParams
@@ -42,6 +43,7 @@ from hybridtable.six_dof.spacecraft import BODY_STATE_SIZE, RigidSpacecraft, por
 from hybridtable.six_dof.table import PoseTable, add_pose_table
 from hybridtable.stewart.geometry import rotation_from_rpy
 from hybridtable.systems.measurement_chain import low_pass_system, mount_system
+from hybridtable.systems.resonant_table import StructuralModeParams
 
 __all__ = [
     "LOG_LAYOUT",
@@ -78,11 +80,11 @@ class TableModelBackend(Diagram):
     Output ``table_state`` (12), ``contact_wrench`` (6: N m, N)
     """
 
-    def __init__(self, params: DockingLoopParams) -> None:
+    def __init__(self, params: DockingLoopParams, mode: StructuralModeParams | None = None) -> None:
         Diagram.__init__(self)
         builder = DiagramBuilder()
         self.table: PoseTable = add_pose_table(
-            builder, params.plant.table.response, params.sample_period_s
+            builder, params.plant.table.response, params.sample_period_s, mode
         )
         contact = builder.AddNamedSystem("contact", DockingContactSystem(params.contact))
         builder.Connect(self.table.system.get_output_port(), contact.get_input_port())
@@ -241,13 +243,26 @@ def _stiffness_model(params: DockingLoopParams):
     return model.stiffness
 
 
-def table_backend(params: DockingLoopParams) -> System:
-    """The table back-end of ``params.table`` (the table model or the Stewart platform)."""
+def table_backend(params: DockingLoopParams, physics: DockingPhysics | None = None) -> System:
+    """The table back-end of ``params.table`` (the table model or the Stewart
+    platform), with the structural mode of ``physics`` (the table model only).
+
+    Raises
+    ------
+    ParameterError
+        A structural mode on the Stewart platform (its plant's dynamics are its own).
+    """
+    mode = None if physics is None or physics.table_mode is None else physics.table_mode
     if params.table == "stewart":
+        if mode is not None:
+            raise ParameterError(
+                "a structural mode of the table (table_resonance) acts on the table model "
+                "only: the Stewart platform's dynamics are its MultibodyPlant's"
+            )
         from hybridtable.six_dof.stewart_backend import StewartPoseBackend
 
         return StewartPoseBackend(params)
-    return TableModelBackend(params)
+    return TableModelBackend(params, None if mode is None else StructuralModeParams(*mode))
 
 
 def add_docking_loop(
@@ -281,7 +296,7 @@ def add_docking_loop(
     true = physics.apply(params) if physics is not None else params
     computer = physics.computer(params) if physics is not None else params
     spacecraft = builder.AddNamedSystem("spacecraft", RigidSpacecraft(computer.spacecraft, h))
-    backend = builder.AddNamedSystem("table_backend", backend or table_backend(true))
+    backend = builder.AddNamedSystem("table_backend", backend or table_backend(true, physics))
     compensator = builder.AddNamedSystem(
         "compensator", compensator or make_wrench_compensator(params, _stiffness_model(params))
     )

@@ -25,6 +25,9 @@ A :class:`DockingPhysics` is what the 6-DoF effects change
   sensor on a compliant mount, each channel ringing as the 1-D chain's mount
   (after the low pass, before the delay), and ``sensor_bias`` (6): an offset
   of the reading (after the delay);
+- ``table_mode`` (``(f, zeta)``: Hz, 1): a structural mode between the
+  table's servo and its device on each pose coordinate (the 1-D
+  ``table_resonance``'s law; the table model only);
 - ``com_offset_m`` (3): the one change of the rig *computer*: its spacecraft
   model's centre of mass this far from the scenario's (body frame), so its
   port sits at ``port_position_m - com_offset_m`` from it
@@ -101,6 +104,9 @@ class DockingPhysics:
     sensor_bias: tuple[float, ...] | None = None
     #: The rig computer's centre of mass from the scenario's, body frame (m).
     com_offset_m: tuple[float, float, float] | None = None
+    #: A structural mode between the table's servo and its device: natural
+    #: frequency (Hz) and damping ratio (1), or None.
+    table_mode: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
         for name in ("changes", "offsets", "factors"):
@@ -117,14 +123,16 @@ class DockingPhysics:
         if not (math.isfinite(tau) and tau >= 0.0):
             raise ParameterError(f"sensor_time_constant_s must be >= 0 (got {tau!r})")
         object.__setattr__(self, "sensor_time_constant_s", tau)
-        if self.sensor_mount is not None:
-            f, zeta = (float(x) for x in self.sensor_mount)
+        for name in ("sensor_mount", "table_mode"):
+            value = getattr(self, name)
+            if value is None:
+                continue
+            f, zeta = (float(x) for x in value)
             if not (math.isfinite(f) and f > 0.0 and math.isfinite(zeta) and zeta > 0.0):
                 raise ParameterError(
-                    f"sensor_mount must be a frequency > 0 Hz and a damping ratio > 0 "
-                    f"(got {self.sensor_mount!r})"
+                    f"{name} must be a frequency > 0 Hz and a damping ratio > 0 (got {value!r})"
                 )
-            object.__setattr__(self, "sensor_mount", (f, zeta))
+            object.__setattr__(self, name, (f, zeta))
         if self.sensor_bias is not None:
             bias = np.asarray(self.sensor_bias, dtype=float)
             if bias.shape != (6,) or not np.all(np.isfinite(bias)):
@@ -145,6 +153,7 @@ class DockingPhysics:
             and self.sensor_mount is None
             and self.sensor_bias is None
             and self.com_offset_m is None
+            and self.table_mode is None
         )
 
     def low_pass(self, time_constant_s: float) -> DockingPhysics:
@@ -157,6 +166,12 @@ class DockingPhysics:
         damping ratio: each channel reads ``y'' = w^2 (u - y) - 2 zeta w y'``
         (the 1-D ``mount_resonance``'s law)."""
         return replace(self, sensor_mount=(float(frequency_hz), float(damping_ratio)))
+
+    def resonant(self, frequency_hz: float, damping_ratio: float) -> DockingPhysics:
+        """A structural mode of this natural frequency (Hz) and damping ratio
+        between the table's servo and its device, on each pose coordinate
+        (the 1-D ``table_resonance``'s law)."""
+        return replace(self, table_mode=(float(frequency_hz), float(damping_ratio)))
 
     def biased(self, bias: Any) -> DockingPhysics:
         """The sensor's reading offset by ``bias`` (6: N m, N; added to earlier ones)."""
@@ -241,6 +256,7 @@ class DockingPhysics:
             "sensor_mount": None if self.sensor_mount is None else list(self.sensor_mount),
             "sensor_bias": None if self.sensor_bias is None else list(self.sensor_bias),
             "com_offset_m": None if self.com_offset_m is None else list(self.com_offset_m),
+            "table_mode": None if self.table_mode is None else list(self.table_mode),
         }
 
 

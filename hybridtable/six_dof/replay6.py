@@ -102,7 +102,7 @@ def replay_run6(run: Run6, physics: DockingPhysics | None = None) -> Replay6:
     start, _ = initial_port_state(params, RigidSpacecraft(params.spacecraft, h))
     builder = DiagramBuilder()
     playback = builder.AddNamedSystem("playback", CommandPlayback(commands, h, start))
-    backend = builder.AddNamedSystem("table_backend", table_backend(true))
+    backend = builder.AddNamedSystem("table_backend", table_backend(true, physics))
     measured, table = add_rig_part(
         builder, params, physics, playback.get_output_port(), backend, False
     )

@@ -7,6 +7,12 @@ command ``u`` held between ticks, solved exactly over each tick (the 1-D
 table's response, per axis); an infinite response frequency is the ideal
 table (``q_act = q_des``).
 
+A structural mode between the table's servo and its contact device (the 1-D
+``table_resonance``'s law, :func:`~hybridtable.systems.resonant_table.resonant_table_matrices`)
+makes each coordinate fourth order (the servo, then the mode it drives), its
+command ``[u, u']`` held over the tick (:func:`~hybridtable.laws.table.held_tick`,
+the 1-D ``SampledTable``'s solution); the pose is the device's.
+
 The table's state is kept one tick behind: its output at tick ``k`` is
 ``Phi s + Gamma u`` with ``u`` the command sent at tick ``k - 1`` (held over
 the last interval), and its update stores that output. So the contact at tick
@@ -19,7 +25,8 @@ import numpy as np
 from pydrake.systems.framework import DiagramBuilder, System
 from pydrake.systems.primitives import LinearSystem, PassThrough
 
-from hybridtable.laws.table import second_order_tick
+from hybridtable.laws.table import held_tick, second_order_tick
+from hybridtable.systems.resonant_table import StructuralModeParams, resonant_table_matrices
 from hybridtable.systems.table import TableParams
 
 __all__ = ["PoseTable", "add_pose_table", "table_tick_matrices"]
@@ -44,6 +51,9 @@ class PoseTable:
 
     def __init__(self, system: System, tick: tuple[np.ndarray, np.ndarray] | None) -> None:
         self.system = system
+        #: One coordinate's ``(Phi, Gamma)`` over a tick (``Gamma``'s columns:
+        #: the command's position, and its rate where a mode reads it), or None
+        #: (the ideal table).
         self._tick = tick
 
     @property
@@ -56,28 +66,42 @@ class PoseTable:
         if self._tick is None:
             return
         Phi, Gamma = self._tick
-        s = np.zeros(12)
+        n = Phi.shape[0]  # servo and mode at the pose, moving alike: the mode unstrained
+        s = np.zeros(6 * n)
         for j in range(6):
-            y = np.array([table_state[j], table_state[6 + j]])
-            s[2 * j : 2 * j + 2] = np.linalg.solve(Phi, y - Gamma[:, 0] * command[j])
+            y = np.tile([table_state[j], table_state[6 + j]], n // 2)
+            u = np.array([command[j], command[6 + j]][: Gamma.shape[1]])
+            s[n * j : n * j + n] = np.linalg.solve(Phi, y - Gamma @ u)
         context.SetDiscreteState(s)
 
 
-def add_pose_table(builder: DiagramBuilder, table: TableParams, period_s: float) -> PoseTable:
+def add_pose_table(
+    builder: DiagramBuilder,
+    table: TableParams,
+    period_s: float,
+    mode: StructuralModeParams | None = None,
+) -> PoseTable:
     """Add the table model to ``builder``: the 1-D table (``table``; an ideal
     one passes its command through) on each of the six pose coordinates,
-    stepped over the rig computer's held tick."""
-    if table.is_ideal:
+    stepped over the rig computer's held tick; with ``mode``, a structural
+    mode between its servo and the device on each (see the module)."""
+    if mode is not None:
+        A4, B4, _, _ = resonant_table_matrices(table, mode)
+        Phi, Gamma = held_tick(A4, B4, period_s)
+    elif table.is_ideal:
         system = builder.AddNamedSystem("table", PassThrough(12))
         return PoseTable(system, None)
-    Phi, Gamma = table_tick_matrices(table.response_frequency_hz, table.damping_ratio, period_s)
-    A = np.zeros((12, 12))
-    B = np.zeros((12, 12))
-    P = np.zeros((12, 12))  # state [x_j, x'_j]... -> output [q; qd]
+    else:
+        Phi, Gamma = table_tick_matrices(table.response_frequency_hz, table.damping_ratio, period_s)
+    n, m = Gamma.shape
+    A = np.zeros((6 * n, 6 * n))
+    B = np.zeros((6 * n, 12))
+    P = np.zeros((12, 6 * n))  # state [.., x_j, x'_j]... -> output [q; qd], the device's
     for j in range(6):
-        A[2 * j : 2 * j + 2, 2 * j : 2 * j + 2] = Phi
-        B[2 * j : 2 * j + 2, j] = Gamma[:, 0]
-        P[j, 2 * j] = 1.0
-        P[6 + j, 2 * j + 1] = 1.0
+        A[n * j : n * j + n, n * j : n * j + n] = Phi
+        for c in range(m):  # the command's position, then its rate
+            B[n * j : n * j + n, j + 6 * c] = Gamma[:, c]
+        P[j, n * j + n - 2] = 1.0
+        P[6 + j, n * j + n - 1] = 1.0
     system = builder.AddNamedSystem("table", LinearSystem(A, B, P @ A, P @ B, period_s))
     return PoseTable(system, (Phi, Gamma))

@@ -126,7 +126,7 @@ def test_a_fit_that_ends_at_a_bound_is_said():
     """An effect whose fit ends on its boundary may stand in for another: the
     verdict says which parameter, and the JSON lists it."""
     from hybridtable.effects.spec import RigScale
-    from hybridtable.six_dof.diagnose6 import Diagnosis6
+    from hybridtable.six_dof.verdict6 import Diagnosis6
 
     scale = RigScale(1e5, 2533.0, 1e-3, 5e-3, 0.1, 25.0)
     effect = get_effect("mount_resonance")

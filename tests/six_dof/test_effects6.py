@@ -36,7 +36,7 @@ def test_the_six_axis_effects_are_listed_and_refused_by_the_1d_loop():
     along_the_normal = {"stiffness_error", "extra_delay", "table_response", "table_damping"}
     along_the_normal |= {"hunt_crossley", "sensor_filter", "force_bias", "mount_resonance"}
     along_the_normal |= {"contact_damping", "nonlinear_stiffness", "series_compliance"}
-    along_the_normal |= {"coulomb_friction"}
+    along_the_normal |= {"coulomb_friction", "table_resonance"}
     assert along_the_normal <= set(SIX)
     face = get_effect("friction_across_face")
     assert face.loops == ("6-DoF",) and face.default_for == ()
@@ -44,7 +44,7 @@ def test_the_six_axis_effects_are_listed_and_refused_by_the_1d_loop():
     with pytest.raises(ParameterError, match="six-axis rig only"):
         build_spec([(face, {"extra_friction_coefficient": 0.1})], scale)
     with pytest.raises(ParameterError, match="1-D loop only"):
-        physics_with([(get_effect("table_resonance"), {})], scale)
+        physics_with([(get_effect("mass_error"), {})], scale)
 
 
 @pytest.mark.parametrize("name", SIX)

@@ -177,3 +177,12 @@ def test_the_pad_law_at_defaults_is_drakes():
         DockingContactParams(K, series_compliance_m_per_n=1e-6).pad_law.series_compliance_m_per_n,
         1e-6 * params.pad_count,
     )
+
+
+def test_a_table_mode_is_refused_on_the_stewart_platform():
+    from hybridtable.six_dof.builder import table_backend
+    from hybridtable.six_dof.physics6 import NOMINAL_PHYSICS
+
+    stewart = load_scenario("examples/six_dof/stewart.toml")
+    with pytest.raises(ParameterError, match="structural mode of the table"):
+        table_backend(stewart, NOMINAL_PHYSICS.resonant(60.0, 0.05))

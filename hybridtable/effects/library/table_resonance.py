@@ -11,6 +11,10 @@ Model: the table back-end becomes a ``ResonantTable`` with
 The effect has no null value (a mode of any frequency is a change); its fit
 starts at the peak of the position residual's spectrum.
 
+On a six-axis rig (``apply6``) the table model carries the mode on each of
+its six pose coordinates (the Stewart platform refuses it: its dynamics are
+its plant's).
+
 Signature: in ``p_act_m`` (and ``f_mea_n`` in contact), ringing at the mode's
 frequency after the start and the touch.
 """
@@ -68,4 +72,6 @@ EFFECT = Effect(
     starts=resonance_starts,
     separation_hint="a run with a sharper start (a larger approach velocity)",
     default_for=("diagnose",),  # a CoR table tries it when named (--effects)
+    # on a six-axis rig: the mode on each pose coordinate of the table model
+    apply6=lambda physics, v, s: physics.resonant(v["frequency_hz"], v["damping_ratio"]),
 )
