@@ -54,6 +54,7 @@ from hybridtable.effects.effect import Effect
 from hybridtable.effects.registry import apply_in_order
 from hybridtable.effects.spec import RigScale
 from hybridtable.errors import ParameterError
+from hybridtable.six_dof.devices import PAD_LAW_FIELDS
 from hybridtable.six_dof.params import DockingLoopParams
 from hybridtable.six_dof.pose import rotation_exp
 
@@ -68,13 +69,7 @@ PHYSICAL_FIELDS: tuple[str, ...] = (
     "sensor_delay_s",
     "table_response_hz",
     "table_damping_ratio",
-    # the pads' law beyond Drake's (contact.PAD_LAW_FIELDS)
-    "contact_exponent",
-    "reference_press_m",
-    "contact_damping_n_s_per_m",
-    "series_compliance_m_per_n",
-    "normal_friction_force_n",
-    "normal_friction_velocity_m_per_s",
+    *PAD_LAW_FIELDS,  # the pads' law beyond Drake's
 )
 
 

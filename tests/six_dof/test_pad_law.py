@@ -15,18 +15,9 @@ from hybridtable.six_dof.contact import DockingContact
 from hybridtable.six_dof.devices import PAD_LAW_FIELDS, DockingContactParams
 from hybridtable.six_dof.scenario import load_scenario, parse_scenario
 from hybridtable.systems.contact_law import ContactLawParams, contact_law_force
+from tests.six_dof.test_contact import central_differences
 
 K = 1.0e5
-
-
-def central_differences(contact: DockingContact, q, qd, step: float = 1e-8):
-    Kq, Cq = np.zeros((6, 6)), np.zeros((6, 6))
-    for j in range(6):
-        e = np.zeros(6)
-        e[j] = step
-        Kq[:, j] = -(contact.wrench(q + e, qd) - contact.wrench(q - e, qd)) / (2.0 * step)
-        Cq[:, j] = -(contact.wrench(q, qd + e) - contact.wrench(q, qd - e)) / (2.0 * step)
-    return Kq, Cq
 
 
 def random_poses(seed: int, n: int):
@@ -135,7 +126,7 @@ def test_the_closed_form_linearization_is_the_derivative_of_the_wrench(law):
         if not np.any(contact.wrench(q, qd)):
             continue
         Kc, Cc = contact.stiffness(q, qd)
-        Kn, Cn = central_differences(contact, q, qd)
+        Kn, Cn = central_differences(contact, q, qd, 1e-8)
         scale = max(np.abs(Kc).max(), 1.0)
         assert np.abs(Kc - Kn).max() <= 1e-4 * scale
         assert np.abs(Cc - Cn).max() <= 1e-4 * max(np.abs(Cc).max(), 1.0)
