@@ -4,11 +4,12 @@ Plain numpy, no Drake and nothing from :mod:`hybridtable`: a rigid spacecraft
 whose docking port carries a ring of ``N`` spherical pads pressed against the
 flat target face z = 0 (each pad's normal force by the pad law of
 docs/run6-format.md, "The pad law": :class:`PadLaw`, :func:`pad_normal_force`;
-by default Drake's point contact ``k x (1 + d xdot)``), an ideal or second-order motion table (exact
-zero-order-hold update per tick), a sensor delay of whole ticks and the
-compensators none / SDC / MDC / SDMDC, where the MDC stiffness ``K = -dw/dq``
-(and damping ``C = -dw/dqd``) comes from central finite differences of this
-module's own wrench function at the table's actual pose.
+by default Drake's point contact ``k x (1 + d xdot)``), an ideal or second-order
+motion table (exact zero-order-hold update per tick; a structural mode behind it:
+``table_resonance``), a sensor delay of whole ticks and the compensators none /
+SDC / MDC / SDMDC, where the MDC stiffness ``K = -dw/dq`` (and damping ``C =
+-dw/dqd``) comes from central finite differences of this module's own wrench
+function at the table's actual pose.
 
 Hidden effects (``simulate_rig6(hidden=...)``): the rig's physical part (the
 table, the contact, the F/T sensor) or the rig computer's spacecraft can do
@@ -380,6 +381,9 @@ LIBRARY_EFFECTS: dict[str, dict[str, float | None]] = {
     "nonlinear_stiffness": {"exponent": 1.0, "reference_stiffness_n_per_m": None},
     "series_compliance": {"series_compliance_m_per_n": 0.0},
     "coulomb_friction": {"friction_force_n": 0.0},
+    # a structural mode between the table's servo and its device, appended last so
+    # that the earlier effects keep their places in the draws (``inf``: no mode)
+    "table_resonance": {"frequency_hz": math.inf, "damping_ratio": 0.05},
 }
 
 #: Effects outside the library, physically plausible for a six-axis rig, none a
@@ -413,6 +417,7 @@ EFFECT_PARTS: dict[str, str] = {
     "table_damping": "table",
     "lateral_backlash": "table",
     "lateral_lag": "table",
+    "table_resonance": "table",
     "com_offset": "computer",
 }
 
@@ -436,7 +441,8 @@ def normalize_hidden(hidden: Mapping | None) -> dict[str, dict[str, float | None
     ------
     ValueError
         An unknown effect or parameter, a value that is not a finite number
-        (``mount_frequency_hz`` may be ``inf``: no mount resonance), or one out
+        (``mount_frequency_hz`` and ``frequency_hz`` may be ``inf``: no mount
+        resonance, no table resonance), or one out
         of its range (a ratio, factor, frequency, exponent or reference
         stiffness not above 0, a negative time constant, delay, width, height,
         contact damping, series compliance or normal friction force, a damping
@@ -460,12 +466,16 @@ def normalize_hidden(hidden: Mapping | None) -> dict[str, dict[str, float | None
             if isinstance(value, bool) or not isinstance(value, (int, float, np.number)):
                 raise ValueError(f"hidden effect {name}: {key} = {value!r} is not a number")
             value = float(value)
-            if math.isnan(value) or (math.isinf(value) and key != "mount_frequency_hz"):
+            if math.isnan(value) or (math.isinf(value) and key not in _MAY_BE_INFINITE):
                 raise ValueError(f"hidden effect {name}: {key} = {value} is not finite")
             full[key] = value
         out[name] = full
     _check_ranges(out)
     return out
+
+
+#: The parameters whose ``inf`` is a value: no mode at all.
+_MAY_BE_INFINITE = frozenset({"mount_frequency_hz", "frequency_hz"})
 
 
 def _check_ranges(effects: Mapping[str, Mapping[str, float | None]]) -> None:
@@ -475,6 +485,8 @@ def _check_ranges(effects: Mapping[str, Mapping[str, float | None]]) -> None:
         "table_damping_factor",
         "mount_frequency_hz",
         "mount_damping_ratio",
+        "frequency_hz",
+        "damping_ratio",
         "lateral_response_ratio",
         "exponent",
         "reference_stiffness_n_per_m",
@@ -588,8 +600,45 @@ def _first_order_hold_mount(freq_hz: float, zeta: float, h: float):
     return e[:2, :2], e[:2, 2] - e[:2, 3] / h, e[:2, 3] / h
 
 
+def _resonance_update(
+    servo_hz: float, servo_zeta: float, mode_hz: float, mode_zeta: float, h: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """``Phi`` (n x n) and ``Gamma`` (n x 2) of one tick of a table's servo and the
+    structural mode behind it, under the command ``[u, u']`` held over the tick
+    (docs/run6-format.md, ``table_resonance``): ``s[k] = Phi s[k-1] + Gamma [u; u']``.
+
+    The servo ``[x, x']`` follows the table model's ``x'' = w^2 (u - x) - 2 zeta w x'``
+    (it reads ``u`` only), the device ``[y, y']`` follows ``y'' = w_r^2 (x - y) +
+    2 zeta_r w_r (x' - y')``: the state is ``[x, x', y, y']`` (n = 4). An ideal
+    servo (``servo_hz = inf``) is ``x = u``, ``x' = u'``: the state is ``[y, y']``
+    (n = 2). Exact: the exponential of ``[[A, B], [0, 0]] h``.
+    """
+    wr = 2.0 * math.pi * mode_hz
+    k_r, c_r = wr * wr, 2.0 * mode_zeta * wr
+    if math.isinf(servo_hz):
+        a = np.array([[0.0, 1.0], [-k_r, -c_r]])
+        b = np.array([[0.0, 0.0], [k_r, c_r]])
+    else:
+        w = 2.0 * math.pi * servo_hz
+        a = np.array(
+            [
+                [0.0, 1.0, 0.0, 0.0],
+                [-w * w, -2.0 * servo_zeta * w, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 1.0],
+                [k_r, c_r, -k_r, -c_r],
+            ]
+        )
+        b = np.array([[0.0, 0.0], [w * w, 0.0], [0.0, 0.0], [0.0, 0.0]])
+    n = len(a)
+    big = np.zeros((n + 2, n + 2))
+    big[:n, :n], big[:n, n:] = a, b
+    e = expm(big * h)
+    return e[:n, :n], e[:n, n:]
+
+
 class _Table:
-    """The table's physical part: its response, turned axes, lateral lag and backlash."""
+    """The table's physical part: its response, structural mode, turned axes,
+    lateral lag and backlash."""
 
     def __init__(self, response_hz, damping_ratio, h, effects, table_start, miss):
         self.ideal = math.isinf(response_hz)
@@ -605,7 +654,14 @@ class _Table:
         self.backlash = None
         if bl is not None and (bl["backlash_x_m"] > 0.0 or bl["backlash_y_m"] > 0.0):
             self.backlash = np.array([bl["backlash_x_m"], bl["backlash_y_m"]])
+        tr = effects.get("table_resonance")
+        self.mode = None  # (Phi, Gamma) per coordinate: (6, n, n), (6, n, 2)
         if self.ideal:
+            if tr is not None and math.isfinite(tr["frequency_hz"]):
+                phi, gam = _resonance_update(
+                    math.inf, 0.0, tr["frequency_hz"], tr["damping_ratio"], h
+                )
+                self.mode = (np.stack([phi] * 6), np.stack([gam] * 6))
             return
         freq = response_hz * effects.get("table_response", {}).get("table_response_ratio", 1.0)
         zeta = damping_ratio * effects.get("table_damping", {}).get("table_damping_factor", 1.0)
@@ -618,6 +674,12 @@ class _Table:
             gam = np.stack([gam_xy] * 2 + [gam] * 4, axis=-1)  # (2, 6)
             lag = np.array([lag / ratio] * 2 + [lag] * 4)
         self.phi, self.gam, self.lag = phi, gam, lag
+        if tr is not None and math.isfinite(tr["frequency_hz"]):
+            f_r, z_r = tr["frequency_hz"], tr["damping_ratio"]
+            axes = [_resonance_update(freq, zeta, f_r, z_r, h)] * 6
+            if ratio != 1.0:
+                axes[:2] = [_resonance_update(freq * ratio, zeta, f_r, z_r, h)] * 2
+            self.mode = (np.stack([a[0] for a in axes]), np.stack([a[1] for a in axes]))
 
     def _command(self, q_cmd, qd_cmd):
         if self.rot is None:
@@ -633,6 +695,9 @@ class _Table:
         u, ud = self._command(q_cmd, qd_cmd)
         if not self.ideal:
             self.x, self.xd = u - self.lag * ud, ud.copy()
+        if self.mode is not None:  # servo and device where the table starts: unstrained
+            x, xd = (u, ud) if self.ideal else (self.x, self.xd)
+            self.s = np.stack([x, xd] if self.ideal else [x, xd, x, xd])  # (n, 6)
         self.first = True
         self.out = None if self.backlash is None else (u if self.ideal else self.x)[:2].copy()
 
@@ -641,7 +706,15 @@ class _Table:
         since the last one (the encoders read the pose)."""
         hold = self.first and self.start_at_tick0
         self.first = False
-        if self.ideal:
+        if self.mode is not None:  # the device behind the servo: what is seen
+            if not hold:
+                u, ud = self._command(q_cmd, qd_cmd)
+                phi, gam = self.mode
+                self.s = np.einsum("cij,jc->ic", phi, self.s) + np.einsum(
+                    "cij,jc->ic", gam, np.stack([u, ud])
+                )
+            q_act, qd_act = self.s[-2].copy(), self.s[-1].copy()
+        elif self.ideal:
             q_act, qd_act = self._command(q_cmd, qd_cmd)
         else:
             if not hold:
@@ -957,6 +1030,17 @@ def simulate_rig6(
     - ``table_response``, ``table_damping``: the table model's natural
       frequency times ``table_response_ratio``, its damping ratio times
       ``table_damping_factor`` (its start's ramp lag is its own);
+    - ``table_resonance`` (``frequency_hz`` ``f_r``, ``damping_ratio``
+      ``zeta_r``): a structural mode between the table's servo and its device,
+      on each of the six pose coordinates: the servo ``[x, x']`` follows the
+      table model's law (it reads the command's pose ``u``; the ideal table's
+      servo is ``x = u``, ``x' = u'``), the device ``[y, y']`` follows ``y'' =
+      w_r^2 (x - y) + 2 zeta_r w_r (x' - y')`` (``w_r = 2 pi f_r``), and the
+      device's pose and twist are what the contact and the encoders see. The
+      command ``[u, u']`` is held over each tick, the states solved exactly
+      (:func:`_resonance_update`); servo and device start where the table
+      starts, at its speed (the mode unstrained). ``f_r = inf``: no mode. With
+      a backlash (outside the library) the play is behind the device;
     - ``com_offset``: the rig computer's spacecraft has its centre of mass
       ``(com_x_m, com_y_m, com_z_m)`` (body frame) from the arguments': its port
       sits at ``[lateral_offset_m - (com_x, com_y), port_distance_m - com_z]``

@@ -910,6 +910,9 @@ def _family(name: str, rng: np.random.Generator, kwargs: Mapping, noise: Mapping
     if name == "mount_resonance":
         zeta = float(rng.uniform(0.1, 0.3))
         return (lambda s: {keys[0]: 1.0 / s, keys[1]: zeta}), 1.0 / 150.0, 1.0 / 10.0, False
+    if name == "table_resonance":  # s: the mode's period, 1/450 s up to 1/15 s
+        zeta = float(rng.uniform(0.03, 0.2))
+        return (lambda s: {keys[0]: 1.0 / s, keys[1]: zeta}), 1.0 / 450.0, 1.0 / 15.0, False
     if name == "lateral_backlash":
         axis = keys[int(rng.integers(2))]
         return (lambda s: {axis: s}), 5.0 * noise["position_noise_m"], 5e-3, False

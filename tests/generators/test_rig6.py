@@ -467,3 +467,147 @@ def test_pad_law_effects_out_of_their_range_are_refused(name, params, words):
     with pytest.raises(ValueError, match=words):
         rig6.normalize_hidden({name: params})
     assert rig6.EFFECT_PARTS[name] == "contact"
+
+
+# --- table_resonance (docs/run6-format.md, "The effects, as laws") ----------------------
+
+
+def _rk4_servo_and_mode(servo_hz, zeta, f_r, z_r, u, ud, h, substeps=100):
+    """One coordinate of the servo and the mode behind it, integrated by RK4 on
+    ``substeps`` steps a tick, the command ``u[k], ud[k]`` held over tick k, from
+    rest at 0: the device's ``y, y'`` at the end of each tick (written apart from
+    rig6: ``x'' = w^2 (u - x) - 2 zeta w x'``, or ``x = u, x' = ud`` for an ideal
+    servo; ``y'' = w_r^2 (x - y) + 2 zeta_r w_r (x' - y')``)."""
+    ideal = math.isinf(servo_hz)
+    w = 0.0 if ideal else 2.0 * math.pi * servo_hz
+    wr = 2.0 * math.pi * f_r
+    dt = h / substeps
+    x = xd = y = yd = 0.0
+    ys, yds = [], []
+    for uk, udk in zip(u, ud, strict=True):
+
+        def deriv(x, xd, y, yd, uk=uk, udk=udk):
+            if ideal:
+                x, xd = uk, udk
+                xdd = 0.0
+            else:
+                xdd = w * w * (uk - x) - 2.0 * zeta * w * xd
+            return xd, xdd, yd, wr * wr * (x - y) + 2.0 * z_r * wr * (xd - yd)
+
+        for _ in range(substeps):
+            k1 = deriv(x, xd, y, yd)
+            k2 = deriv(*(s + 0.5 * dt * d for s, d in zip((x, xd, y, yd), k1, strict=True)))
+            k3 = deriv(*(s + 0.5 * dt * d for s, d in zip((x, xd, y, yd), k2, strict=True)))
+            k4 = deriv(*(s + dt * d for s, d in zip((x, xd, y, yd), k3, strict=True)))
+            x, xd, y, yd = (
+                s + dt / 6.0 * (a + 2.0 * b + 2.0 * c + e)
+                for s, a, b, c, e in zip((x, xd, y, yd), k1, k2, k3, k4, strict=True)
+            )
+        ys.append(y)
+        yds.append(yd)
+    return np.array(ys), np.array(yds)
+
+
+#: A held command of one coordinate: a step, a rate held with it, then a step back.
+_N_TICKS = 150
+_U = np.where(np.arange(_N_TICKS) < 80, 1.0, -0.5)
+_UD = np.where(np.arange(_N_TICKS) < 80, 0.3, -0.2)
+
+
+@pytest.mark.parametrize(
+    "servo_hz, f_r, z_r",
+    [(25.0, 40.0, 0.05), (25.0, 12.0, 0.2), (math.inf, 40.0, 0.05), (math.inf, 90.0, 0.7)],
+    ids=["servo_40Hz_mode", "servo_12Hz_mode", "ideal_40Hz_mode", "ideal_90Hz_mode"],
+)
+def test_table_resonance_is_the_servo_and_mode_solved_exactly_over_each_tick(servo_hz, f_r, z_r):
+    h, zeta = 1e-3, 0.8
+    effects = rig6.normalize_hidden(
+        {"table_resonance": {"frequency_hz": f_r, "damping_ratio": z_r}}
+    )
+    table = rig6._Table(servo_hz, zeta, h, effects, "previous_tick", (0.0, 0.0))
+    table.start(np.zeros(6), np.zeros(6))  # at rest at 0: tick 0 reads one tick on
+    gains = np.array([1.0, -2.0, 0.5, 0.01, -0.02, 0.03])  # six coordinates, one law
+    seen = [table.advance(u * gains, ud * gains) for u, ud in zip(_U, _UD, strict=True)]
+    q_act = np.array([s[0] for s in seen])
+    qd_act = np.array([s[1] for s in seen])
+    y, yd = _rk4_servo_and_mode(servo_hz, zeta, f_r, z_r, _U, _UD, h)
+    wr = 2.0 * math.pi * f_r
+    np.testing.assert_allclose(q_act, np.outer(y, gains), rtol=0, atol=1e-9)
+    np.testing.assert_allclose(qd_act, np.outer(yd, gains), rtol=0, atol=1e-9 * wr)
+    assert np.abs(y[:80] - 1.0).max() > 0.05  # the mode rings: a real test of it
+
+
+def test_table_resonance_starts_unstrained_where_the_table_starts():
+    kw = RIG | OFFSET | {"mass_kg": M_KG, "contact_stiffness_n_per_m": K_N_PER_M}
+    out = rig6.simulate_rig6(**kw, table_start="tick0")
+    args = (out["command_initial"], out["command_rate_initial"], out["q_des"], out["qd_des"])
+    mode = {"table_resonance": {"frequency_hz": 30.0, "damping_ratio": 0.05}}
+    for response_hz in (25.0, math.inf):
+        rig = kw | {"table_response_hz": response_hz}
+        plain = rig6.replay_rig6(*args, **rig, table_start="tick0")
+        rung = rig6.replay_rig6(*args, **rig, hidden=mode, table_start="tick0")
+        np.testing.assert_array_equal(rung["q_act"][0], plain["q_act"][0])
+        np.testing.assert_array_equal(rung["qd_act"][0], out["command_rate_initial"])
+        assert np.abs(rung["q_act"] - plain["q_act"]).max() > 1e-6  # then it moves its own way
+
+
+@pytest.mark.parametrize("response_hz", [25.0, math.inf], ids=["model", "ideal"])
+def test_table_resonance_at_an_infinite_frequency_is_the_old_run_bit_for_bit(response_hz):
+    kw = RIG | OFFSET | {"compensator": "SDC", "hunt_crossley_dissipation_s_per_m": 0.2}
+    kw["table_response_hz"] = response_hz
+    old = run(**kw)
+    for params in ({}, {"frequency_hz": math.inf, "damping_ratio": 0.3}):
+        new = run(**kw, hidden={"table_resonance": params})
+        assert old.keys() == new.keys()
+        for name, value in old.items():
+            np.testing.assert_array_equal(new[name], value, err_msg=name)
+
+
+@pytest.mark.parametrize("response_hz", [25.0, math.inf], ids=["model", "ideal"])
+def test_a_very_stiff_table_resonance_is_nearly_the_old_run(response_hz):
+    kw = RIG | {"table_response_hz": response_hz}
+    stiff = {"table_resonance": {"frequency_hz": 5000.0, "damping_ratio": 0.7}}
+    old, new = run(**kw), run(**kw, hidden=stiff)
+    assert new["cor_normal"] == pytest.approx(old["cor_normal"], abs=1e-3)
+    assert new["peak_force_n"] == pytest.approx(old["peak_force_n"], rel=1e-3)
+
+
+def test_a_40_hz_table_resonance_changes_the_on_axis_cor():
+    mode = {"table_resonance": {"frequency_hz": 40.0, "damping_ratio": 0.05}}
+    old, new = run(**RIG), run(**RIG, hidden=mode)
+    assert abs(new["cor_normal"] - old["cor_normal"]) > 1e-4
+    assert np.abs(new["q_act"][:, 2] - old["q_act"][:, 2]).max() > 1e-6  # m: the device rings
+    np.testing.assert_allclose(new["q_act"][:, :2], 0.0, atol=1e-15)  # on axis it stays there
+
+
+def test_table_resonance_acts_on_each_coordinate_behind_its_own_servo():
+    kw = RIG | OFFSET | {"mass_kg": M_KG, "contact_stiffness_n_per_m": K_N_PER_M}
+    out = rig6.simulate_rig6(**kw)
+    args = (out["command_initial"], out["command_rate_initial"], out["q_des"], out["qd_des"])
+    mode = {"table_resonance": {"frequency_hz": 30.0, "damping_ratio": 0.05}}
+    alone = rig6.replay_rig6(*args, **kw, hidden=mode)
+    lagged = rig6.replay_rig6(*args, **kw, hidden=mode | {"lateral_lag": {}})
+    np.testing.assert_array_equal(lagged["q_act"], alone["q_act"])  # a null lag: the same
+    slow = rig6.replay_rig6(
+        *args, **kw, hidden=mode | {"lateral_lag": {"lateral_response_ratio": 0.5}}
+    )
+    np.testing.assert_allclose(slow["q_act"][:, 2:], alone["q_act"][:, 2:], rtol=0, atol=1e-15)
+    assert np.abs(slow["q_act"][:, :2] - alone["q_act"][:, :2]).max() > 1e-7
+
+
+@pytest.mark.parametrize(
+    "params, words",
+    [
+        ({"frequency_hz": 0.0}, "above 0"),
+        ({"frequency_hz": -40.0}, "above 0"),
+        ({"damping_ratio": 0.0}, "above 0"),
+        ({"damping_ratio": -0.1}, "above 0"),
+        ({"damping_ratio": math.inf}, "not finite"),
+        ({"frequency_hz": math.nan}, "not finite"),
+    ],
+)
+def test_table_resonance_out_of_its_range_is_refused(params, words):
+    with pytest.raises(ValueError, match=words):
+        rig6.normalize_hidden({"table_resonance": params})
+    assert rig6.EFFECT_PARTS["table_resonance"] == "table"
+    assert list(rig6.LIBRARY_EFFECTS)[-1] == "table_resonance"  # appended: the draws keep

@@ -538,3 +538,15 @@ def test_a_drawn_delay_is_at_its_target_in_the_sets_noise(seed):
     err = g.replay_error6(scen, s6.hidden, s6.truth["noise"], hold_s=hold_s)
     assert err["ratio"] == pytest.approx(report["ratio"], rel=1e-9)
     assert s6.truth["run_errors"][0]["ratio"] == pytest.approx(report["ratio"], rel=1e-9)
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_sizing_grows_a_table_resonance_to_the_target(seed):
+    scen = g.scenario(**{"approach.initial_gap_m": 0.004})
+    sized = g.size_effect6(scen, "table_resonance", NOISE, 5.0, np.random.default_rng(seed))
+    assert sized is not None
+    params, report = sized
+    assert report["ratio"] == pytest.approx(5.0, rel=0.2)
+    assert g.replay_error6(scen, {"table_resonance": params}, NOISE)["ratio"] == report["ratio"]
+    assert 15.0 <= params["frequency_hz"] <= 450.0  # the family's periods, 1/450 to 1/15 s
+    assert 0.03 <= params["damping_ratio"] <= 0.2
