@@ -25,7 +25,9 @@ the candidates (every registered effect with ``apply6``, or those named):
    and removing at least :data:`~hybridtable.diagnosis.settings.MIN_EXCESS_REMOVED`
    of the worst component's error above the noise (a significant effect that
    leaves the worst error where it was explains nothing, and does not block
-   one that does); relevant candidates within
+   one that does); when no candidate does, of the error pooled over the
+   components (two hidden effects, each fit alone compromised by the other's
+   misfit: the one that explains most enters first); relevant candidates within
    :data:`~hybridtable.diagnosis.settings.INDISTINGUISHABLE_BIC` of it are its
    look-alikes, which the data cannot tell apart;
 4. it stops when the model explains the runs, when no candidate enters, or
@@ -77,6 +79,7 @@ from hybridtable.six_dof.verdict6 import (
     Diagnosis6,
     Step6,
     component_errors,
+    pooled_error,
     public_entry,
 )
 
@@ -290,18 +293,34 @@ def diagnose_runs6(
         worst = max(out.final_errors, key=out.final_errors.__getitem__)
         excess = out.final_errors[worst] - 1.0
 
+        pooled = pooled_error(out.final_errors)
+        measure = f"{worst}'s error"
+
         def removed_by(entry: dict) -> float:
+            if measure == "the pooled error":
+                gone = pooled - pooled_error(entry["errors"])
+                return gone / (pooled - 1.0) if pooled > 1.0 else 0.0
             gone = out.final_errors[worst] - entry["errors"][worst]
             return gone / excess if excess > 0 else 0.0
 
+        def relevant_ones() -> list[dict]:
+            return [
+                r
+                for r in scored
+                if r["delta_bic"] > BIC_THRESHOLD and removed_by(r) >= MIN_EXCESS_REMOVED
+            ]
+
         # the most significant candidate that is also relevant (one that fits
         # other components better but leaves the worst where it was does not
-        # block the one that explains it)
-        relevant = [
-            r
-            for r in scored
-            if r["delta_bic"] > BIC_THRESHOLD and removed_by(r) >= MIN_EXCESS_REMOVED
-        ]
+        # block the one that explains it); when none touches the worst, the
+        # one that removes most of the error pooled over the components (two
+        # effects, each leaving the other's components off: the first enters)
+        relevant = relevant_ones()
+        if not relevant:
+            measure = "the pooled error"
+            relevant = relevant_ones()
+            if not relevant:
+                measure = f"{worst}'s error"
         best = relevant[0] if relevant else scored[0]
         removed = removed_by(best)
         if best["delta_bic"] <= BIC_THRESHOLD:
@@ -313,14 +332,14 @@ def diagnose_runs6(
         if removed < MIN_EXCESS_REMOVED:
             step.why = (
                 f"{best['effect']} is significant (delta BIC {best['delta_bic']:.3g}) but removes "
-                f"{100 * removed:.0f} % of {worst}'s error above the noise (at least "
-                f"{100 * MIN_EXCESS_REMOVED:.0f} % needed)"
+                f"{100 * removed:.0f} % of {worst}'s error above the noise, and less of the "
+                f"pooled error (at least {100 * MIN_EXCESS_REMOVED:.0f} % needed)"
             )
             return None
         step.chosen = best["effect"]
         step.why = (
             f"{best['effect']}: delta BIC {best['delta_bic']:.4g}, removes {100 * removed:.0f} % "
-            f"of {worst}'s error above the noise"
+            f"of {measure} above the noise"
         )
         fit = out.fit = best["fit"]
         out.final_errors = best["errors"]
