@@ -33,9 +33,9 @@ the candidates (every registered effect with ``apply6``, or those named):
 4. it stops when the model explains the runs, when no candidate enters, or
    after ``max_effects`` (:data:`MAX_EFFECTS`);
 5. a swap step (the 1-D diagnose's, :func:`~hybridtable.effects.search.swaps`):
-   the selection with one effect replaced by one of the first round's
-   :data:`~hybridtable.diagnosis.settings.PAIR_POOL` best, each fitted
-   jointly; the best swap whose information criterion beats the selection's
+   the selection with one effect replaced by one of the
+   :data:`~hybridtable.diagnosis.settings.PAIR_POOL` best significant others
+   of the round it entered in, each fitted jointly; the best swap whose information criterion beats the selection's
    replaces it: by :data:`~hybridtable.diagnosis.settings.BIC_THRESHOLD`, or
    by anything at all when it has fewer parameters (the simpler model, no
    worse: a power law whose exponent came back to 1 is a stiffness). A
@@ -115,14 +115,23 @@ def _parameters(names) -> int:
 def _swap_step(runs, out: Diagnosis6, r0: np.ndarray, workers: int, progress: bool) -> None:
     """The swap step (see the module): ``out``'s selection, fit, errors and
     look-alikes replaced by the best swap that beats them, if one does."""
-    first = sorted(
-        (r for r in out.steps[0].ranking if "delta_bic" in r),
-        key=lambda r: r["delta_bic"],
-        reverse=True,
-    )
-    fitted = {r["effect"]: r["values"][r["effect"]] for r in first}
-    pool = [r["effect"] for r in first[:PAIR_POOL]]
     selected = tuple(out.selected)
+    # each selected effect against the best others of the round it entered
+    pools: dict[str, list[str]] = {}
+    fitted: dict[tuple[str, str], dict] = {}
+    for step in out.steps:
+        if step.kind != "round" or step.chosen is None:
+            continue
+        ranked = sorted(
+            (r for r in step.ranking if "delta_bic" in r and r["effect"] not in selected),
+            key=lambda r: r["delta_bic"],
+            reverse=True,
+        )
+        near = [r for r in ranked if r["delta_bic"] > BIC_THRESHOLD][:PAIR_POOL]
+        pools[step.chosen] = [r["effect"] for r in near]
+        for r in near:
+            fitted[(step.chosen, r["effect"])] = r["values"][r["effect"]]
+    pool = list(dict.fromkeys(n for names in pools.values() for n in names))
 
     def conflict_free(names) -> bool:
         effects = [get_effect(n) for n in names]
@@ -130,8 +139,11 @@ def _swap_step(runs, out: Diagnosis6, r0: np.ndarray, workers: int, progress: bo
 
     jobs = []
     for names in swaps(selected, pool, conflict_free, {frozenset(selected)}):
+        gone = next(n for n in selected if n not in names)
+        if names[-1] not in pools.get(gone, ()):
+            continue
         start = {n: out.fit.values[n] for n in names[:-1]}
-        start[names[-1]] = fitted[names[-1]]
+        start[names[-1]] = fitted[(gone, names[-1])]
         jobs.append((names, start))
     if not jobs:
         return
@@ -168,7 +180,16 @@ def _swap_step(runs, out: Diagnosis6, r0: np.ndarray, workers: int, progress: bo
         kind="swap",
     )
     out.steps.append(step)
+
+    def note_lookalikes(swapped: str | None) -> None:
+        # a swap of another effect that scored as well as the selection
+        for r in scored:
+            if r["replaces"] != swapped and abs(r["delta_bic"]) < INDISTINGUISHABLE_BIC:
+                alike = out.lookalikes_of.setdefault(r["replaces"], [])
+                alike += [r["effect"]] * (r["effect"] not in alike)
+
     if not better:
+        note_lookalikes(None)
         return
     best = better[0]
     step.chosen = best["effect"]
@@ -180,17 +201,20 @@ def _swap_step(runs, out: Diagnosis6, r0: np.ndarray, workers: int, progress: bo
     out.selected[:] = [best["effect"] if n == best["replaces"] else n for n in selected]
     out.fit = best["fit"]
     out.final_errors = best["errors"]
-    # what the data cannot tell from it: the replaced effect and the other
-    # replacements of the same effect, within the margin
-    alike = [best["replaces"]] if best["delta_bic"] < INDISTINGUISHABLE_BIC else []
+    # what the data cannot tell apart: for the swapped effect, the one it
+    # replaced and the other replacements of that effect within the margin
+    gone, new = best["replaces"], best["effect"]
+    out.lookalikes_of.pop(gone, None)
+    alike = [gone] if best["delta_bic"] < INDISTINGUISHABLE_BIC else []
     alike += [
         r["effect"]
         for r in scored
         if r is not best
-        and r["replaces"] == best["replaces"]
+        and r["replaces"] == gone
         and best["delta_bic"] - r["delta_bic"] < INDISTINGUISHABLE_BIC
     ]
-    out.lookalikes = alike
+    out.lookalikes_of[new] = alike
+    note_lookalikes(gone)
 
 
 def _able(runs: Sequence[Run6], effects: Sequence[str]) -> tuple[list[str], dict[str, str]]:
@@ -344,7 +368,7 @@ def diagnose_runs6(
         fit = out.fit = best["fit"]
         out.final_errors = best["errors"]
         current = blocks(runs, fit.residuals)
-        out.lookalikes = [
+        out.lookalikes_of[best["effect"]] = [
             r["effect"]
             for r in lookalikes(
                 best,

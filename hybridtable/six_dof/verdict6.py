@@ -80,7 +80,10 @@ class Diagnosis6:
     selected: list[str] = field(default_factory=list)
     fit: Fit6 | None = None
     final_errors: dict[str, float] = field(default_factory=dict)
-    lookalikes: list[str] = field(default_factory=list)
+    #: Each selected effect's look-alikes: the candidates of the round it
+    #: entered in (or of the swaps of it) within
+    #: :data:`~hybridtable.diagnosis.settings.INDISTINGUISHABLE_BIC` of it.
+    lookalikes_of: dict[str, list[str]] = field(default_factory=dict)
     steps: list[Step6] = field(default_factory=list)
     fits: int = 0
     #: Candidates that cannot act on this rig, with why (e.g. the table's
@@ -90,6 +93,12 @@ class Diagnosis6:
     audit: Audit6 | None = None
     #: The scale the effects' bounds were taken at (the first run's scenario).
     scale: RigScale | None = None
+
+    @property
+    def lookalikes(self) -> list[str]:
+        """The selected effects' look-alikes, each once."""
+        names = (n for s in self.selected for n in self.lookalikes_of.get(s, ()))
+        return list(dict.fromkeys(n for n in names if n not in self.selected))
 
     @property
     def found(self) -> list[str]:
@@ -197,6 +206,7 @@ class Diagnosis6:
             "final_errors": self.final_errors,
             "error_unit": "RMS replay error / noise level, per component, over the runs",
             "lookalikes": self.lookalikes,
+            "lookalikes_of": {s: self.lookalikes_of.get(s, []) for s in self.selected},
             "at_bounds": self.at_bounds(),
             "rounds": [
                 {"kind": s.kind, "ranking": s.ranking, "chosen": s.chosen, "why": s.why}
