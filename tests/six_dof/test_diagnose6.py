@@ -151,3 +151,49 @@ def test_a_fit_that_ends_at_a_bound_is_said():
         d.sentence()
     )
     assert d.to_dict()["at_bounds"] == ["mount_resonance's mount_damping_ratio at its bound 0.7071"]
+
+
+@pytest.mark.slow
+def test_the_swap_step_names_the_simpler_of_two_look_alikes(tmp_path):
+    """The independent generator hides a compliance behind the pads and a
+    friction force along the normal. Round 1 takes the power law (its exponent
+    soaks up the friction's misfit), round 2 the friction; the swap step then
+    names the linear stiffness, one parameter fewer and no worse (the power
+    law's exponent is back at 1), with the series compliance, the same law on
+    one spring, as its look-alike; and the values are the hidden ones."""
+    from hybridtable.six_dof.run6 import read_run6
+    from tests.generators import run6_logs as g6
+
+    scen = g6.scenario(compensator={"name": "SDC"})
+    s, friction = 2.0e-6, 50.0
+    hidden = {
+        "series_compliance": {"series_compliance_m_per_n": s},
+        "coulomb_friction": {"friction_force_n": friction},
+    }
+    rows = g6.generate_run6(
+        scen,
+        seed=4,
+        force_noise_n=2.0,
+        moment_noise_n_m=0.5,
+        position_noise_m=2e-6,
+        attitude_noise_rad=1e-6,
+        hidden=hidden,
+        table_start="tick0",
+    )
+    csv, _ = g6.write_run6(tmp_path, "pair", scen, rows)
+    result = diagnose_runs6([read_run6(csv)], workers=2)
+    named = set(result.selected)
+    assert "coulomb_friction" in named and result.explained
+    softer = named - {"coulomb_friction"}
+    assert softer <= {"stiffness_error", "series_compliance"} and len(softer) == 1
+    other = ({"stiffness_error", "series_compliance"} - softer).pop()
+    assert other in result.lookalikes_of[softer.pop()]
+    k = float(scen["contact"]["contact_stiffness_n_per_m"])
+    values = result.fit.values
+    if "stiffness_error" in values:
+        assert values["stiffness_error"]["contact_stiffness_n_per_m"] == pytest.approx(
+            k / (1.0 + k * s), rel=1e-3
+        )
+    assert values["coulomb_friction"]["friction_force_n"] == pytest.approx(friction, rel=0.02)
+    swap = [step for step in result.steps if step.kind == "swap"]
+    assert len(swap) == 1
