@@ -32,7 +32,6 @@ from pydrake.systems.primitives import (
     VectorLogSink,
 )
 
-from hybridtable.errors import ParameterError
 from hybridtable.six_dof.compensator import constant_stiffness
 from hybridtable.six_dof.contact import DockingContact, DockingContactSystem, port_start_z_m
 from hybridtable.six_dof.params import DockingLoopParams
@@ -245,20 +244,10 @@ def _stiffness_model(params: DockingLoopParams):
 
 def table_backend(params: DockingLoopParams, physics: DockingPhysics | None = None) -> System:
     """The table back-end of ``params.table`` (the table model or the Stewart
-    platform), with the structural mode of ``physics`` (the table model only).
-
-    Raises
-    ------
-    ParameterError
-        A structural mode on the Stewart platform (its plant's dynamics are its own).
-    """
+    platform), with the structural mode of ``physics`` (the table model only:
+    :meth:`DockingPhysics.apply` refuses it on the Stewart platform)."""
     mode = None if physics is None or physics.table_mode is None else physics.table_mode
     if params.table == "stewart":
-        if mode is not None:
-            raise ParameterError(
-                "a structural mode of the table (table_resonance) acts on the table model "
-                "only: the Stewart platform's dynamics are its MultibodyPlant's"
-            )
         from hybridtable.six_dof.stewart_backend import StewartPoseBackend
 
         return StewartPoseBackend(params)

@@ -230,7 +230,20 @@ class DockingPhysics:
         """The loop's parameters of the rig's physical part (the contact, the
         table, the sensor): ``params`` with :attr:`changes`, then the
         :attr:`offsets` and :attr:`factors` on their values (a friction or a
-        delay below 0 is 0)."""
+        delay below 0 is 0).
+
+        Raises
+        ------
+        ParameterError
+            A change the rig cannot take: a term of the pads' law on a drogue
+            or on the Stewart platform's plant, a structural mode of the table
+            on the Stewart platform (its dynamics are its MultibodyPlant's).
+        """
+        if self.table_mode is not None and params.table == "stewart":
+            raise ParameterError(
+                "a structural mode of the table (table_resonance) acts on the table model "
+                "only: the Stewart platform's dynamics are its MultibodyPlant's"
+            )
         values: dict[str, Any] = dict(self.changes)
         for name, delta in self.offsets.items():
             values[name] = max(0.0, float(values.get(name, getattr(params, name))) + delta)

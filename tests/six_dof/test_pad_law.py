@@ -171,9 +171,8 @@ def test_the_pad_law_at_defaults_is_drakes():
 
 
 def test_a_table_mode_is_refused_on_the_stewart_platform():
-    from hybridtable.six_dof.builder import table_backend
     from hybridtable.six_dof.physics6 import NOMINAL_PHYSICS
 
     stewart = load_scenario("examples/six_dof/stewart.toml")
     with pytest.raises(ParameterError, match="structural mode of the table"):
-        table_backend(stewart, NOMINAL_PHYSICS.resonant(60.0, 0.05))
+        NOMINAL_PHYSICS.resonant(60.0, 0.05).apply(stewart)
