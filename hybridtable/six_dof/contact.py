@@ -38,7 +38,9 @@ from hybridtable.six_dof.pads import (
     pad_law_contacts,
     pad_law_stiffness,
     pad_stiffness,
+    pad_wrench,
     register_pads,
+    wrench_of,
 )
 from hybridtable.six_dof.pose import rotation_exp, rotation_jacobian
 from hybridtable.stewart.geometry import cross
@@ -178,7 +180,9 @@ class DockingContact:
         if not params.is_cone:
             self._pad_centres = np.ascontiguousarray(params.pad_centres_m)
             self._pad_stiffness = pad_stiffness()
-            #: The pads' own law where it is not Drake's (None: Drake's query).
+            self._pad_wrench = pad_wrench()
+            self._wrench_of = wrench_of()
+            #: The pads' own law where it is not Drake's (None: Drake's, in closed form).
             self._pad_law = None if params.drake_law else params.pad_law
 
     def _evaluate(self, q: np.ndarray, qd: np.ndarray | None):
@@ -197,21 +201,11 @@ class DockingContact:
         return p, self._results.Eval(ctx)
 
     def _contacts(self, q: np.ndarray, qd: np.ndarray | None):
-        """The point pairs of the pads with the device at ``q`` moving at
-        ``qd``: ``(port origin p, [(contact point, force on the device, the
-        pair's depth, normal out of the plate toward the device), ...])``:
-        Drake's, or where the pads' law is not Drake's
-        (:attr:`DockingContactParams.drake_law`), the same point pairs with
-        the 1-D contact law per pad (:func:`~hybridtable.six_dof.pads.pad_law_contacts`)."""
-        if self._pad_law is not None:
-            q = np.asarray(q, dtype=float)
-            qd = np.zeros(6) if qd is None else np.asarray(qd, dtype=float)
-            c = self.params
-            U, F, X, N = pad_law_contacts(
-                q, qd, self._pad_centres, c.pad_radius_m, self._pad_law, c.friction_coefficient
-            )
-            p = q[:3]
-            return p, [(p + U[i], F[i], X[i], N[i]) for i in range(X.shape[0])]
+        """Drake's point pairs of the pads with the device at ``q`` moving at
+        ``qd`` (its query: what the Stewart platform's plant computes, and
+        what :meth:`wrench`'s closed form is tested against): ``(port origin
+        p, [(contact point, force on the device, the pair's depth, normal out
+        of the plate toward the device), ...])``."""
         p, results = self._evaluate(q, qd)
         pairs = []
         for i in range(results.num_point_pair_contacts()):
@@ -225,6 +219,32 @@ class DockingContact:
                 normal = -normal
             pairs.append((info.contact_point(), f, pair.depth, normal))
         return p, pairs
+
+    def _pads(self, q: np.ndarray, qd: np.ndarray):
+        """The pads' wrench at ``q`` moving at ``qd`` and the touching pads'
+        ``(U, F)`` (contact point from the port origin, force on the device):
+        Drake's point pairs in closed form, one compiled call
+        (:func:`~hybridtable.six_dof.pads.pad_wrench`: Drake's query to
+        round-off, tested, at a fraction of its cost), or where the pads' law
+        is not Drake's (:attr:`DockingContactParams.drake_law`), the same
+        point pairs with the 1-D contact law per pad
+        (:func:`~hybridtable.six_dof.pads.pad_law_contacts`)."""
+        c = self.params
+        if self._pad_law is None:
+            k_pad = c.contact_stiffness_n_per_m / c.pad_count
+            return self._pad_wrench(
+                q,
+                qd,
+                self._pad_centres,
+                c.pad_radius_m,
+                k_pad,
+                c.contact_dissipation_s_per_m,
+                c.friction_coefficient,
+            )
+        U, F, _, _ = pad_law_contacts(
+            q, qd, self._pad_centres, c.pad_radius_m, self._pad_law, c.friction_coefficient
+        )
+        return self._wrench_of(U, F), U, F
 
     def _surfaces(self, q: np.ndarray, qd: np.ndarray | None):
         """The probe's hydroelastic contacts at ``q`` moving at ``qd``:
@@ -261,16 +281,18 @@ class DockingContact:
         ``qd = [v; omega]`` (default at rest). ``points``, when given, gets
         ``(contact point, force on the device)`` of every touching pad or
         contact surface (its centroid) (W, m, N)."""
+        if not self.params.is_cone:
+            q = np.asarray(q, dtype=float)
+            w, U, F = self._pads(q, np.zeros(6) if qd is None else np.asarray(qd, dtype=float))
+            if points is not None:
+                points += [(q[:3] + U[i], np.array(F[i])) for i in range(U.shape[0])]
+            return w
         force = np.zeros(3)
         moment = np.zeros(3)
-        if self.params.is_cone:
-            p, surfaces = self._surfaces(q, qd)
-            touches = [(c, f) for c, f, _, _ in surfaces]
-            for _, _, m, _ in surfaces:
-                moment += m
-        else:
-            p, pairs = self._contacts(q, qd)
-            touches = [(c, f) for c, f, _, _ in pairs]
+        p, surfaces = self._surfaces(q, qd)
+        touches = [(c, f) for c, f, _, _ in surfaces]
+        for _, _, m, _ in surfaces:
+            moment += m
         for c, f in touches:
             force += f
             moment += cross(c - p, f)

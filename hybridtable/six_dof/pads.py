@@ -30,6 +30,8 @@ __all__ = [
     "register_pads",
     "pad_stiffness",
     "pad_geometry",
+    "pad_wrench",
+    "wrench_of",
     "pad_law",
     "pad_law_contacts",
     "pad_law_stiffness",
@@ -266,6 +268,30 @@ def _pad_stiffness(q, qd, centres, r, k, d, mu):
     return -w_q, -w_qd
 
 
+def _wrench_of(U, F):
+    """``[moment about the port origin; force]`` (6) of the point forces
+    ``F[i]`` at ``U[i]`` from the port origin."""
+    w = np.zeros(6)
+    for i in range(U.shape[0]):
+        u0, u1, u2 = U[i, 0], U[i, 1], U[i, 2]
+        f0, f1, f2 = F[i, 0], F[i, 1], F[i, 2]
+        w[0] += u1 * f2 - u2 * f1
+        w[1] += u2 * f0 - u0 * f2
+        w[2] += u0 * f1 - u1 * f0
+        w[3] += f0
+        w[4] += f1
+        w[5] += f2
+    return w
+
+
+def _pad_wrench(q, qd, centres, r, k, d, mu):
+    """The pads' wrench on the device at the port pose ``q = [p; theta]``
+    moving at ``qd`` with Drake's law (:func:`_pad_contacts`, Drake's point
+    pairs in closed form), and the touching pads' ``(U, F)``, one compiled call."""
+    U, F, _, _ = _pad_contacts(q[0:3], rotation_exp(q[3:6]), qd, centres, r, k, d, mu)
+    return _wrench_of(U, F), U, F
+
+
 _HELPERS = (
     skew,
     rotation_exp,
@@ -275,12 +301,24 @@ _HELPERS = (
     _pad_forces,
     _drake_law,
     _pad_jacobians,
+    _pad_contacts,
+    _wrench_of,
 )
 
 
 def pad_stiffness():
     """:func:`_pad_stiffness`, compiled by numba if it is importable."""
     return compiled_kernel(_pad_stiffness, _HELPERS)
+
+
+def pad_wrench():
+    """:func:`_pad_wrench`, compiled by numba if it is importable."""
+    return compiled_kernel(_pad_wrench, _HELPERS)
+
+
+def wrench_of():
+    """:func:`_wrench_of`, compiled by numba if it is importable."""
+    return compiled_kernel(_wrench_of, _HELPERS)
 
 
 def pad_geometry():
