@@ -37,6 +37,11 @@ Each set is written to a temporary folder and diagnosed in a subprocess,
 - pair: ``right`` when both are named, ``wrong`` when it names anything else
   or one of the two, ``missed`` when it names none (a hidden effect among the
   diagnosis's look-alikes is noted, not counted);
+- single and pair: ``alike`` rather than ``wrong`` when every hidden effect is
+  named or a look-alike the verdict names for a named one, and every named
+  effect stands for a hidden one (``lookalikes_of`` in the JSON: the 1-D
+  study's rule, ``benchmarks/study_diagnose.py``); the single target is
+  reported both ways;
 - outside: ``flagged`` when the verdict is "not explained", else ``missed``
   ("nothing missing") or ``wrong`` (library effects said to explain it).
 
@@ -67,7 +72,7 @@ from tests.generators import rig6, run6_logs  # noqa: E402
 
 CLASSES = ("null", "single", "pair", "outside")
 #: The outcomes per class, in table order.
-OUTCOMES = ("right", "wrong", "missed", "flagged", "error")
+OUTCOMES = ("right", "alike", "wrong", "missed", "flagged", "error")
 #: Every effect name diagnose could say (the library's, the generator's outside ones).
 KNOWN_EFFECTS = tuple(rig6.LIBRARY_EFFECTS) + tuple(rig6.OUTSIDE_EFFECTS)
 #: Names of the rig computer's audit (docs/run6-format.md, "The audit of the rig
@@ -142,6 +147,16 @@ def score(cls: str, effects: list[str], doc: dict | None) -> tuple[str, str]:
         alike |= _names_in(item)
     if set(effects) & alike:
         said += f" (look-alikes: {' + '.join(sorted(alike))})"
+    of = doc.get("lookalikes_of") or {}
+
+    def accounts(s: str, t: str) -> bool:  # the 1-D study's rule
+        return s == t or t in of.get(s, ())
+
+    hidden = set(effects)
+    if all(any(accounts(s, t) for s in named) for t in hidden) and all(
+        any(accounts(s, t) for t in hidden) for s in named - set(AUDIT_NAMES)
+    ):
+        return "alike", said
     if not named:
         return "missed", said
     return "wrong", said
@@ -260,6 +275,13 @@ def summarize(results: list[dict]) -> tuple[str, dict]:
         targets["null false positives"] = {"value": fp, "target": "0", "met": fp == 0}
     for cls, outcome, goal in (("single", "right", 0.9), ("outside", "flagged", 0.9)):
         value = share(cls, outcome)
+        if cls == "single" and value is not None:
+            lenient = value + share(cls, "alike")
+            targets["single right or a look-alike it names (the 1-D study's rule)"] = {
+                "value": lenient,
+                "target": f">= {goal:.0%}",
+                "met": lenient >= goal,
+            }
         if value is not None:
             targets[f"{cls} {outcome}"] = {
                 "value": value,
