@@ -9,7 +9,7 @@ F/T and encoder noise) and 1-3 runs of it at different approaches (speed,
 tilt, lateral miss), and hides:
 
 - ``null``: nothing;
-- ``single``: one library effect (round-robin over the thirteen of
+- ``single``: one library effect (round-robin over the eighteen of
   ``docs/run6-format.md``, "The effects, as laws");
 - ``pair``: two library effects acting on different parts of the rig
   (contact, sensor dynamics, sensor statics, table, rig computer);
