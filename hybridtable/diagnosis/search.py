@@ -36,7 +36,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from itertools import combinations
 
 from hybridtable.diagnosis.candidates import Candidate, judge
 from hybridtable.diagnosis.evaluate import Evaluator
@@ -51,7 +50,7 @@ from hybridtable.diagnosis.fit import (
 )
 from hybridtable.diagnosis.settings import BIC_THRESHOLD, PAIR_POOL
 from hybridtable.effects.registry import get_effect
-from hybridtable.effects.search import propose, swaps
+from hybridtable.effects.search import compatible, propose, swaps
 from hybridtable.effects.workers import pool_map
 
 __all__ = ["PAIR_NFEV", "grid_values", "drop_one", "pairs_and_swaps"]
@@ -184,13 +183,9 @@ def pairs_and_swaps(
     timing = {c.effect for c in usable if get_effect(c.effect).starts is not None}
     seen = {frozenset(selected)}
 
-    def conflict_free(names: Sequence[str]) -> bool:
-        effects = [get_effect(n) for n in names]
-        return not any(a.conflicts_with(b) for a, b in combinations(effects, 2))
-
     def worth_a_pair(names: Sequence[str]) -> bool:
         hides = set(names) & timing or set(names) <= set(pool)
-        return bool(hides) and frozenset(names) not in seen and conflict_free(names)
+        return bool(hides) and frozenset(names) not in seen and compatible(names)
 
     worst = sorted(range(len(ev.data)), key=lambda i: -sum(nominal.evaluations[i].rss().values()))
     worst = worst[:SCREENING_RUNS]
@@ -222,7 +217,7 @@ def pairs_and_swaps(
         )
         proposals += [(list(p.names), p.start, (), PAIR_NFEV) for p in pairs]
     fitted = {c.effect: c.parameters for c in usable}
-    for names in swaps(selected, pool, conflict_free, seen):
+    for names in swaps(selected, pool, compatible, seen):
         start = {n: current.values[n] for n in names if n in current.values}
         start[names[-1]] = fitted[names[-1]]
         proposals.append((list(names), start, (), PAIR_NFEV))

@@ -36,7 +36,7 @@ from itertools import combinations
 
 from hybridtable.effects.registry import get_effect
 
-__all__ = ["Proposal", "forward", "beside", "propose", "swaps"]
+__all__ = ["Proposal", "forward", "beside", "compatible", "propose", "swaps"]
 
 #: Effect names of one model.
 Names = tuple[str, ...]
@@ -124,6 +124,14 @@ def swaps(
             if c not in selected and frozenset(names) not in seen and allowed(names):
                 seen.add(frozenset(names))
                 yield names
+
+
+def compatible(names: Sequence[str]) -> bool:
+    """No two of the effects ``names`` change the same part
+    (:meth:`~hybridtable.effects.effect.Effect.conflicts_with`): a model can
+    hold them together."""
+    effects = [get_effect(n) for n in names]
+    return not any(a.conflicts_with(b) for a, b in combinations(effects, 2))
 
 
 def beside(names: Sequence[str], selected: Sequence[str]) -> list[str]:

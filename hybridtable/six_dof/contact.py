@@ -4,7 +4,8 @@ Two pairs of devices (:class:`DockingContactParams`, ``geometry``):
 
 - ``"plate"``: a ring of spherical pads against a flat plate whose face is the
   plane ``z = 0`` of the target frame W, in Drake's compliant point contact
-  (:mod:`~hybridtable.six_dof.pads`);
+  (:mod:`~hybridtable.six_dof.pads`), or with the 1-D contact law per pad
+  where the scenario states terms Drake's has not;
 - ``"cone"``: a probe head entering a conical drogue, in Drake's hydroelastic
   contact (:mod:`~hybridtable.six_dof.drogue`), so that an offset or a tilt
   acts through the drogue's walls.
@@ -12,9 +13,11 @@ Two pairs of devices (:class:`DockingContactParams`, ``geometry``):
 :func:`register_docking_devices` adds either pair to any MultibodyPlant (the
 Stewart plant uses it too); :class:`DockingContact` holds a small plant of the
 two devices alone (the device a free body, the target welded to the world)
-and evaluates the contact wrench at a pose and twist through the plant's
-contact results (Hunt–Crossley dissipation and regularized Coulomb friction
-in both), and its 6x6 stiffness and damping in closed form;
+and evaluates the contact wrench at a pose and twist: the drogue's through
+the plant's contact results, the pads' by their point pairs in closed form
+(Drake's query to round-off, tested against it; Hunt–Crossley dissipation
+and regularized Coulomb friction in both), and its 6x6 stiffness and damping
+in closed form;
 :class:`DockingContactSystem` is that as a Drake system of the loop.
 """
 

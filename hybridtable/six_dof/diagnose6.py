@@ -35,12 +35,13 @@ the candidates (every registered effect with ``apply6``, or those named):
 5. a swap step (the 1-D diagnose's, :func:`~hybridtable.effects.search.swaps`):
    the selection with one effect replaced by one of the
    :data:`~hybridtable.diagnosis.settings.PAIR_POOL` best significant others
-   of the round it entered in, each fitted jointly; the best swap whose information criterion beats the selection's
-   replaces it: by :data:`~hybridtable.diagnosis.settings.BIC_THRESHOLD`, or
-   by anything at all when it has fewer parameters (the simpler model, no
-   worse: a power law whose exponent came back to 1 is a stiffness). A
-   look-alike chosen first (one that fitted the others' misfit in the first
-   round) cannot block the right effect so.
+   of the round it entered in, each fitted jointly; the best swap whose
+   information criterion beats the selection's replaces it: by
+   :data:`~hybridtable.diagnosis.settings.BIC_THRESHOLD`, or by anything at
+   all when it has fewer parameters (the simpler model, no worse: a power law
+   whose exponent came back to 1 is a stiffness). A look-alike chosen first
+   (one that fitted another effect's misfit in its round) cannot block the
+   right effect so.
 
 Effects of the rig computer (``stage="closed_loop"``: ``com_offset``) act
 on no replay: the audit of the computer's spacecraft
@@ -66,7 +67,7 @@ from hybridtable.diagnosis.settings import (
     PAIR_POOL,
 )
 from hybridtable.effects.registry import effect_names, get_effect
-from hybridtable.effects.search import forward, swaps
+from hybridtable.effects.search import compatible, forward, swaps
 from hybridtable.effects.selection import delta_bic, lookalikes
 from hybridtable.effects.workers import pool_map
 from hybridtable.errors import ParameterError, SimulationError
@@ -112,7 +113,7 @@ def _parameters(names) -> int:
     return sum(len(get_effect(n).parameters) for n in names)
 
 
-def _swap_step(runs, out: Diagnosis6, r0: np.ndarray, workers: int, progress: bool) -> None:
+def _swap_step(runs: Sequence[Run6], out: Diagnosis6, workers: int, progress: bool) -> None:
     """The swap step (see the module): ``out``'s selection, fit, errors and
     look-alikes replaced by the best swap that beats them, if one does."""
     selected = tuple(out.selected)
@@ -133,12 +134,8 @@ def _swap_step(runs, out: Diagnosis6, r0: np.ndarray, workers: int, progress: bo
             fitted[(step.chosen, r["effect"])] = r["values"][r["effect"]]
     pool = list(dict.fromkeys(n for names in pools.values() for n in names))
 
-    def conflict_free(names) -> bool:
-        effects = [get_effect(n) for n in names]
-        return not any(a.conflicts_with(b) for i, a in enumerate(effects) for b in effects[i + 1 :])
-
     jobs = []
-    for names in swaps(selected, pool, conflict_free, {frozenset(selected)}):
+    for names in swaps(selected, pool, compatible, {frozenset(selected)}):
         gone = next(n for n in selected if n not in names)
         if names[-1] not in pools.get(gone, ()):
             continue
@@ -383,5 +380,5 @@ def diagnose_runs6(
 
     forward(effects, out.selected, max_effects, round_)
     if out.selected and out.fit is not None and swap:
-        _swap_step(runs, out, r0, workers, progress)
+        _swap_step(runs, out, workers, progress)
     return out
