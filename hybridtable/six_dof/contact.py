@@ -15,7 +15,9 @@ Stewart plant uses it too); :class:`DockingContact` holds a small plant of the
 two devices alone (the device a free body, the target welded to the world)
 and evaluates the contact wrench at a pose and twist: the drogue's through
 the plant's contact results, the pads' by their point pairs in closed form
-(Drake's query to round-off, tested against it; Hunt–Crossley dissipation
+(Drake's query to round-off, tested against it: the plant's contact results
+are the tests' oracle, and what the Stewart platform's plant computes;
+Hunt–Crossley dissipation
 and regularized Coulomb friction in both), and its 6x6 stiffness and damping
 in closed form;
 :class:`DockingContactSystem` is that as a Drake system of the loop.
@@ -179,7 +181,6 @@ class DockingContact:
         self._context = self._diagram.CreateDefaultContext()
         self._plant_context = plant.GetMyMutableContextFromRoot(self._context)
         self._results = plant.get_contact_results_output_port()
-        self._device_index = self._device.index()
         if not params.is_cone:
             self._pad_centres = np.ascontiguousarray(params.pad_centres_m)
             self._pad_stiffness = pad_stiffness()
@@ -202,26 +203,6 @@ class DockingContact:
                 ctx, self._device, SpatialVelocity(np.asarray(qd[3:]), np.asarray(qd[:3]))
             )
         return p, self._results.Eval(ctx)
-
-    def _contacts(self, q: np.ndarray, qd: np.ndarray | None):
-        """Drake's point pairs of the pads with the device at ``q`` moving at
-        ``qd`` (its query: what the Stewart platform's plant computes, and
-        what :meth:`wrench`'s closed form is tested against): ``(port origin
-        p, [(contact point, force on the device, the pair's depth, normal out
-        of the plate toward the device), ...])``."""
-        p, results = self._evaluate(q, qd)
-        pairs = []
-        for i in range(results.num_point_pair_contacts()):
-            info = results.point_pair_contact_info(i)
-            f = info.contact_force()  # on body B, at the contact point
-            pair = info.point_pair()
-            normal = pair.nhat_BA_W  # out of B into A
-            if info.bodyA_index() == self._device_index:
-                f = -f
-            else:
-                normal = -normal
-            pairs.append((info.contact_point(), f, pair.depth, normal))
-        return p, pairs
 
     def _pads(self, q: np.ndarray, qd: np.ndarray):
         """The pads' wrench at ``q`` moving at ``qd`` and the touching pads'

@@ -90,23 +90,14 @@ __all__ = ["MAX_EFFECTS", "diagnose_runs6"]
 MAX_EFFECTS = 3
 
 
-def _fit_job(shared, job) -> Fit6 | str:
-    runs, selected, start = shared
-    return _fit_names(runs, (*selected, job), start)
-
-
-def _fit_names(runs, names, start) -> Fit6 | str:
-    """The joint fit of the effects ``names``, or why it failed."""
+def _fit_job(runs: Sequence[Run6], job: tuple) -> Fit6 | str:
+    """The joint fit of the effects ``names`` from ``start`` (``job``), or
+    why it failed: a round's candidate with the selection, or a swap."""
+    names, start = job
     try:
         return fit_runs6(runs, [(get_effect(n), {}) for n in names], start)
     except (SimulationError, ParameterError) as err:
         return f"{type(err).__name__}: {err}"
-
-
-def _swap_job(shared, job) -> Fit6 | str:
-    runs = shared
-    names, start = job
-    return _fit_names(runs, names, start)
 
 
 def _parameters(names) -> int:
@@ -144,9 +135,7 @@ def _swap_step(runs: Sequence[Run6], out: Diagnosis6, workers: int, progress: bo
         jobs.append((names, start))
     if not jobs:
         return
-    results = pool_map(
-        _swap_job, jobs, workers, progress=progress, label="swaps", shared=list(runs)
-    )
+    results = pool_map(_fit_job, jobs, workers, progress=progress, label="swaps", shared=list(runs))
     out.fits += len(jobs)
     current = blocks(runs, out.fit.residuals)
     k0 = _parameters(selected)
@@ -288,11 +277,11 @@ def diagnose_runs6(
         start = None if fit is None else fit.values
         results = pool_map(
             _fit_job,
-            jobs,
+            [((*out.selected, name), start) for name in jobs],
             workers,
             progress=progress,
             label=f"round {len(out.steps) + 1}",
-            shared=(list(runs), tuple(out.selected), start),
+            shared=list(runs),
         )
         out.fits += len(jobs)
         ranking = []
@@ -315,20 +304,20 @@ def diagnose_runs6(
         excess = out.final_errors[worst] - 1.0
 
         pooled = pooled_error(out.final_errors)
-        measure = f"{worst}'s error"
 
-        def removed_by(entry: dict) -> float:
-            if measure == "the pooled error":
-                gone = pooled - pooled_error(entry["errors"])
-                return gone / (pooled - 1.0) if pooled > 1.0 else 0.0
+        def from_worst(entry: dict) -> float:
             gone = out.final_errors[worst] - entry["errors"][worst]
             return gone / excess if excess > 0 else 0.0
 
-        def relevant_ones() -> list[dict]:
+        def from_pooled(entry: dict) -> float:
+            gone = pooled - pooled_error(entry["errors"])
+            return gone / (pooled - 1.0) if pooled > 1.0 else 0.0
+
+        def relevant_by(removed) -> list[dict]:
             return [
                 r
                 for r in scored
-                if r["delta_bic"] > BIC_THRESHOLD and removed_by(r) >= MIN_EXCESS_REMOVED
+                if r["delta_bic"] > BIC_THRESHOLD and removed(r) >= MIN_EXCESS_REMOVED
             ]
 
         # the most significant candidate that is also relevant (one that fits
@@ -336,12 +325,11 @@ def diagnose_runs6(
         # block the one that explains it); when none touches the worst, the
         # one that removes most of the error pooled over the components (two
         # effects, each leaving the other's components off: the first enters)
-        relevant = relevant_ones()
-        if not relevant:
-            measure = "the pooled error"
-            relevant = relevant_ones()
-            if not relevant:
-                measure = f"{worst}'s error"
+        removed_by, measure = from_worst, f"{worst}'s error"
+        relevant = relevant_by(from_worst)
+        if not relevant and relevant_by(from_pooled):
+            removed_by, measure = from_pooled, "the pooled error"
+            relevant = relevant_by(from_pooled)
         best = relevant[0] if relevant else scored[0]
         removed = removed_by(best)
         if best["delta_bic"] <= BIC_THRESHOLD:

@@ -24,6 +24,28 @@ def central_differences(contact: DockingContact, q, qd, step: float):
     return K, C
 
 
+def drakes_point_pairs(contact: DockingContact, q, qd):
+    """Drake's own point pairs of the pads with the device at ``q`` moving at
+    ``qd`` (the plant's contact results: the oracle of the closed form, and
+    what the Stewart platform's plant computes): ``(port origin p, [(contact
+    point, force on the device, the pair's depth, normal out of the plate
+    toward the device), ...])``."""
+    p, results = contact._evaluate(q, qd)
+    device = contact._device.index()
+    pairs = []
+    for i in range(results.num_point_pair_contacts()):
+        info = results.point_pair_contact_info(i)
+        f = info.contact_force()  # on body B, at the contact point
+        pair = info.point_pair()
+        normal = pair.nhat_BA_W  # out of B into A
+        if info.bodyA_index() == device:
+            f = -f
+        else:
+            normal = -normal
+        pairs.append((info.contact_point(), f, pair.depth, normal))
+    return p, pairs
+
+
 def relative_error(A: np.ndarray, B: np.ndarray) -> float:
     return float(np.abs(A - B).max() / np.abs(B).max())
 
@@ -143,7 +165,7 @@ def test_pads_as_drakes_point_pairs():
         # 1 / d = 0.05 m/s, Hunt–Crossley's force vanishes and Drake has no pair.
         speed = 1e-4 if draw % 3 == 0 else 0.15
         qd = rng.uniform(-speed, speed, 6)
-        p, pairs = contact._contacts(q, qd)
+        p, pairs = drakes_point_pairs(contact, q, qd)
         U, F, X, N = pads_module._pad_contacts(
             q[:3],
             rotation_exp(q[3:]),

@@ -15,7 +15,7 @@ from hybridtable.six_dof.contact import DockingContact
 from hybridtable.six_dof.devices import PAD_LAW_FIELDS, DockingContactParams
 from hybridtable.six_dof.scenario import load_scenario, parse_scenario
 from hybridtable.systems.contact_law import ContactLawParams, contact_law_force
-from tests.six_dof.test_contact import central_differences
+from tests.six_dof.test_contact import central_differences, drakes_point_pairs
 
 K = 1.0e5
 
@@ -32,7 +32,7 @@ def random_poses(seed: int, n: int):
 
 def drakes_wrench(contact: DockingContact, q, qd) -> np.ndarray:
     """The pads' wrench summed from Drake's query (its point pairs)."""
-    p, pairs = contact._contacts(q, qd)
+    p, pairs = drakes_point_pairs(contact, q, qd)
     w = np.zeros(6)
     for point, force, _, _ in pairs:
         w[:3] += np.cross(point - p, force)
