@@ -27,8 +27,10 @@ along the docking axis) from pulling.
 :func:`compensate` is the one definition: the Drake compensators are compiled
 from it (:mod:`hybridtable.compensators.paper`, ``.online``), the fast engine
 calls it per tick and derives its exact per-mode force rows from it
-(:mod:`hybridtable.loop.fast`), and the 6-DoF wrench compensator calls it on
-arrays (:mod:`hybridtable.six_dof.compensator`).
+(:mod:`hybridtable.loop.fast`), the 6-DoF wrench compensator calls it on
+arrays (:mod:`hybridtable.six_dof.compensator`), and the audits of a record
+solve for its constants on the terms :func:`linear_terms` takes from it
+(:mod:`hybridtable.measurement.audit`, :mod:`hybridtable.six_dof.audit_law6`).
 """
 
 from __future__ import annotations
@@ -45,6 +47,7 @@ __all__ = [
     "above_deadband",
     "compensate",
     "backward_difference",
+    "linear_terms",
     "nonnegative",
 ]
 
@@ -183,3 +186,35 @@ def compensate(
         f = nonnegative(f, None if compression is None else compression(f))
     level = measured if gate_force is None else gate_force
     return select(law.gate_open(level), f, 0.0 * measured)
+
+
+def linear_terms(
+    measured: Any,
+    rate: Any,
+    response_error: Any = 0.0,
+    stiffness: Any = 0.0,
+    rate_error: Any = 0.0,
+    damping: Any = None,
+) -> tuple[Any, Any, Any]:
+    """The law between its switches as a sum of terms, one per constant:
+    ``f_comp = a * reading + T_lead * lead + s * motion`` with ``a = 1`` and
+    ``s = 1`` (the MDC's gains as believed) in the format's law.
+
+    Each term is :func:`compensate` on the law without switches with that
+    constant at one and the others' terms at zero, so an audit that solves a
+    record for ``a``, ``T_lead`` and ``s`` (a regression on these terms)
+    states the law from its one definition. Arguments as :func:`compensate`'s.
+    """
+    zero = 0.0 * measured
+    reading = compensate(CompensationLaw(gate="none"), measured)
+    lead = compensate(CompensationLaw(lead_time_s=1.0, gate="none"), zero, rate)
+    motion = compensate(
+        CompensationLaw(motion_correction=True, gate="none"),
+        zero,
+        0.0,
+        response_error,
+        rate_error,
+        stiffness,
+        damping,
+    )
+    return reading, lead, motion

@@ -45,6 +45,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from hybridtable.laws.compensation import backward_difference, linear_terms
 from hybridtable.laws.spacecraft import DEFAULT_INTEGRATOR, INTEGRATORS
 from hybridtable.measurement.audit_findings import (
     RELATIVE_TOLERANCE,
@@ -59,11 +60,13 @@ from hybridtable.measurement.run_format import Run
 __all__ = [
     "audit_run",
     "audit_runs",
+    "linear_fit",
 ]
 
 
-def _ls(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
-    """Least squares ``y ~ x @ c``: coefficients, standard errors, residual RMS."""
+def linear_fit(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    """Least squares ``y ~ x @ c``: coefficients, standard errors (the residual's
+    variance not below the CSV's rounding, 1e-10 of ``y``), residual RMS."""
     c, *_ = np.linalg.lstsq(x, y, rcond=None)
     r = y - x @ c
     n, p = x.shape
@@ -96,7 +99,7 @@ def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
     dx = np.diff(p_des)
     vv = v[1:]
     if n > 2 and float(vv @ vv) > 0.0:
-        (h,), (h_se,), _ = _ls(vv[:, None], dx)
+        (h,), (h_se,), _ = linear_fit(vv[:, None], dx)
     else:
         h, h_se = h_json, math.inf
     rule, weight, weight_se, h_rule, h_rule_se = _integration_rule(dx, v)
@@ -153,7 +156,7 @@ def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
     on = fk != 0.0
     m, m_se = math.nan, math.nan
     if on.sum() >= 2:
-        (b,), (b_se,), _ = _ls((fk[on] * h)[:, None], -dv[on])
+        (b,), (b_se,), _ = linear_fit((fk[on] * h)[:, None], -dv[on])
         if b > 0.0:
             m = 1.0 / b
             m_se = b_se / (b * b)
@@ -199,10 +202,11 @@ def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
             )
         )
 
-    # Compensation: f_comp = a f + L df/h + K (p_des[k-1] - p_act[k]) + b.
+    # Compensation: f_comp = a f + L df/h + K (p_des[k-1] - p_act[k]) + b, the law's
+    # terms from its definition (a gain of the reading, the lead's, the MDC's per N/m).
     k = np.arange(1, n)
-    df = (f[k] - f[k - 1]) / h
-    lag = p_des[k - 1] - p_act[k]
+    terms = linear_terms(f[k], backward_difference(f[k], f[k - 1], h), p_des[k - 1] - p_act[k], 1.0)
+    x_all = np.column_stack([*terms, np.ones(len(k))])
     rows = fc[k] != 0.0
     lead_json = info.lead_time_s if info.compensator in ("SDC", "SDMDC") else 0.0
     stiff_json = info.contact_stiffness_n_per_m if info.compensator in ("MDC", "SDMDC") else 0.0
@@ -210,8 +214,7 @@ def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
     coef, se, resid = nan4, nan4, math.nan
     deadband = (math.nan, math.nan)
     if rows.sum() >= 8:
-        x = np.column_stack([f[k], df, lag, np.ones(len(k))])[rows]
-        coef, se, resid = _ls(x, fc[k][rows])
+        coef, se, resid = linear_fit(x_all[rows], fc[k][rows])
         a, lead, stiff, off = (float(c) for c in coef)
         a_se, lead_se, stiff_se, off_se = (float(s) for s in se)
         f_scale = float(np.max(np.abs(fc)))
@@ -284,7 +287,7 @@ def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
                 )
             )
         # Deadband: a reading gated to zero although its compensation is positive.
-        pre = np.column_stack([f[k], df, lag, np.ones(len(k))]) @ coef
+        pre = x_all @ coef
         tol = 5.0 * resid + 1e-9 * f_scale
         zero = fc[k] == 0.0
         gated = zero & (pre > tol)
@@ -371,7 +374,7 @@ def _integration_rule(dx: np.ndarray, v: np.ndarray) -> tuple[str, float, float,
     dv = np.diff(v)
     if len(dx) < 3 or not np.any(dv != 0.0):
         return fmt
-    (h, c), (h_se, c_se), _ = _ls(np.column_stack([v[1:], -dv]), dx)
+    (h, c), (h_se, c_se), _ = linear_fit(np.column_stack([v[1:], -dv]), dx)
     if not (math.isfinite(h) and h > 0.0 and math.isfinite(c_se)):
         return fmt
     theta = 1.0 - c / h

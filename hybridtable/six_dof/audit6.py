@@ -39,13 +39,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hybridtable.measurement.audit_findings import RELATIVE_TOLERANCE, SIGNIFICANCE, differs
+from hybridtable.six_dof.audit_law6 import AuditFinding6, CompensationAudit6, audit_compensation6
 from hybridtable.six_dof.run6 import Run6
 from hybridtable.stewart.geometry import skew
 
 __all__ = [
     "LAW_RESIDUAL",
     "Audit6",
-    "AuditFinding6",
     "SpacecraftAudit",
     "audit_runs6",
     "audit_spacecraft6",
@@ -62,24 +62,6 @@ _AXES = ("x", "y", "z")
 
 #: Singular values below this fraction of the largest leave their direction undetermined.
 _RANK_TOLERANCE = 1e-9
-
-
-@dataclass(frozen=True)
-class AuditFinding6:
-    """A quantity of the rig computer's spacecraft that is not the JSON's."""
-
-    effect: str
-    values: dict[str, float]
-    std: dict[str, float | None]
-    sentence: str
-
-    def to_dict(self) -> dict:
-        return {
-            "effect": self.effect,
-            "values": self.values,
-            "std": self.std,
-            "sentence": self.sentence,
-        }
 
 
 @dataclass(frozen=True)
@@ -194,13 +176,15 @@ def _finding(stated, solved, std, scale) -> bool:
 class Audit6:
     """:func:`audit_runs6`'s result: one :class:`SpacecraftAudit` for each
     spacecraft the runs' JSONs state (runs of one spacecraft are solved
-    together)."""
+    together), and one :class:`~hybridtable.six_dof.audit_law6.CompensationAudit6`
+    for each compensator (``laws``)."""
 
     groups: list[SpacecraftAudit]
+    laws: list[CompensationAudit6] = field(default_factory=list)
 
     @property
     def findings(self) -> list[AuditFinding6]:
-        return [f for g in self.groups for f in g.findings]
+        return [f for g in [*self.groups, *self.laws] for f in g.findings]
 
     @property
     def effects(self) -> list[str]:
@@ -208,27 +192,42 @@ class Audit6:
         return list(dict.fromkeys(f.effect for f in self.findings))
 
     def sentence(self) -> str:
-        if len(self.groups) == 1:
-            return self.groups[0].sentence()
-        return "; ".join(f"{', '.join(g.run_ids)}: {g.sentence()}" for g in self.groups)
+        """Each part's sentence (with a finding: only the parts that have one)."""
+        parts = [*self.groups, *self.laws]
+        if self.findings:
+            parts = [p for p in parts if p.findings]
+        if len(self.groups) <= 1 and len(self.laws) <= 1:
+            return "; ".join(p.sentence() for p in parts)
+        return "; ".join(f"{', '.join(p.run_ids)}: {p.sentence()}" for p in parts)
 
     def to_dict(self) -> dict:
         return {
             "sentence": self.sentence(),
             "findings": [
-                {**f.to_dict(), "runs": g.run_ids} for g in self.groups for f in g.findings
+                {**f.to_dict(), "runs": g.run_ids}
+                for g in [*self.groups, *self.laws]
+                for f in g.findings
             ],
             "groups": [g.to_dict() for g in self.groups],
+            "compensation": [c.to_dict() for c in self.laws],
         }
 
 
 def audit_runs6(runs: Sequence[Run6]) -> Audit6:
-    """Solve the rig computer's spacecraft from ``runs`` (see the module),
-    the runs of each spacecraft their JSONs state together."""
-    groups: dict = {}
+    """Solve the rig computer from ``runs``: its spacecraft (see the module),
+    the runs of each spacecraft their JSONs state together, and its
+    compensation law (:func:`~hybridtable.six_dof.audit_law6.audit_compensation6`),
+    the runs of each compensator (and rate and believed contact) together."""
+    bodies: dict = {}
+    laws: dict = {}
     for run in runs:
-        groups.setdefault(run.params.spacecraft, []).append(run)
-    return Audit6([audit_spacecraft6(group) for group in groups.values()])
+        p = run.params
+        bodies.setdefault(p.spacecraft, []).append(run)
+        laws.setdefault((p.rig.compensator, p.sample_rate_hz, p.believed_contact), []).append(run)
+    return Audit6(
+        [audit_spacecraft6(group) for group in bodies.values()],
+        [audit_compensation6(group) for group in laws.values()],
+    )
 
 
 def audit_spacecraft6(runs: Sequence[Run6]) -> SpacecraftAudit:

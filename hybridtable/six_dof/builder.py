@@ -32,8 +32,8 @@ from pydrake.systems.primitives import (
     VectorLogSink,
 )
 
-from hybridtable.six_dof.compensator import constant_stiffness
-from hybridtable.six_dof.contact import DockingContact, DockingContactSystem, port_start_z_m
+from hybridtable.six_dof.compensator import stiffness_model_of
+from hybridtable.six_dof.contact import DockingContactSystem, port_start_z_m
 from hybridtable.six_dof.params import DockingLoopParams
 from hybridtable.six_dof.physics6 import DockingPhysics
 from hybridtable.six_dof.registry import make_wrench_compensator
@@ -233,15 +233,6 @@ def initial_port_state(
     return port_state(spacecraft.params, body), body
 
 
-def _stiffness_model(params: DockingLoopParams):
-    if params.stiffness_model == "given":
-        return constant_stiffness(np.array(params.compensator_stiffness_matrix))
-    model = DockingContact(params.believed_contact)
-    if params.stiffness_model == "nominal":
-        return constant_stiffness(*model.stiffness(params.nominal_pose()))
-    return model.stiffness
-
-
 def table_backend(params: DockingLoopParams, physics: DockingPhysics | None = None) -> System:
     """The table back-end of ``params.table`` (the table model or the Stewart
     platform), with the structural mode of ``physics`` (the table model only:
@@ -287,7 +278,7 @@ def add_docking_loop(
     spacecraft = builder.AddNamedSystem("spacecraft", RigidSpacecraft(computer.spacecraft, h))
     backend = builder.AddNamedSystem("table_backend", backend or table_backend(true, physics))
     compensator = builder.AddNamedSystem(
-        "compensator", compensator or make_wrench_compensator(params, _stiffness_model(params))
+        "compensator", compensator or make_wrench_compensator(params, stiffness_model_of(params))
     )
     command = spacecraft.GetOutputPort("commanded_state")
     measured, table = add_rig_part(builder, params, physics, command, backend)

@@ -31,8 +31,9 @@ import numpy as np
 from pydrake.systems.framework import BasicVector, LeafSystem
 
 from hybridtable.laws.compensation import CompensationLaw, backward_difference, compensate
+from hybridtable.six_dof.contact import DockingContact
 
-__all__ = ["StiffnessModel", "WrenchCompensator", "constant_stiffness"]
+__all__ = ["StiffnessModel", "WrenchCompensator", "constant_stiffness", "stiffness_model_of"]
 
 #: ``stiffness(q_act, qd_act) -> (K, C)``, each 6x6.
 StiffnessModel = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
@@ -43,6 +44,19 @@ def constant_stiffness(K: np.ndarray, C: np.ndarray | None = None) -> StiffnessM
     K = np.asarray(K, dtype=float)
     C = np.zeros((6, 6)) if C is None else np.asarray(C, dtype=float)
     return lambda q, qd: (K, C)
+
+
+def stiffness_model_of(params) -> StiffnessModel:
+    """The MDC's stiffness model of a scenario
+    (:class:`~hybridtable.six_dof.params.DockingLoopParams`): its ``given``
+    matrix, its believed contact linearized once at the nominal pose, or
+    (``linearized``) that contact linearized where it is asked."""
+    if params.stiffness_model == "given":
+        return constant_stiffness(np.array(params.compensator_stiffness_matrix))
+    model = DockingContact(params.believed_contact)
+    if params.stiffness_model == "nominal":
+        return constant_stiffness(*model.stiffness(params.nominal_pose()))
+    return model.stiffness
 
 
 class WrenchCompensator(LeafSystem):
