@@ -9,13 +9,14 @@ says why."""
 from __future__ import annotations
 
 import copy
+import json
 
 import numpy as np
 import pytest
 
 from hybridtable.six_dof.audit6 import audit_runs6
 from hybridtable.six_dof.audit_law6 import NOISE_LEVELS, audit_compensation6
-from hybridtable.six_dof.run6 import read_runs6, run6_of_docking
+from hybridtable.six_dof.run6 import read_runs6, run6_csv_text, run6_json, run6_of_docking
 from hybridtable.six_dof.scenario import parse_scenario
 from hybridtable.six_dof.simulation import simulate6
 from tests.generators.run6_logs import generate_run6, scenario, write_run6
@@ -148,3 +149,15 @@ def test_a_loggers_own_noise_is_not_taken_for_another_law(tmp_path):
     assert [f.effect for f in lead.findings] == ["compensation_law_error"]
     assert lead.noise_levels > 3 * NOISE_LEVELS
     assert "cannot be solved" in lead.sentence()
+
+
+def test_compare_names_the_lead_the_computer_used(tmp_path, capsys):
+    from hybridtable.cli import main
+
+    run = _told(_with(NOISY, lead_time_s=0.003), NOISY, "lead")
+    (tmp_path / "run1.csv").write_text(run6_csv_text(run))
+    (tmp_path / "run1.json").write_text(json.dumps(run6_json(run)))
+    assert main(["compare", str(tmp_path / "run1.csv"), "--no-progress", "--json", "-"]) == 0
+    audit = json.loads(capsys.readouterr().out)["audit"]
+    assert [f["effect"] for f in audit["findings"]] == ["lead_time_error"]
+    assert audit["compensation"][0]["solved"]["lead_time_s"] == pytest.approx(0.003, abs=1e-10)
