@@ -55,31 +55,19 @@ from hybridtable.measurement.audit_findings import (
     Finding,
     differs,
 )
+from hybridtable.measurement.audit_fit import (
+    NOISE_LEVELS,
+    block_ticks,
+    linear_fit,
+    stated_law_levels,
+)
+from hybridtable.measurement.channels import noise_level_of_differences
 from hybridtable.measurement.run_format import Run
 
 __all__ = [
     "audit_run",
     "audit_runs",
-    "linear_fit",
 ]
-
-
-def linear_fit(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
-    """Least squares ``y ~ x @ c``: coefficients, standard errors (the residual's
-    variance not below the CSV's rounding, 1e-10 of ``y``), residual RMS."""
-    c, *_ = np.linalg.lstsq(x, y, rcond=None)
-    r = y - x @ c
-    n, p = x.shape
-    dof = max(n - p, 1)
-    s2 = float(r @ r) / dof
-    # Rounding of the CSV (about 1e-10 relative) bounds the resolution.
-    s2 = max(s2, (1e-10 * float(np.max(np.abs(y)) if y.size else 0.0)) ** 2)
-    try:
-        cov = s2 * np.linalg.inv(x.T @ x)
-        se = np.sqrt(np.maximum(np.diag(cov), 0.0))
-    except np.linalg.LinAlgError:
-        se = np.full(p, math.inf)
-    return c, se, math.sqrt(float(r @ r) / max(n, 1))
 
 
 def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
@@ -213,12 +201,16 @@ def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
     nan4 = np.full(4, math.nan)
     coef, se, resid = nan4, nan4, math.nan
     deadband = (math.nan, math.nan)
+    noise_levels = math.nan
     if rows.sum() >= 8:
         coef, se, resid = linear_fit(x_all[rows], fc[k][rows])
         a, lead, stiff, off = (float(c) for c in coef)
         a_se, lead_se, stiff_se, off_se = (float(s) for s in se)
         f_scale = float(np.max(np.abs(fc)))
-        if resid > 1e-4 * f_scale + 10 * 1e-9 * f_scale:
+        noisy, exact = False, resid <= 1e-4 * f_scale + 10 * 1e-9 * f_scale
+        if not exact:  # noise the computer did not see, or another law
+            noise_levels, noisy = _stated_law_levels(run, k, rows, x_all, lead_json, stiff_json)
+        if noisy and noise_levels > NOISE_LEVELS:  # a fit on such readings is biased
             found.append(
                 Finding(
                     "compensation_law",
@@ -226,100 +218,117 @@ def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
                     resid,
                     0.0,
                     rid,
-                    f"f_comp is not the format's compensation of the readings: "
-                    f"{resid:.3g} N RMS remain after fitting a gain, a lead, a "
-                    "stiffness and an offset",
+                    f"f_comp is not the JSON's {info.compensator} law of the logged readings: "
+                    f"over means of ticks it misses by {noise_levels:.3g} noise levels (at most "
+                    f"{NOISE_LEVELS:g}), and no gain, lead, stiffness and offset make it one "
+                    f"({resid:.3g} N RMS remain): the computer compensates otherwise, or the "
+                    "log's readings carry noise it did not see, and then which of its "
+                    "constants differs cannot be solved from them",
                 )
             )
-        if differs(lead, lead_se, lead_json, max(lead_json, h)):
-            says = (
-                f"JSON says {lead_json * 1e3:.6g} ms"
-                if lead_json > 0.0
-                else f"the JSON's compensator {info.compensator} has no lead"
-            )
-            found.append(
-                Finding(
-                    "lead_time_s",
-                    lead_json,
-                    lead,
-                    lead_se,
-                    rid,
-                    f"lead_time_s used {lead * 1e3:.6g} ms, {says}",
+        elif not noisy:
+            if not exact:
+                found.append(
+                    Finding(
+                        "compensation_law",
+                        0.0,
+                        resid,
+                        0.0,
+                        rid,
+                        f"f_comp is not the format's compensation of the readings: "
+                        f"{resid:.3g} N RMS remain after fitting a gain, a lead, a "
+                        "stiffness and an offset",
+                    )
                 )
-            )
-        k_scale = max(stiff_json, info.contact_stiffness_n_per_m)
-        if differs(stiff, stiff_se, stiff_json, k_scale):
-            says = (
-                f"JSON says {stiff_json:.6g} N/m"
-                if stiff_json > 0.0
-                else f"the JSON's compensator {info.compensator} has no MDC"
-            )
-            found.append(
-                Finding(
-                    "contact_stiffness_n_per_m",
-                    stiff_json,
-                    stiff,
-                    stiff_se,
-                    rid,
-                    f"the MDC stiffness used {stiff:.6g} N/m, {says}",
+            if differs(lead, lead_se, lead_json, max(lead_json, h)):
+                says = (
+                    f"JSON says {lead_json * 1e3:.6g} ms"
+                    if lead_json > 0.0
+                    else f"the JSON's compensator {info.compensator} has no lead"
                 )
-            )
-        if differs(a, a_se, 1.0, 1.0):
-            found.append(
-                Finding(
-                    "compensation_gain",
-                    1.0,
-                    a,
-                    a_se,
-                    rid,
-                    f"the computer scales the force reading by {a:.6g} before compensating",
+                found.append(
+                    Finding(
+                        "lead_time_s",
+                        lead_json,
+                        lead,
+                        lead_se,
+                        rid,
+                        f"lead_time_s used {lead * 1e3:.6g} ms, {says}",
+                    )
                 )
-            )
-        if differs(off, off_se, 0.0, f_scale):
-            found.append(
-                Finding(
-                    "compensation_offset_n",
-                    0.0,
-                    off,
-                    off_se,
-                    rid,
-                    f"the computer adds {off:.4g} N to the compensated force",
+            k_scale = max(stiff_json, info.contact_stiffness_n_per_m)
+            if differs(stiff, stiff_se, stiff_json, k_scale):
+                says = (
+                    f"JSON says {stiff_json:.6g} N/m"
+                    if stiff_json > 0.0
+                    else f"the JSON's compensator {info.compensator} has no MDC"
                 )
-            )
-        # Deadband: a reading gated to zero although its compensation is positive.
-        pre = x_all @ coef
-        tol = 5.0 * resid + 1e-9 * f_scale
-        zero = fc[k] == 0.0
-        gated = zero & (pre > tol)
-        lower = float(np.max(f[k][gated])) if gated.any() else -math.inf
-        upper = float(np.min(f[k][fc[k] > 0.0])) if (fc[k] > 0.0).any() else math.inf
-        deadband = (lower, upper)
-        db = info.force_deadband_n
-        if lower >= upper:
-            found.append(
-                Finding(
-                    "force_deadband_n",
-                    db,
-                    lower,
-                    math.nan,
-                    rid,
-                    f"which readings give no force is not a deadband: a reading of "
-                    f"{lower:.4g} N gave none, one of {upper:.4g} N gave one",
+                found.append(
+                    Finding(
+                        "contact_stiffness_n_per_m",
+                        stiff_json,
+                        stiff,
+                        stiff_se,
+                        rid,
+                        f"the MDC stiffness used {stiff:.6g} N/m, {says}",
+                    )
                 )
-            )
-        elif not (lower <= db < upper):
-            used = 0.5 * (lower + upper) if math.isfinite(lower) else upper
-            found.append(
-                Finding(
-                    "force_deadband_n",
-                    db,
-                    used,
-                    0.5 * (upper - lower) if math.isfinite(lower) else math.inf,
-                    rid,
-                    f"force_deadband_n used between {max(lower, 0.0):.4g} and {upper:.4g} N, "
-                    f"JSON says {db:.4g} N",
+            if differs(a, a_se, 1.0, 1.0):
+                found.append(
+                    Finding(
+                        "compensation_gain",
+                        1.0,
+                        a,
+                        a_se,
+                        rid,
+                        f"the computer scales the force reading by {a:.6g} before compensating",
+                    )
                 )
-            )
+            if differs(off, off_se, 0.0, f_scale):
+                found.append(
+                    Finding(
+                        "compensation_offset_n",
+                        0.0,
+                        off,
+                        off_se,
+                        rid,
+                        f"the computer adds {off:.4g} N to the compensated force",
+                    )
+                )
+            # Deadband: a reading gated to zero although its compensation is positive.
+            pre = x_all @ coef
+            tol = 5.0 * resid + 1e-9 * f_scale
+            zero = fc[k] == 0.0
+            gated = zero & (pre > tol)
+            lower = float(np.max(f[k][gated])) if gated.any() else -math.inf
+            upper = float(np.min(f[k][fc[k] > 0.0])) if (fc[k] > 0.0).any() else math.inf
+            deadband = (lower, upper)
+            db = info.force_deadband_n
+            if lower >= upper:
+                found.append(
+                    Finding(
+                        "force_deadband_n",
+                        db,
+                        lower,
+                        math.nan,
+                        rid,
+                        f"which readings give no force is not a deadband: a reading of "
+                        f"{lower:.4g} N gave none, one of {upper:.4g} N gave one",
+                    )
+                )
+            elif not (lower <= db < upper):
+                used = 0.5 * (lower + upper) if math.isfinite(lower) else upper
+                found.append(
+                    Finding(
+                        "force_deadband_n",
+                        db,
+                        used,
+                        0.5 * (upper - lower) if math.isfinite(lower) else math.inf,
+                        rid,
+                        f"force_deadband_n used between {max(lower, 0.0):.4g} and {upper:.4g} N, "
+                        f"JSON says {db:.4g} N",
+                    )
+                )
     negative = int(np.sum(fc < 0.0))
     if negative:
         found.append(
@@ -353,12 +362,31 @@ def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
         offset_n=float(coef[3]),
         offset_se=float(se[3]),
         compensation_residual_n=float(resid),
+        compensation_noise_levels=noise_levels,
         deadband_n=deadband,
         force_ticks=int(on.sum()),
         free_velocity_change_m_per_s=free_change,
         negative_force_ticks=negative,
     )
     return est, found
+
+
+def _stated_law_levels(run: Run, k, rows, x_all, lead_json, stiff_json) -> tuple[float, bool]:
+    """:func:`stated_law_levels` of a 1-D run (the noise of ``f_mea`` and
+    ``p_act`` from the ticks before the table first touches, every tick with
+    fewer than 10), and whether its logged readings carry noise at all."""
+    h = run.info.sample_period_s
+    first = int(np.argmax(np.asarray(run.p_act_m) > 0.0))
+    quiet = slice(0, first) if first >= 10 else slice(None)
+    var_f, var_p = (
+        noise_level_of_differences(np.diff(np.asarray(x, dtype=float)[quiet], 2)) ** 2
+        for x in (run.f_mea_n, run.p_act_m)
+    )
+    misfit = (np.asarray(run.f_comp_n)[k] - x_all[:, :3] @ [1.0, lead_json, stiff_json])[:, None]
+    var_m = np.full((len(k), 1), stiff_json**2 * var_p)
+    m = block_ticks(int(rows.sum()))
+    levels = stated_law_levels(misfit, rows, np.array([var_f]), var_m, lead_json / h, m)
+    return float(levels[0]), bool(var_f > 0.0 or var_m[0, 0] > 0.0)
 
 
 def _integration_rule(dx: np.ndarray, v: np.ndarray) -> tuple[str, float, float, float, float]:

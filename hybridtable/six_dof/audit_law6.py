@@ -53,15 +53,19 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hybridtable.laws.compensation import backward_difference, linear_terms
-from hybridtable.measurement.audit import linear_fit
 from hybridtable.measurement.audit_findings import RELATIVE_TOLERANCE, SIGNIFICANCE, differs
+from hybridtable.measurement.audit_fit import (
+    NOISE_LEVELS,
+    block_ticks,
+    linear_fit,
+    stated_law_levels,
+)
 from hybridtable.six_dof.compensator import stiffness_model_of
 from hybridtable.six_dof.run6 import noise_levels
 
 __all__ = [
     "AUDITED_COMPENSATORS",
     "LAW_RESIDUAL",
-    "NOISE_LEVELS",
     "AuditFinding6",
     "CompensationAudit6",
     "audit_compensation6",
@@ -74,11 +78,6 @@ AUDITED_COMPENSATORS = ("none", "SDC", "MDC", "SDMDC")
 #: of a computer that compensates by the format's law (the 1-D audit's 1e-4 of
 #: the force's scale; a CSV at six digits leaves about 1e-5).
 LAW_RESIDUAL = 1e-4
-
-#: A law's residual within this many noise levels of the logged readings (and
-#: pose) in every component is their noise, not another law: a logger that adds
-#: noise the computer did not see.
-NOISE_LEVELS = 2.0
 
 _COMPONENTS = ("mx", "my", "mz", "fx", "fy", "fz")
 
@@ -226,18 +225,6 @@ def _terms(run, model) -> dict | None:
     }
 
 
-def _blocks(a: np.ndarray, open_: np.ndarray, m: int) -> np.ndarray:
-    """Means of ``a``'s rows over blocks of ``m`` consecutive open ticks (the
-    law is linear with constant constants: it holds for the means too)."""
-    idx = np.flatnonzero(open_)
-    out = []
-    for seg in np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1):
-        n = len(seg) // m
-        if n:
-            out.append(a[seg[: n * m]].reshape(n, m, *a.shape[1:]).mean(axis=1))
-    return np.concatenate(out) if out else np.zeros((0, *a.shape[1:]))
-
-
 def _solve(parts: list[dict], columns: int, size: np.ndarray):
     """The law's constants of ``parts`` by least squares over their open
     ticks, each component over its ``size``: (coefficients, standard errors,
@@ -254,24 +241,6 @@ def _solve(parts: list[dict], columns: int, size: np.ndarray):
     x, y = np.concatenate(xs), np.concatenate(ys)
     coef, se, resid = linear_fit(x.reshape(-1, x.shape[2]), y.ravel())
     return coef, se, resid, design
-
-
-def _stated_misfit(parts: list[dict], stated: np.ndarray, m: int) -> np.ndarray:
-    """Per component, the JSON's law's misfit over means of ``m`` open ticks,
-    in noise levels of what the logged readings carry into those means (``a
-    n + T_lead (n_k - n_k-m) / (m h)`` and the MDC term's share): about 1 when
-    the log's readings carry noise the computer did not see, more when it
-    compensated otherwise."""
-    res, noise = [], []
-    for p in parts:
-        open_ = np.any(p["wc"] != 0.0, axis=1)
-        misfit = p["wc"] - p["terms"][:, :, : len(stated)] @ stated
-        res.append(_blocks(misfit, open_, m))
-        lead = p["lead_s"] / p["h"]
-        var_w = p["var_w"] * (1.0 / m + 2.0 * (lead / m) ** 2)
-        noise.append(var_w + _blocks(p["var_m"], open_, m) / m)
-    res, noise = np.concatenate(res), np.concatenate(noise)
-    return np.sqrt(np.mean(res**2, axis=0) / np.maximum(np.mean(noise, axis=0), 1e-300))
 
 
 def audit_compensation6(runs: Sequence) -> CompensationAudit6:
@@ -312,14 +281,29 @@ def audit_compensation6(runs: Sequence) -> CompensationAudit6:
     signal = float(np.sqrt(np.mean((wc[open_] / size) ** 2)))
     relative = resid / signal if signal > 0.0 else 0.0
     block, levels = 1, math.nan
-    if relative > LAW_RESIDUAL:
+    noisy = any(np.any(p["var_w"] > 0.0) or np.any(p["var_m"] > 0.0) for p in parts)
+    if relative > LAW_RESIDUAL and noisy:
         # The readings' noise the computer did not see, or another law. A fit on
         # noisy readings is biased (errors in variables: the lead and the MDC term
         # trade), so only the JSON's law is tested, over means of ticks, whose
         # noise the means shrink and a misfit of the law's constants survives.
-        block = int(np.clip(ticks // 40, 4, 25))
+        block = block_ticks(min(int(np.any(p["wc"] != 0.0, axis=1).sum()) for p in parts))
         stated = np.array([1.0, parts[0]["lead_s"], 1.0 if mdc else 0.0][:columns])
-        levels = float(np.max(_stated_misfit(parts, stated, block)))
+        levels = float(
+            np.max(
+                [
+                    stated_law_levels(
+                        p["wc"] - p["terms"][:, :, :columns] @ stated,
+                        np.any(p["wc"] != 0.0, axis=1),
+                        p["var_w"],
+                        p["var_m"],
+                        p["lead_s"] / p["h"],
+                        block,
+                    )
+                    for p in parts
+                ]
+            )
+        )
     predicted = np.concatenate(design) @ coef * size  # every tick's compensation, ungated
     level = _level(
         np.concatenate([p["w"] for p in parts]), params.deadband_reading == "axial_force"
@@ -343,6 +327,18 @@ def audit_compensation6(runs: Sequence) -> CompensationAudit6:
 
 def _findings(audit: CompensationAudit6, params, size: np.ndarray) -> list[AuditFinding6]:
     name, h = audit.compensator, params.sample_period_s
+    if audit.relative_residual > LAW_RESIDUAL and audit.block == 1:
+        return [
+            AuditFinding6(
+                "compensation_law_error",
+                {"relative_residual": audit.relative_residual},
+                {"relative_residual": None},
+                f"compensation_law_error: w_comp is not the format's compensation of the "
+                f"readings: {audit.relative_residual:.2g} of the signal remains after solving a "
+                f"gain, a lead, the MDC term's factor and an offset per component (at most "
+                f"{LAW_RESIDUAL:g})",
+            )
+        ]  # the values below assume the format's law
     if audit.block > 1:
         if audit.noise_levels <= NOISE_LEVELS:
             return []  # the JSON's law, to the noise of readings it did not see
@@ -353,9 +349,11 @@ def _findings(audit: CompensationAudit6, params, size: np.ndarray) -> list[Audit
                 {"stated_law_noise_levels": None},
                 f"compensation_law_error: w_comp is not the JSON's {name} law of the logged "
                 f"readings: over means of {audit.block} ticks it misses by "
-                f"{audit.noise_levels:.3g} noise levels (at most {NOISE_LEVELS:g}); the log's "
-                "readings carry noise the computer did not see, so which of its constants "
-                "differs (lead, MDC stiffness, gain, offsets) cannot be solved from them",
+                f"{audit.noise_levels:.3g} noise levels (at most {NOISE_LEVELS:g}), and no gain, "
+                f"lead, MDC factor and offsets make it one ({audit.relative_residual:.2g} of the "
+                "signal remains): the computer compensates otherwise, or the log's readings "
+                "carry noise it did not see, and then which of its constants differs cannot be "
+                "solved from them",
             )
         ]
     out = []

@@ -125,3 +125,27 @@ def test_runs_that_agree_are_merged_into_one_finding(tmp_path):
     assert f.runs == ("r1", "r2", "r3")
     assert f.used_value == pytest.approx(700.0, rel=1e-6)
     assert audit.effects == ["mass_error"]
+
+
+def _logged_with_noise(tmp_path, used: dict, seed: int):
+    """A run whose logger adds its own noise to the readings (2 N, 2 um): the
+    computer compensated the readings without it."""
+    info_used = dict(NOMINAL, **used)
+    info_said = dict(NOMINAL, run_id=f"logger{seed}")
+    cols = simulate_record(info_used, seed=seed, duration_s=0.5, noise_f_n=0.0, noise_p_m=0.0)
+    rng = np.random.default_rng(seed)
+    cols["f_mea_n"] = cols["f_mea_n"] + 2.0 * rng.standard_normal(len(cols["f_mea_n"]))
+    cols["p_act_m"] = cols["p_act_m"] + 2e-6 * rng.standard_normal(len(cols["p_act_m"]))
+    return read_run(write_run(tmp_path, info_said["run_id"], info_said, cols))
+
+
+def test_a_loggers_own_noise_is_not_taken_for_another_compensation(tmp_path):
+    from hybridtable.measurement.audit_fit import NOISE_LEVELS
+
+    own = audit_runs([_logged_with_noise(tmp_path, {}, seed=3)])
+    assert own.ok, [f.text for f in own.findings]
+    assert own.estimates[0].compensation_noise_levels <= NOISE_LEVELS
+    # a lead 1 ms off still shows over means of ticks, as the law, not as a guess
+    lead = audit_runs([_logged_with_noise(tmp_path, {"lead_time_s": 0.003}, seed=4)])
+    assert [f.key for f in lead.findings] == ["compensation_law"]
+    assert lead.estimates[0].compensation_noise_levels > NOISE_LEVELS
