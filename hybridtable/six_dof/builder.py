@@ -269,8 +269,9 @@ def add_docking_loop(
         The rig's physical part where it differs from ``params`` (the contact,
         the table and the sensor are built from :meth:`DockingPhysics.apply`;
         the spacecraft and the compensator are the rig computer's, from
-        ``params``, its spacecraft's centre of mass moved by the physics'
-        :meth:`DockingPhysics.computer`).
+        ``params`` as the physics' :meth:`DockingPhysics.computer` changes
+        them: its spacecraft's centre of mass, its compensator's lead and
+        stiffness).
     """
     h = params.sample_period_s
     true = physics.apply(params) if physics is not None else params
@@ -278,7 +279,8 @@ def add_docking_loop(
     spacecraft = builder.AddNamedSystem("spacecraft", RigidSpacecraft(computer.spacecraft, h))
     backend = builder.AddNamedSystem("table_backend", backend or table_backend(true, physics))
     compensator = builder.AddNamedSystem(
-        "compensator", compensator or make_wrench_compensator(params, stiffness_model_of(params))
+        "compensator",
+        compensator or make_wrench_compensator(computer, stiffness_model_of(computer)),
     )
     command = spacecraft.GetOutputPort("commanded_state")
     measured, table = add_rig_part(builder, params, physics, command, backend)

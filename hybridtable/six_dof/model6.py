@@ -9,9 +9,10 @@ taken at, the effects with their values, standard errors and which were
 fitted (the 1-D model file's entries: :func:`~hybridtable.diagnosis.model_file.effects_json`,
 read back by :func:`~hybridtable.diagnosis.model_reader.effect_from_json`),
 the runs (id, CSV, SHA-256), the evidence and where it came from. An effect
-of the rig computer the audit solved (``com_offset``) is one of the effects;
-the audit's other findings (a mass, an inertia: the 6-DoF loop's computer
-cannot take them) are in the evidence. The file is JSON::
+of the rig computer the audit solved (``com_offset``, ``lead_time_error``,
+``compensator_stiffness_error``) is one of the effects; the audit's other
+findings (a mass, an inertia, a gain or a dead band of the compensation: the
+6-DoF loop's computer cannot take them) are in the evidence. The file is JSON::
 
     {"format": "hybridtable-model6/1", "tool_version": "0.1.0",
      "created": "2026-11-29T01:00:00+00:00", "source": "diagnose",

@@ -28,12 +28,15 @@ A :class:`DockingPhysics` is what the 6-DoF effects change
 - ``table_mode`` (``(f, zeta)``: Hz, 1): a structural mode between the
   table's servo and its device on each pose coordinate (the 1-D
   ``table_resonance``'s law; the table model only);
-- ``com_offset_m`` (3): the one change of the rig *computer*: its spacecraft
-  model's centre of mass this far from the scenario's (body frame), so its
-  port sits at ``port_position_m - com_offset_m`` from it
-  (:meth:`DockingPhysics.computer`). The replay of the physical part does not
-  see it; the audit of the computer's arithmetic does
-  (:mod:`~hybridtable.six_dof.audit6`).
+- ``com_offset_m`` (3) and, in ``offsets`` and ``factors``, the
+  compensator's lead and stiffness (:data:`COMPUTER_FIELDS`): changes of the
+  rig *computer*: its spacecraft model's centre of mass this far from the
+  scenario's (body frame), so its port sits at ``port_position_m -
+  com_offset_m`` from it; its lead offset from, its contact model's
+  stiffness scaled from what it believes (:meth:`DockingPhysics.computer`).
+  The replay of the physical part does not see them; the audits of the
+  computer's arithmetic do (:mod:`~hybridtable.six_dof.audit6`,
+  :mod:`~hybridtable.six_dof.audit_law6`).
 
 They are Drake primitives in the diagram (``MatrixGain``, a discrete
 ``LinearSystem``, ``Adder``: :func:`~hybridtable.six_dof.builder.add_rig_part`),
@@ -58,7 +61,19 @@ from hybridtable.six_dof.devices import PAD_LAW_FIELDS
 from hybridtable.six_dof.params import DockingLoopParams
 from hybridtable.six_dof.pose import rotation_exp
 
-__all__ = ["DockingPhysics", "NOMINAL_PHYSICS", "PHYSICAL_FIELDS", "physics_with", "rig_scale"]
+__all__ = [
+    "COMPUTER_FIELDS",
+    "DockingPhysics",
+    "NOMINAL_PHYSICS",
+    "PHYSICAL_FIELDS",
+    "physics_with",
+    "rig_scale",
+]
+
+#: The rig computer's compensator's constants an effect may offset or scale
+#: from what it believes (:meth:`DockingPhysics.computer`): its lead (s, offset)
+#: and its contact model's stiffness (a factor; of a given matrix, the matrix's).
+COMPUTER_FIELDS: tuple[str, ...] = ("lead_time_s", "compensator_stiffness_n_per_m")
 
 #: The scenario's own quantities an effect may change (the rig computer's
 #: beliefs, the approach and the spacecraft are the scenario's, never the rig's).
@@ -106,10 +121,11 @@ class DockingPhysics:
     def __post_init__(self) -> None:
         for name in ("changes", "offsets", "factors"):
             given = dict(getattr(self, name))
-            unknown = [k for k in given if k not in PHYSICAL_FIELDS]
+            allowed = PHYSICAL_FIELDS + (COMPUTER_FIELDS if name != "changes" else ())
+            unknown = [k for k in given if k not in allowed]
             if unknown:
                 raise ParameterError(
-                    f"a 6-DoF effect may change {', '.join(PHYSICAL_FIELDS)} (got {unknown[0]!r})"
+                    f"a 6-DoF effect may change {', '.join(allowed)} (got {unknown[0]!r})"
                 )
             object.__setattr__(self, name, given)  # a copy (picklable for workers)
         object.__setattr__(self, "sensor_gain", _matrix("sensor_gain", self.sensor_gain))
@@ -219,12 +235,27 @@ class DockingPhysics:
     def computer(self, params: DockingLoopParams) -> DockingLoopParams:
         """The rig computer's parameters: ``params`` with its spacecraft's
         centre of mass moved by :attr:`com_offset_m` (the port's position from
-        it less the offset; the body's mass and inertia are the scenario's)."""
-        if self.com_offset_m is None:
-            return params
-        sc = params.spacecraft
-        port = sc.port_position_m - np.array(self.com_offset_m)
-        return params.with_(lateral_offset_m=(port[0], port[1]), port_distance_m=port[2])
+        it less the offset; the body's mass and inertia are the scenario's),
+        and its compensator's lead and stiffness offset and scaled from what it
+        believes (:data:`COMPUTER_FIELDS` in :attr:`offsets` and
+        :attr:`factors`; a lead below 0 is 0)."""
+        values: dict[str, Any] = {}
+        if self.com_offset_m is not None:
+            port = params.spacecraft.port_position_m - np.array(self.com_offset_m)
+            values.update(lateral_offset_m=(port[0], port[1]), port_distance_m=port[2])
+        if "lead_time_s" in self.offsets:
+            values["lead_time_s"] = max(
+                0.0, params.effective_lead_time_s + self.offsets["lead_time_s"]
+            )
+        factor = self.factors.get("compensator_stiffness_n_per_m")
+        if factor is not None and params.stiffness_model == "given":
+            K = np.array(params.compensator_stiffness_matrix) * factor
+            values["compensator_stiffness_matrix"] = K
+        elif factor is not None:
+            values["compensator_stiffness_n_per_m"] = (
+                factor * params.believed_contact.contact_stiffness_n_per_m
+            )
+        return params.with_(**values) if values else params
 
     def apply(self, params: DockingLoopParams) -> DockingLoopParams:
         """The loop's parameters of the rig's physical part (the contact, the
@@ -246,9 +277,11 @@ class DockingPhysics:
             )
         values: dict[str, Any] = dict(self.changes)
         for name, delta in self.offsets.items():
-            values[name] = max(0.0, float(values.get(name, getattr(params, name))) + delta)
+            if name in PHYSICAL_FIELDS:
+                values[name] = max(0.0, float(values.get(name, getattr(params, name))) + delta)
         for name, factor in self.factors.items():
-            values[name] = float(values.get(name, getattr(params, name))) * factor
+            if name in PHYSICAL_FIELDS:
+                values[name] = float(values.get(name, getattr(params, name))) * factor
         return params.with_(**values) if values else params
 
     def to_dict(self) -> dict:

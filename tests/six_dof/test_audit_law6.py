@@ -162,3 +162,49 @@ def test_compare_names_the_lead_the_computer_used(tmp_path, capsys):
     audit = json.loads(capsys.readouterr().out)["audit"]
     assert [f["effect"] for f in audit["findings"]] == ["lead_time_error"]
     assert audit["compensation"][0]["solved"]["lead_time_s"] == pytest.approx(0.003, abs=1e-10)
+
+
+@pytest.mark.parametrize(
+    "effect, values, used",
+    [
+        ("lead_time_error", {"lead_error_s": -0.002}, {"lead_time_s": 0.003}),
+        (
+            "compensator_stiffness_error",
+            {"compensator_stiffness_ratio": 0.8},
+            {"stiffness_n_per_m": 0.8e5},
+        ),
+    ],
+)
+def test_what_the_audit_finds_runs_the_computer_it_found(effect, values, used):
+    # the 6-DoF loop's computer takes the finding (apply6): the JSON's scenario with
+    # the effect is the computer that used the other value, to round-off
+    from hybridtable.effects.registry import get_effect
+    from hybridtable.six_dof.physics6 import physics_with, rig_scale
+
+    params = parse_scenario(NOISY)
+    physics = physics_with([(get_effect(effect), values)], rig_scale(params))
+    modelled = simulate6(params, physics=physics).log["compensated_wrench"]
+    actual = simulate6(parse_scenario(_with(NOISY, **used))).log["compensated_wrench"]
+    np.testing.assert_allclose(modelled, actual, rtol=0, atol=1e-9 * np.abs(actual).max())
+    assert np.abs(actual).max() > 100.0
+
+
+def test_a_model_file_carries_the_lead_the_audit_found(tmp_path, capsys):
+    from hybridtable.cli import main
+
+    run = _told(_with(NOISY, lead_time_s=0.003), NOISY, "lead")
+    (tmp_path / "run1.csv").write_text(run6_csv_text(run))
+    (tmp_path / "run1.json").write_text(json.dumps(run6_json(run)))
+    model = tmp_path / "model.json"
+    args = ["compare", str(tmp_path / "run1.csv"), "--no-progress", "--save-model", str(model)]
+    assert main(args) == 0
+    saved = json.loads(model.read_text())
+    (lead,) = [e for e in saved["effects"] if e["name"] == "lead_time_error"]
+    assert lead["parameters"]["lead_error_s"]["value"] == pytest.approx(-0.002, abs=1e-10)
+    capsys.readouterr()
+    args = ["compare", str(tmp_path / "run1.csv"), "--no-progress", "--model", str(model)]
+    assert main([*args, "--json", "-"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    # the closed loop of the JSON's computer misses the CoR; with the audited lead it does not
+    assert abs(out["runs"][0]["cor_error"]) > 0.01
+    assert abs(out["model"]["runs"][0]["cor_error"]) < 0.1 * abs(out["runs"][0]["cor_error"])

@@ -44,6 +44,9 @@ EFFECT = Effect(
     ),
     Signature((V_DES,), CONTACT, "closed loop: the MDC's force term is off by the ratio"),
     _apply,
+    apply6=lambda physics, v, s: physics.times(
+        compensator_stiffness_n_per_m=v["compensator_stiffness_ratio"]
+    ),
     stage="closed_loop",
     touches=("computer.stiffness",),
     default_for=("explain",),  # runs: the audit solves the MDC's stiffness

@@ -45,6 +45,7 @@ EFFECT = Effect(
     ),
     Signature((V_DES,), CONTACT, "closed loop: the compensated force leads by the error"),
     _apply,
+    apply6=lambda physics, v, s: physics.plus(lead_time_s=v["lead_error_s"]),
     stage="closed_loop",
     touches=("computer.lead",),
     default_for=("explain",),  # runs: the audit solves the lead
