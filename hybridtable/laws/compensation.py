@@ -191,6 +191,7 @@ def compensate(
 def linear_terms(
     measured: Any,
     rate: Any,
+    *,
     response_error: Any = 0.0,
     stiffness: Any = 0.0,
     rate_error: Any = 0.0,
@@ -203,7 +204,8 @@ def linear_terms(
     Each term is :func:`compensate` on the law without switches with that
     constant at one and the others' terms at zero, so an audit that solves a
     record for ``a``, ``T_lead`` and ``s`` (a regression on these terms)
-    states the law from its one definition. Arguments as :func:`compensate`'s.
+    states the law from its one definition. Arguments as :func:`compensate`'s
+    (by name but the first two).
     """
     zero = 0.0 * measured
     reading = compensate(CompensationLaw(gate="none"), measured)

@@ -58,10 +58,11 @@ from hybridtable.measurement.audit_findings import (
 from hybridtable.measurement.audit_fit import (
     NOISE_LEVELS,
     block_ticks,
+    deadband_bounds,
     linear_fit,
+    reading_noise,
     stated_law_levels,
 )
-from hybridtable.measurement.channels import noise_level_of_differences
 from hybridtable.measurement.run_format import Run
 
 __all__ = [
@@ -75,8 +76,6 @@ def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
     info = run.info
     h_json = info.sample_period_s
     p_des = np.asarray(run.p_des_m, dtype=float)
-    p_act = np.asarray(run.p_act_m, dtype=float)
-    f = np.asarray(run.f_mea_n, dtype=float)
     fc = np.asarray(run.f_comp_n, dtype=float)
     v = np.asarray(run.v_des_m_per_s, dtype=float)
     n = len(v)
@@ -190,145 +189,7 @@ def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
             )
         )
 
-    # Compensation: f_comp = a f + L df/h + K (p_des[k-1] - p_act[k]) + b, the law's
-    # terms from its definition (a gain of the reading, the lead's, the MDC's per N/m).
-    k = np.arange(1, n)
-    terms = linear_terms(f[k], backward_difference(f[k], f[k - 1], h), p_des[k - 1] - p_act[k], 1.0)
-    x_all = np.column_stack([*terms, np.ones(len(k))])
-    rows = fc[k] != 0.0
-    lead_json = info.lead_time_s if info.compensator in ("SDC", "SDMDC") else 0.0
-    stiff_json = info.contact_stiffness_n_per_m if info.compensator in ("MDC", "SDMDC") else 0.0
-    nan4 = np.full(4, math.nan)
-    coef, se, resid = nan4, nan4, math.nan
-    deadband = (math.nan, math.nan)
-    noise_levels = math.nan
-    if rows.sum() >= 8:
-        coef, se, resid = linear_fit(x_all[rows], fc[k][rows])
-        a, lead, stiff, off = (float(c) for c in coef)
-        a_se, lead_se, stiff_se, off_se = (float(s) for s in se)
-        f_scale = float(np.max(np.abs(fc)))
-        noisy, exact = False, resid <= 1e-4 * f_scale + 10 * 1e-9 * f_scale
-        if not exact:  # noise the computer did not see, or another law
-            noise_levels, noisy = _stated_law_levels(run, k, rows, x_all, lead_json, stiff_json)
-        if noisy and noise_levels > NOISE_LEVELS:  # a fit on such readings is biased
-            found.append(
-                Finding(
-                    "compensation_law",
-                    0.0,
-                    resid,
-                    0.0,
-                    rid,
-                    f"f_comp is not the JSON's {info.compensator} law of the logged readings: "
-                    f"over means of ticks it misses by {noise_levels:.3g} noise levels (at most "
-                    f"{NOISE_LEVELS:g}), and no gain, lead, stiffness and offset make it one "
-                    f"({resid:.3g} N RMS remain): the computer compensates otherwise, or the "
-                    "log's readings carry noise it did not see, and then which of its "
-                    "constants differs cannot be solved from them",
-                )
-            )
-        elif not noisy:
-            if not exact:
-                found.append(
-                    Finding(
-                        "compensation_law",
-                        0.0,
-                        resid,
-                        0.0,
-                        rid,
-                        f"f_comp is not the format's compensation of the readings: "
-                        f"{resid:.3g} N RMS remain after fitting a gain, a lead, a "
-                        "stiffness and an offset",
-                    )
-                )
-            if differs(lead, lead_se, lead_json, max(lead_json, h)):
-                says = (
-                    f"JSON says {lead_json * 1e3:.6g} ms"
-                    if lead_json > 0.0
-                    else f"the JSON's compensator {info.compensator} has no lead"
-                )
-                found.append(
-                    Finding(
-                        "lead_time_s",
-                        lead_json,
-                        lead,
-                        lead_se,
-                        rid,
-                        f"lead_time_s used {lead * 1e3:.6g} ms, {says}",
-                    )
-                )
-            k_scale = max(stiff_json, info.contact_stiffness_n_per_m)
-            if differs(stiff, stiff_se, stiff_json, k_scale):
-                says = (
-                    f"JSON says {stiff_json:.6g} N/m"
-                    if stiff_json > 0.0
-                    else f"the JSON's compensator {info.compensator} has no MDC"
-                )
-                found.append(
-                    Finding(
-                        "contact_stiffness_n_per_m",
-                        stiff_json,
-                        stiff,
-                        stiff_se,
-                        rid,
-                        f"the MDC stiffness used {stiff:.6g} N/m, {says}",
-                    )
-                )
-            if differs(a, a_se, 1.0, 1.0):
-                found.append(
-                    Finding(
-                        "compensation_gain",
-                        1.0,
-                        a,
-                        a_se,
-                        rid,
-                        f"the computer scales the force reading by {a:.6g} before compensating",
-                    )
-                )
-            if differs(off, off_se, 0.0, f_scale):
-                found.append(
-                    Finding(
-                        "compensation_offset_n",
-                        0.0,
-                        off,
-                        off_se,
-                        rid,
-                        f"the computer adds {off:.4g} N to the compensated force",
-                    )
-                )
-            # Deadband: a reading gated to zero although its compensation is positive.
-            pre = x_all @ coef
-            tol = 5.0 * resid + 1e-9 * f_scale
-            zero = fc[k] == 0.0
-            gated = zero & (pre > tol)
-            lower = float(np.max(f[k][gated])) if gated.any() else -math.inf
-            upper = float(np.min(f[k][fc[k] > 0.0])) if (fc[k] > 0.0).any() else math.inf
-            deadband = (lower, upper)
-            db = info.force_deadband_n
-            if lower >= upper:
-                found.append(
-                    Finding(
-                        "force_deadband_n",
-                        db,
-                        lower,
-                        math.nan,
-                        rid,
-                        f"which readings give no force is not a deadband: a reading of "
-                        f"{lower:.4g} N gave none, one of {upper:.4g} N gave one",
-                    )
-                )
-            elif not (lower <= db < upper):
-                used = 0.5 * (lower + upper) if math.isfinite(lower) else upper
-                found.append(
-                    Finding(
-                        "force_deadband_n",
-                        db,
-                        used,
-                        0.5 * (upper - lower) if math.isfinite(lower) else math.inf,
-                        rid,
-                        f"force_deadband_n used between {max(lower, 0.0):.4g} and {upper:.4g} N, "
-                        f"JSON says {db:.4g} N",
-                    )
-                )
+    coef, se, resid, deadband, noise_levels = _compensation(run, h, found)
     negative = int(np.sum(fc < 0.0))
     if negative:
         found.append(
@@ -371,22 +232,183 @@ def audit_run(run: Run) -> tuple[ComputerEstimate, list[Finding]]:
     return est, found
 
 
-def _stated_law_levels(run: Run, k, rows, x_all, lead_json, stiff_json) -> tuple[float, bool]:
-    """:func:`stated_law_levels` of a 1-D run (the noise of ``f_mea`` and
-    ``p_act`` from the ticks before the table first touches, every tick with
-    fewer than 10), and whether its logged readings carry noise at all."""
-    h = run.info.sample_period_s
-    first = int(np.argmax(np.asarray(run.p_act_m) > 0.0))
-    quiet = slice(0, first) if first >= 10 else slice(None)
-    var_f, var_p = (
-        noise_level_of_differences(np.diff(np.asarray(x, dtype=float)[quiet], 2)) ** 2
-        for x in (run.f_mea_n, run.p_act_m)
-    )
-    misfit = (np.asarray(run.f_comp_n)[k] - x_all[:, :3] @ [1.0, lead_json, stiff_json])[:, None]
-    var_m = np.full((len(k), 1), stiff_json**2 * var_p)
-    m = block_ticks(int(rows.sum()))
-    levels = stated_law_levels(misfit, rows, np.array([var_f]), var_m, lead_json / h, m)
-    return float(levels[0]), bool(var_f > 0.0 or var_m[0, 0] > 0.0)
+def _compensation(run: Run, h: float, found: list[Finding]) -> tuple:
+    """The compensation's constants solved from one run (see the module doc),
+    its findings appended to ``found``: (coefficients ``[a, L, K, b]``, their
+    standard errors, the residual RMS (N), the dead band's bounds, and the
+    JSON's law's misfit in noise levels where the readings carry noise the
+    computer did not see: then the constants are not solved, NaN)."""
+    info, rid = run.info, (run.run_id,)
+    f = np.asarray(run.f_mea_n, dtype=float)
+    fc = np.asarray(run.f_comp_n, dtype=float)
+    p_des = np.asarray(run.p_des_m, dtype=float)
+    p_act = np.asarray(run.p_act_m, dtype=float)
+    # f_comp = a f + L df/h + K (p_des[k-1] - p_act[k]) + b, the law's terms from its
+    # definition (a gain of the reading, the lead's, the MDC's per N/m)
+    k = np.arange(1, len(f))
+    rate = backward_difference(f[k], f[k - 1], h)
+    terms = linear_terms(f[k], rate, response_error=p_des[k - 1] - p_act[k], stiffness=1.0)
+    x_all = np.column_stack([*terms, np.ones(len(k))])
+    rows = fc[k] != 0.0
+    lead_json = info.lead_time_s if info.compensator in ("SDC", "SDMDC") else 0.0
+    stiff_json = info.contact_stiffness_n_per_m if info.compensator in ("MDC", "SDMDC") else 0.0
+    nan4 = np.full(4, math.nan)
+    if rows.sum() < 8:
+        return nan4, nan4, math.nan, (math.nan, math.nan), math.nan
+    coef, se, resid = linear_fit(x_all[rows], fc[k][rows])
+    f_scale = float(np.max(np.abs(fc)))
+    exact = resid <= 1e-4 * f_scale + 10 * 1e-9 * f_scale
+    before = int(np.argmax(p_act > 0.0))
+    (sigma_f,), noisy_f = reading_noise(f, before)
+    (sigma_p,), noisy_p = reading_noise(p_act, before)
+    if exact or not (noisy_f or (noisy_p and stiff_json > 0.0)):
+        _constants(info, h, coef, se, resid, f_scale, exact, rid, found)
+        pre = x_all @ coef  # every tick's compensation, ungated
+        pending = pre > 5.0 * resid + 1e-9 * f_scale
+        levels, slack = math.nan, 0.0
+    else:
+        # Noise the computer did not see, or another law: a fit on noisy readings is
+        # biased (errors in variables), so the constants are not solved; the JSON's law
+        # is tested over means of blocks of ticks, and bounds the dead band.
+        stated = x_all[:, :3] @ [1.0, lead_json, stiff_json]
+        var_m = np.full((len(k), 1), stiff_json**2 * sigma_p**2)
+        m = block_ticks(int(rows.sum()))
+        misfit = (fc[k] - stated)[:, None]
+        levels = float(
+            stated_law_levels(misfit, rows, np.array([sigma_f**2]), var_m, lead_json / h, m)[0]
+        )
+        coef, se = nan4, nan4
+        if not levels <= NOISE_LEVELS:
+            found.append(
+                Finding(
+                    "compensation_law",
+                    0.0,
+                    resid,
+                    0.0,
+                    rid,
+                    f"f_comp is not the JSON's {info.compensator} law of the logged readings: "
+                    + (
+                        f"over means of {m} ticks it misses by {levels:.3g} noise levels (at "
+                        f"most {NOISE_LEVELS:g}), and no gain, lead, stiffness and offset make it "
+                        "one exactly"
+                        if math.isfinite(levels)
+                        else "no gain, lead, stiffness and offset make it one exactly, and its "
+                        "stretches of force are too short to tell noise from another law"
+                    )
+                    + ": the computer compensates otherwise, or the log's readings carry "
+                    "noise it did not see, and then which of its constants differs cannot be "
+                    "solved from them",
+                )
+            )
+        lead = lead_json / h
+        noise = math.sqrt(sigma_f**2 * ((1.0 + lead) ** 2 + lead**2) + var_m[0, 0])
+        pending = stated > 3.0 * noise  # a compensation the clamp does not explain
+        slack = 5.0 * sigma_f
+    lower, upper = deadband_bounds(f[k], fc[k] > 0.0, pending, slack)
+    db = info.force_deadband_n
+    if lower >= upper:
+        found.append(
+            Finding(
+                "force_deadband_n",
+                db,
+                lower,
+                math.nan,
+                rid,
+                f"which readings give no force is not a deadband: a reading of "
+                f"{lower:.4g} N gave none, one of {upper:.4g} N gave one",
+            )
+        )
+    elif not (lower <= db < upper):
+        used = 0.5 * (lower + upper) if math.isfinite(lower) else upper
+        found.append(
+            Finding(
+                "force_deadband_n",
+                db,
+                used,
+                0.5 * (upper - lower) if math.isfinite(lower) else math.inf,
+                rid,
+                f"force_deadband_n used between {max(lower, 0.0):.4g} and {upper:.4g} N, "
+                f"JSON says {db:.4g} N",
+            )
+        )
+    return coef, se, resid, (lower, upper), levels
+
+
+def _constants(info, h, coef, se, resid, f_scale, exact, rid, found: list[Finding]) -> None:
+    """The findings of the compensation's solved constants (and, when no
+    constant makes the law exact, that)."""
+    a, lead, stiff, off = (float(c) for c in coef)
+    a_se, lead_se, stiff_se, off_se = (float(s) for s in se)
+    lead_json = info.lead_time_s if info.compensator in ("SDC", "SDMDC") else 0.0
+    stiff_json = info.contact_stiffness_n_per_m if info.compensator in ("MDC", "SDMDC") else 0.0
+    if not exact:
+        found.append(
+            Finding(
+                "compensation_law",
+                0.0,
+                resid,
+                0.0,
+                rid,
+                f"f_comp is not the format's compensation of the readings: "
+                f"{resid:.3g} N RMS remain after fitting a gain, a lead, a "
+                "stiffness and an offset",
+            )
+        )
+    if differs(lead, lead_se, lead_json, max(lead_json, h)):
+        says = (
+            f"JSON says {lead_json * 1e3:.6g} ms"
+            if lead_json > 0.0
+            else f"the JSON's compensator {info.compensator} has no lead"
+        )
+        found.append(
+            Finding(
+                "lead_time_s",
+                lead_json,
+                lead,
+                lead_se,
+                rid,
+                f"lead_time_s used {lead * 1e3:.6g} ms, {says}",
+            )
+        )
+    k_scale = max(stiff_json, info.contact_stiffness_n_per_m)
+    if differs(stiff, stiff_se, stiff_json, k_scale):
+        says = (
+            f"JSON says {stiff_json:.6g} N/m"
+            if stiff_json > 0.0
+            else f"the JSON's compensator {info.compensator} has no MDC"
+        )
+        found.append(
+            Finding(
+                "contact_stiffness_n_per_m",
+                stiff_json,
+                stiff,
+                stiff_se,
+                rid,
+                f"the MDC stiffness used {stiff:.6g} N/m, {says}",
+            )
+        )
+    if differs(a, a_se, 1.0, 1.0):
+        found.append(
+            Finding(
+                "compensation_gain",
+                1.0,
+                a,
+                a_se,
+                rid,
+                f"the computer scales the force reading by {a:.6g} before compensating",
+            )
+        )
+    if differs(off, off_se, 0.0, f_scale):
+        found.append(
+            Finding(
+                "compensation_offset_n",
+                0.0,
+                off,
+                off_se,
+                rid,
+                f"the computer adds {off:.4g} N to the compensated force",
+            )
+        )
 
 
 def _integration_rule(dx: np.ndarray, v: np.ndarray) -> tuple[str, float, float, float, float]:
@@ -447,6 +469,13 @@ def audit_runs(runs: Sequence[Run]) -> Audit:
     notes = []
     if any(not math.isfinite(e.mass_kg) for e in estimates):
         notes.append("a run without compensated force: its mass cannot be audited")
+    for e in estimates:
+        if e.compensation_noise_levels <= NOISE_LEVELS:
+            notes.append(
+                f"{e.run_id}: its compensation is the JSON's to the noise of its logged readings, "
+                f"which the computer did not see ({e.compensation_noise_levels:.2g} noise levels "
+                "over means of ticks): its lead, stiffness, gain and offset are not solved"
+            )
     return Audit(estimates, findings, notes)
 
 

@@ -171,9 +171,11 @@ class ComputerEstimate:
     force_ticks: int
     free_velocity_change_m_per_s: float
     negative_force_ticks: int
-    #: With a residual above the CSV's precision: the stated law's misfit in noise
-    #: levels of the logged readings (at most 2: noise the computer did not see,
-    #: and the compensation's constants are not audited); NaN otherwise.
+    #: With a residual above the CSV's precision and noisy readings: the stated
+    #: law's misfit in noise levels of the logged readings over means of ticks (at
+    #: most :data:`~hybridtable.measurement.audit_fit.NOISE_LEVELS`: noise the
+    #: computer did not see, and the compensation's constants are not solved,
+    #: NaN); NaN otherwise.
     compensation_noise_levels: float = math.nan
 
     def to_json(self) -> dict:

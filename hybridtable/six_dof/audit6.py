@@ -39,7 +39,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hybridtable.measurement.audit_findings import RELATIVE_TOLERANCE, SIGNIFICANCE, differs
-from hybridtable.six_dof.audit_law6 import AuditFinding6, CompensationAudit6, audit_compensation6
+from hybridtable.six_dof.audit_findings6 import AuditFinding6, CompensationAudit6
+from hybridtable.six_dof.audit_law6 import audit_compensation6, law_key
 from hybridtable.six_dof.run6 import Run6
 from hybridtable.stewart.geometry import skew
 
@@ -192,10 +193,11 @@ class Audit6:
         return list(dict.fromkeys(f.effect for f in self.findings))
 
     def sentence(self) -> str:
-        """Each part's sentence (with a finding: only the parts that have one)."""
+        """Each part's sentence (with a finding: only the parts that have one,
+        or that could not be audited)."""
         parts = [*self.groups, *self.laws]
         if self.findings:
-            parts = [p for p in parts if p.findings]
+            parts = [p for p in parts if p.findings or getattr(p, "not_audited", "")]
         if len(self.groups) <= 1 and len(self.laws) <= 1:
             return "; ".join(p.sentence() for p in parts)
         return "; ".join(f"{', '.join(p.run_ids)}: {p.sentence()}" for p in parts)
@@ -217,13 +219,13 @@ def audit_runs6(runs: Sequence[Run6]) -> Audit6:
     """Solve the rig computer from ``runs``: its spacecraft (see the module),
     the runs of each spacecraft their JSONs state together, and its
     compensation law (:func:`~hybridtable.six_dof.audit_law6.audit_compensation6`),
-    the runs of each compensator (and rate and believed contact) together."""
+    the runs that state one law together (:func:`~hybridtable.six_dof.audit_law6.law_key`)."""
     bodies: dict = {}
     laws: dict = {}
     for run in runs:
         p = run.params
         bodies.setdefault(p.spacecraft, []).append(run)
-        laws.setdefault((p.rig.compensator, p.sample_rate_hz, p.believed_contact), []).append(run)
+        laws.setdefault(law_key(p), []).append(run)
     return Audit6(
         [audit_spacecraft6(group) for group in bodies.values()],
         [audit_compensation6(group) for group in laws.values()],

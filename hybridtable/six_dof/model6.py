@@ -155,13 +155,24 @@ def model6_of_runs(
     effects = list(effects)
     left = []
     if audit is not None:
-        for f in audit.findings:
-            known = len(audit.groups) == 1 and f.effect in effect_names()
-            known = known and get_effect(f.effect).apply6 is not None
-            if known and f.effect not in (e.name for e in effects):
-                effects.append(FittedEffect(f.effect, dict(f.values), dict(f.std), tuple(f.values)))
-            else:
-                left.append(f.sentence)
+        scale = rig_scale(runs[0].params)
+        # an audit's part of one group of runs (one spacecraft, one stated law) is
+        # the model's: its findings the 6-DoF loop's computer takes, within their bounds
+        for group in (audit.groups, audit.laws):
+            for f in (f for g in group for f in g.findings):
+                known = len(group) == 1 and f.effect in effect_names()
+                known = known and get_effect(f.effect).apply6 is not None
+                if known and f.effect not in (e.name for e in effects):
+                    try:
+                        get_effect(f.effect).check_values(f.values, scale)
+                    except ParameterError as err:
+                        left.append(f"{f.sentence} (not in the model: {err})")
+                        continue
+                    effects.append(
+                        FittedEffect(f.effect, dict(f.values), dict(f.std), tuple(f.values))
+                    )
+                else:
+                    left.append(f.sentence)
     records = []
     for r in runs:
         path = Path(r.csv_path) if r.csv_path else None

@@ -149,3 +149,15 @@ def test_a_loggers_own_noise_is_not_taken_for_another_compensation(tmp_path):
     lead = audit_runs([_logged_with_noise(tmp_path, {"lead_time_s": 0.003}, seed=4)])
     assert [f.key for f in lead.findings] == ["compensation_law"]
     assert lead.estimates[0].compensation_noise_levels > NOISE_LEVELS
+
+
+def test_a_loggers_noise_leaves_no_finding_over_seeds_and_a_dead_band_still_shows(tmp_path):
+    for seed in range(5, 10):
+        audit = audit_runs([_logged_with_noise(tmp_path, {}, seed=seed)])
+        assert audit.ok, [f.text for f in audit.findings]
+        assert np.isnan(audit.estimates[0].lead_time_s)  # not solved from such readings
+        assert "not solved" in audit.notes[0]
+    audit = audit_runs([_logged_with_noise(tmp_path, {"force_deadband_n": 30.0}, seed=11)])
+    assert [f.key for f in audit.findings] == ["force_deadband_n"]
+    lower, upper = audit.estimates[0].deadband_n
+    assert lower <= 30.0 < upper

@@ -208,3 +208,53 @@ def test_a_model_file_carries_the_lead_the_audit_found(tmp_path, capsys):
     # the closed loop of the JSON's computer misses the CoR; with the audited lead it does not
     assert abs(out["runs"][0]["cor_error"]) > 0.01
     assert abs(out["model"]["runs"][0]["cor_error"]) < 0.1 * abs(out["runs"][0]["cor_error"])
+
+
+def test_a_loggers_noise_gives_no_finding_over_seeds_and_a_dead_band_still_shows(tmp_path):
+    noise = dict(force_noise_n=2.0, moment_noise_n_m=0.5, position_noise_m=2e-6)
+    for seed in range(5):
+        rows = generate_run6(scenario(compensator={"name": "SDMDC"}), seed=seed, **noise)
+        write_run6(tmp_path, f"s{seed}", scenario(compensator={"name": "SDMDC"}), rows)
+        audit = audit_compensation6(read_runs6([tmp_path / f"s{seed}.csv"]))
+        assert audit.findings == [] and audit.noise_levels < NOISE_LEVELS, audit.sentence()
+        assert audit.lead_s is None and "would not show" in audit.sentence()
+    # the computer's dead band 20 N, its JSON's none
+    used = scenario(compensator={"name": "SDMDC", "force_deadband_n": 20.0})
+    write_run6(
+        tmp_path, "db", scenario(compensator={"name": "SDMDC"}), generate_run6(used, **noise)
+    )
+    audit = audit_compensation6(read_runs6([tmp_path / "db.csv"]))
+    assert [f.effect for f in audit.findings] == ["deadband_error"]
+    lower, upper = audit.deadband_n
+    assert lower <= 20.0 < upper
+
+
+def test_runs_of_other_delays_are_audited_apart():
+    # no lead stated: each run's lead is its own delay
+    other = copy.deepcopy(NOISY)
+    other["rig"] = dict(other["rig"], sensor_delay_s=0.004)
+    audit = audit_runs6([_told(NOISY, NOISY, "d5"), _told(other, other, "d4")])
+    assert len(audit.laws) == 2 and audit.findings == []
+
+
+def test_a_law_the_json_does_not_state_is_not_taken_for_a_constant():
+    # an SDC computer under an SDMDC JSON: no MDC term at all, not a softer stiffness
+    audit = audit_compensation6([_told(_with(NOISY, name="SDC"), NOISY, "sdc")])
+    assert [f.effect for f in audit.findings] == ["compensation_law_error"]
+    assert abs(audit.factor) < 1e-6
+    # an SDMDC computer under an MDC JSON: a lead the JSON's compensator has not
+    audit = audit_compensation6([_told(NOISY, _with(NOISY, name="MDC"), "mdc")])
+    assert [f.effect for f in audit.findings] == ["compensation_law_error"]
+    assert audit.lead_s == pytest.approx(0.005, abs=1e-9) and "has no lead" in audit.sentence()
+
+
+def test_a_finding_out_of_its_effects_bounds_stays_in_the_evidence():
+    from hybridtable.six_dof.model6 import model6_of_runs
+
+    # the computer led by 5 ms, its JSON says 30 ms: -25 ms, below lead_error_s's -20 ms
+    run = _told(NOISY, _with(NOISY, lead_time_s=0.03), "far")
+    audit = audit_runs6([run])
+    assert audit.effects == ["lead_time_error"]
+    model = model6_of_runs([run], [], audit, "compare")
+    assert [e.name for e in model.effects] == []
+    assert "out of bounds" in model.evidence["audit_not_in_the_model"][0]
