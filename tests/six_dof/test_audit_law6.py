@@ -258,3 +258,13 @@ def test_a_finding_out_of_its_effects_bounds_stays_in_the_evidence():
     model = model6_of_runs([run], [], audit, "compare")
     assert [e.name for e in model.effects] == []
     assert "out of bounds" in model.evidence["audit_not_in_the_model"][0]
+
+
+def test_a_computer_that_never_compensated_has_a_dead_band_above_its_readings(own):
+    silent = copy.deepcopy(own)
+    for block in ("f_comp", "m_comp"):
+        silent.blocks[block] = np.zeros_like(own.blocks[block])
+    audit = audit_compensation6([silent])
+    assert [f.effect for f in audit.findings] == ["deadband_error"]
+    peak = float(np.max(np.linalg.norm(own.blocks["f_mea"], axis=1)))
+    assert audit.deadband_n[0] > 0.5 * peak and "no reading got a compensation" in audit.sentence()
