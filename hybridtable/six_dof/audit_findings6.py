@@ -12,12 +12,12 @@ from dataclasses import dataclass, field
 
 from hybridtable.measurement.audit_findings import RELATIVE_TOLERANCE, SIGNIFICANCE
 
-__all__ = ["LAW_RESIDUAL", "WRENCH_COMPONENTS", "AuditFinding6", "CompensationAudit6"]
+__all__ = ["COMPENSATION_RESIDUAL", "WRENCH_COMPONENTS", "AuditFinding6", "CompensationAudit6"]
 
 #: The largest RMS residual of the law, over the RMS of the compensated wrench,
 #: of a computer that compensates by the format's law (the 1-D audit's 1e-4 of
 #: the force's scale; a CSV at six digits leaves about 1e-5).
-LAW_RESIDUAL = 1e-4
+COMPENSATION_RESIDUAL = 1e-4
 
 #: The wrench's components, in the loop's order (moment first).
 WRENCH_COMPONENTS = ("mx", "my", "mz", "fx", "fy", "fz")
@@ -141,7 +141,7 @@ class CompensationAudit6:
             "thresholds": {
                 "sigmas": SIGNIFICANCE,
                 "relative": RELATIVE_TOLERANCE,
-                "law_residual": LAW_RESIDUAL,
+                "law_residual": COMPENSATION_RESIDUAL,
             },
         }
 

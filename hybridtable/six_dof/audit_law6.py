@@ -25,7 +25,7 @@ below 1e-3 of the largest's). A value is a finding as the 1-D audit decides
 term over its model's, where ``K`` is linear in the believed stiffness and
 the factor within that effect's range), ``compensation_law_error`` (a gain,
 an offset, a lead or MDC term the JSON's compensator does not have, or a
-residual above ``LAW_RESIDUAL`` of the signal: the computer does not
+residual above ``COMPENSATION_RESIDUAL`` of the signal: the computer does not
 compensate by the format's law) and ``deadband_error`` (the readings it
 gated bound its dead band from below, those it compensated from above;
 :func:`~hybridtable.measurement.audit_fit.deadband_bounds`). A computer that
@@ -71,7 +71,7 @@ from hybridtable.measurement.audit_fit import (
     stated_law_levels,
 )
 from hybridtable.six_dof.audit_findings6 import (
-    LAW_RESIDUAL,
+    COMPENSATION_RESIDUAL,
     WRENCH_COMPONENTS,
     AuditFinding6,
     CompensationAudit6,
@@ -246,10 +246,10 @@ def audit_compensation6(runs: Sequence) -> CompensationAudit6:
     coef, se, resid, design = _solve(parts, columns, size)
     signal = float(np.sqrt(np.mean((wc[open_] / size) ** 2)))
     relative = resid / signal if signal > 0.0 else 0.0
-    if relative <= LAW_RESIDUAL or not noisy:
+    if relative <= COMPENSATION_RESIDUAL or not noisy:
         predicted = np.concatenate(design) @ coef * size  # every tick's, ungated
         pending = np.any(np.abs(predicted) / size > 5.0 * relative * signal + 1e-9, axis=1)
-        levels, how = math.nan, "exact" if relative <= LAW_RESIDUAL else "other"
+        levels, how = math.nan, "exact" if relative <= COMPENSATION_RESIDUAL else "other"
     else:
         # Noise the computer did not see, or another law: a fit on noisy readings is
         # biased (errors in variables), so the constants are not solved; the JSON's
@@ -324,7 +324,7 @@ def _findings(audit: CompensationAudit6, params, size: np.ndarray, how: str) -> 
                 f"compensation_law_error: w_comp is not the format's compensation of the "
                 f"readings: {audit.relative_residual:.2g} of the signal remains after solving a "
                 f"gain, a lead, the MDC term's factor and an offset per component (at most "
-                f"{LAW_RESIDUAL:g})",
+                f"{COMPENSATION_RESIDUAL:g})",
             )
         ]  # the values below assume the format's law
     if how == "noisy":
