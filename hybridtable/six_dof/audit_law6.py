@@ -168,16 +168,19 @@ def _solve(parts: list[dict], columns: int, size: np.ndarray):
     return coef, se, resid, design
 
 
-def _stated(parts: list[dict], stated: np.ndarray, block: int):
+def _stated(parts: list[dict], stated: np.ndarray, block: int, size: np.ndarray):
     """The JSON's law against the logged readings: its misfit over means of
     ``block`` ticks in noise levels (largest component of any run), per tick
     its compensation and that compensation's noise (rows x 6), and the
     smallest change of each constant (gain, lead in s, the MDC term's factor)
     that would pass :data:`NOISE_LEVELS` (its term's block means against
     their noise in the most telling component: ``levels^2 = 1 + (c term)^2 /
-    noise``)."""
+    noise``). A component whose readings carry no noise counts the exact
+    law's resolution (``COMPENSATION_RESIDUAL`` of its ``size``) as its noise."""
     levels, predicted, noise, telling = [], [], [], []
+    floor = (COMPENSATION_RESIDUAL * size) ** 2
     for p in parts:
+        p = dict(p, var_w=np.maximum(p["var_w"], floor))
         x = p["terms"][:, :, : len(stated)]
         predicted.append(x @ stated)
         lead = p["lead_s"] / p["h"]
@@ -192,8 +195,11 @@ def _stated(parts: list[dict], stated: np.ndarray, block: int):
         ]
         telling.append([float(np.max(np.nan_to_num(u))) for u in unit])
     most = np.max(telling, axis=0)
-    smallest = np.sqrt((NOISE_LEVELS**2 - 1.0) / np.maximum(most, 1e-300))
-    return float(np.max(levels)), np.concatenate(predicted), np.concatenate(noise), smallest
+    smallest = np.full(len(most), np.inf)
+    smallest[most > 0.0] = np.sqrt((NOISE_LEVELS**2 - 1.0) / most[most > 0.0])
+    # a run too short for a block tells nothing; all of them: NaN
+    level = float(np.nanmax(levels)) if np.any(np.isfinite(levels)) else math.nan
+    return level, np.concatenate(predicted), np.concatenate(noise), smallest
 
 
 def audit_compensation6(runs: Sequence) -> CompensationAudit6:
@@ -233,7 +239,7 @@ def audit_compensation6(runs: Sequence) -> CompensationAudit6:
     base = dict(stated_lead_s=parts[0]["lead_s"], stated_factor=1.0 if mdc else 0.0)
     clamp = params.clamp_nonnegative
     if ticks < 8:  # a computer that gave (almost) no wrench: a dead band above its readings?
-        _, predicted, noise, _ = _stated(parts, stated, block)
+        _, predicted, noise, _ = _stated(parts, stated, block, np.ones(6))
         pending = ~(clamp & (-predicted[:, 5] < 3.0 * noise[:, 5]))  # not (maybe) clamped
         bounds = deadband_bounds(level, open_, pending, slack)
         audit = CompensationAudit6(ids, name, ticks, deadband_n=bounds, **base)
@@ -255,7 +261,7 @@ def audit_compensation6(runs: Sequence) -> CompensationAudit6:
         # biased (errors in variables), so the constants are not solved; the JSON's
         # law is tested over means of blocks of ticks, and bounds the dead band.
         # Every tick without a wrench that its clamp may not explain was gated.
-        levels, predicted, noise, smallest = _stated(parts, stated, block)
+        levels, predicted, noise, smallest = _stated(parts, stated, block, size)
         pending = ~(clamp & (-predicted[:, 5] < 3.0 * noise[:, 5]))
         how = "noisy"
     pending &= ~(clamp & (-predicted[:, 5] < 0.0))
@@ -351,7 +357,8 @@ def _findings(audit: CompensationAudit6, params, size: np.ndarray, how: str) -> 
                 f"compensation_law_error: w_comp is not the JSON's {name} law of the logged "
                 f"readings: over means of {audit.block} ticks it misses by "
                 f"{audit.noise_levels:.3g} noise levels (at most {NOISE_LEVELS:g}), and no gain, "
-                "lead, MDC factor and offsets make it one exactly: the computer compensates "
+                f"lead, MDC factor and offsets make it one exactly ({audit.relative_residual:.2g} "
+                "of the signal remains): the computer compensates "
                 "otherwise, or the log's readings carry noise it did not see, and then which of "
                 "its constants differs cannot be solved from them",
             )
@@ -405,13 +412,19 @@ def _findings(audit: CompensationAudit6, params, size: np.ndarray, how: str) -> 
             has = (
                 "" if audit.stated_factor > 0.0 else f" the JSON's compensator {name} does not have"
             )
+            said = (
+                f"it has no MDC term (its factor {factor:.2g} +- {std:.2g} of its "
+                f"{params.stiffness_model} stiffness model's); the JSON's {name} has one"
+                if audit.stated_factor > 0.0 and not differs(factor, std, 0.0, 1.0)
+                else f"its MDC term is {factor:.4g} +- {std:.2g} times its "
+                f"{params.stiffness_model} stiffness model's{has}"
+            )
             out.append(
                 AuditFinding6(
                     "compensation_law_error",
                     {"mdc_factor": factor},
                     {"mdc_factor": std},
-                    f"compensation_law_error: its MDC term is {factor:.4g} +- {std:.2g} times "
-                    f"its {params.stiffness_model} stiffness model's{has}",
+                    f"compensation_law_error: {said}",
                 )
             )
     if differs(audit.gain, audit.gain_std, 1.0, 1.0):
