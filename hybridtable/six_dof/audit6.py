@@ -177,8 +177,8 @@ def _finding(stated, solved, std, scale) -> bool:
 class Audit6:
     """:func:`audit_runs6`'s result: one :class:`SpacecraftAudit` for each
     spacecraft the runs' JSONs state (runs of one spacecraft are solved
-    together), and one :class:`~hybridtable.six_dof.audit_law6.CompensationAudit6`
-    for each compensator (``laws``)."""
+    together), and one :class:`~hybridtable.six_dof.audit_findings6.CompensationAudit6`
+    for each law the runs' JSONs state (``laws``)."""
 
     groups: list[SpacecraftAudit]
     laws: list[CompensationAudit6] = field(default_factory=list)
