@@ -27,7 +27,10 @@ finding when it differs from the JSON's by more than
 centre of mass, the scenario's port position less the solved one),
 ``mass_error`` (the mass over the JSON's) and ``inertia_error``; a residual
 above :data:`LAW_RESIDUAL` of the signal says the computer does not step its
-model by the format's rule (``spacecraft_model_error``).
+model by the format's rule (``spacecraft_model_error``). A model stepped by
+another time step than the JSON's rate
+(:func:`~hybridtable.six_dof.audit_law6.time_step`) is ``sample_rate_error``,
+and its equations are written with the step it used.
 """
 
 from __future__ import annotations
@@ -40,7 +43,7 @@ import numpy as np
 
 from hybridtable.measurement.audit_findings import RELATIVE_TOLERANCE, SIGNIFICANCE, differs
 from hybridtable.six_dof.audit_findings6 import AuditFinding6, CompensationAudit6
-from hybridtable.six_dof.audit_law6 import audit_compensation6, law_key
+from hybridtable.six_dof.audit_law6 import audit_compensation6, law_key, time_step
 from hybridtable.six_dof.run6 import Run6
 from hybridtable.stewart.geometry import skew
 
@@ -139,11 +142,10 @@ def _inertia_columns(u: np.ndarray) -> np.ndarray:
     return out
 
 
-def _equations(run: Run6) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def _equations(run: Run6, h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The run's translation and rotation equations on the ticks with a
-    wrench: ``(A_t, b_t, A_r, b_r)``, each 3 rows a tick, 10 unknowns
-    ``[mu, c (3), inertia (6)]``."""
-    h = run.params.sample_period_s
+    wrench, for a model stepped by ``h``: ``(A_t, b_t, A_r, b_r)``, each 3
+    rows a tick, 10 unknowns ``[mu, c (3), inertia (6)]``."""
     R = run.rotations("des")
     omega = run.blocks["w_des"]
     v = run.blocks["v_des"]
@@ -243,7 +245,25 @@ def audit_spacecraft6(runs: Sequence[Run6]) -> SpacecraftAudit:
     lever = max(float(np.linalg.norm(body.port_position_m)), 0.1)
     i_scale = float(np.trace(inertia0)) / 3.0
     scale = np.array([x0[0], lever, lever, lever, *(i_scale,) * 6])
-    parts = [_equations(r) for r in runs]
+    # a model stepped by another time step than the JSON's rate: read with its own,
+    # so that it does not pass for a mass and an inertia of its own
+    steps, stepped = [], []
+    for r in runs:
+        h_json = r.params.sample_period_s
+        h, se = time_step(r)
+        off = differs(h, se, h_json, h_json)
+        steps.append(h if off else h_json)
+        if off:
+            stepped.append(
+                AuditFinding6(
+                    "sample_rate_error",
+                    {"sample_rate_hz": 1.0 / h},
+                    {"sample_rate_hz": se / (h * h)},
+                    f"sample_rate_error: {r.run_id}'s model steps by {h * 1e3:.6g} ms "
+                    f"({1.0 / h:.6g} Hz), the JSON's rate {r.params.sample_rate_hz:g} Hz",
+                )
+            )
+    parts = [_equations(r, h) for r, h in zip(runs, steps, strict=True)]
     A_t = np.vstack([p[0] for p in parts])
     b_t = np.concatenate([p[1] for p in parts])
     A_r = np.vstack([p[2] for p in parts])
@@ -254,6 +274,7 @@ def audit_spacecraft6(runs: Sequence[Run6]) -> SpacecraftAudit:
         return SpacecraftAudit(
             [r.run_id for r in runs], 0, stated[0], stated[1], stated[2],
             None, None, (None,) * 3, (None,) * 3, (None,) * 6, (None,) * 6, 0.0,
+            findings=stepped,
         )  # fmt: skip
     # each block weighted first by its signal, then by its scatter about the solution
     x = None
@@ -284,7 +305,7 @@ def audit_spacecraft6(runs: Sequence[Run6]) -> SpacecraftAudit:
         mass, mass_std, tuple(value[1:4]), tuple(std[1:4]), tuple(value[4:]), tuple(std[4:]),
         residual,
     )  # fmt: skip
-    audit.findings.extend(_findings(audit, lever, i_scale))
+    audit.findings.extend(stepped + _findings(audit, lever, i_scale))
     return audit
 
 

@@ -10,7 +10,8 @@ compensated wrench the format's law is linear in its constants:
 
     w_comp = a w_mea + T_lead (w_mea[k] - w_mea[k-1]) / h + s (-K (q_des[k-1] - q_act[k])) + b
 
-with the terms taken from the law's one definition
+(``h`` the time step the computer stepped its model by:
+:func:`computer_step`) with the terms taken from the law's one definition
 (:func:`~hybridtable.laws.compensation.linear_terms`, as the 1-D audit's
 regression, :mod:`hybridtable.measurement.audit`), ``K`` the scenario's
 stiffness model at the measured pose
@@ -79,7 +80,7 @@ from hybridtable.six_dof.audit_findings6 import (
 from hybridtable.six_dof.compensator import stiffness_model_of
 from hybridtable.six_dof.physics6 import rig_scale
 
-__all__ = ["AUDITED_COMPENSATORS", "audit_compensation6", "law_key"]
+__all__ = ["AUDITED_COMPENSATORS", "audit_compensation6", "computer_step", "law_key", "time_step"]
 
 #: The compensators whose law the audit solves for (the format's four).
 AUDITED_COMPENSATORS = ("none", "SDC", "MDC", "SDMDC")
@@ -88,6 +89,32 @@ AUDITED_COMPENSATORS = ("none", "SDC", "MDC", "SDMDC")
 def _level(wrench: np.ndarray, axial: bool) -> np.ndarray:
     """What the dead band reads of each row: the compression ``-fz`` or the force's norm."""
     return -wrench[:, 5] if axial else np.linalg.norm(wrench[:, 3:], axis=1)
+
+
+def time_step(run) -> tuple[float, float]:
+    """The time step (s) the rig computer steps its model by, and its
+    standard error: the format's position step of the centre of mass, ``p[k]
+    = p[k-1] + h v[k]``, on the port's logged pose and twist (``p = p_P - R
+    c``, ``v = v_P - omega x R c``, ``c`` the JSON's port position: an error
+    of ``c`` enters to second order), by least squares over every tick."""
+    c = np.asarray(run.params.spacecraft.port_position_m, dtype=float)
+    Rc = run.rotations("des") @ c
+    p, v, omega = run.blocks["p_des"], run.blocks["v_des"], run.blocks["w_des"]
+    y = np.diff(p - Rc, axis=0).ravel()
+    x = (v - np.cross(omega, Rc))[1:].ravel()
+    if not float(x @ x) > 0.0:
+        return run.params.sample_period_s, math.inf
+    (h,), (se,), _ = linear_fit(x[:, None], y)
+    return float(h), float(se)
+
+
+def computer_step(run) -> float:
+    """The time step the rig computer stepped its model by: :func:`time_step`
+    where it differs from the JSON's rate (a finding of the spacecraft's
+    audit), else the JSON's."""
+    h_json = run.params.sample_period_s
+    h, se = time_step(run)
+    return h if differs(h, se, h_json, h_json) else h_json
 
 
 def law_key(params) -> tuple:
@@ -113,7 +140,7 @@ def _terms(run) -> dict:
     the MDC term, ``var_m`` (rows x 6; :func:`reading_noise`: from every
     tick), and whether the readings carry noise at all (``noisy``)."""
     params = run.params
-    h = params.sample_period_s
+    h = computer_step(run)
     w, wc = run.wrench("mea"), run.wrench("comp")
     q_act, q_des = run.pose("act"), run.pose("des")
     k = np.arange(1, run.n)

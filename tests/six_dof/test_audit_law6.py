@@ -268,3 +268,17 @@ def test_a_computer_that_never_compensated_has_a_dead_band_above_its_readings(ow
     assert [f.effect for f in audit.findings] == ["deadband_error"]
     peak = float(np.max(np.linalg.norm(own.blocks["f_mea"], axis=1)))
     assert audit.deadband_n[0] > 0.5 * peak and "no reading got a compensation" in audit.sentence()
+
+
+def test_a_model_stepped_by_another_time_step_than_the_jsons_rate_is_named(own):
+    # the computer ticks and steps its model at 1 kHz; its JSON says 1250 Hz
+    from hybridtable.six_dof.audit_law6 import time_step
+
+    h, se = time_step(own)
+    assert h == pytest.approx(own.params.sample_period_s, rel=1e-12)
+    told = copy.deepcopy(NOISY)
+    told["rig"] = dict(told["rig"], sample_rate_hz=1250.0)
+    audit = audit_runs6([_told(NOISY, told, "rate")])
+    # read with its own step, neither its mass and inertia nor its lead pass for errors
+    assert audit.effects == ["sample_rate_error"]
+    assert audit.findings[0].values["sample_rate_hz"] == pytest.approx(1000.0, rel=1e-9)
