@@ -18,7 +18,8 @@ stiffness model at the measured pose
 (:func:`~hybridtable.six_dof.compensator.stiffness_model_of`), the gain ``a``
 (1), the MDC term's factor ``s`` (1 with an MDC, else 0) and an offset ``b``
 per component (0). The six components of the ticks of the runs that state
-one law (:func:`law_key`: compensator, lead, rate, believed contact) are
+one law (:func:`law_key`: compensator, lead, rate, believed contact and
+the nominal pose of a ``nominal`` stiffness model) are
 solved together by least squares, each component weighted by its size (not
 below 1e-3 of the largest's). A value is a finding as the 1-D audit decides
 (:func:`~hybridtable.measurement.audit_findings.differs`): ``lead_time_error``
