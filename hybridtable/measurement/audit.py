@@ -59,6 +59,7 @@ from hybridtable.measurement.audit_fit import (
     NOISE_LEVELS,
     block_ticks,
     deadband_bounds,
+    deadband_used,
     linear_fit,
     reading_noise,
     stated_law_levels,
@@ -262,7 +263,7 @@ def _compensation(run: Run, h: float, found: list[Finding]) -> tuple:
     (sigma_f,), noisy_f = reading_noise(f, before)
     (sigma_p,), noisy_p = reading_noise(p_act, before)
     if exact or not (noisy_f or (noisy_p and stiff_json > 0.0)):
-        _constants(info, h, coef, se, resid, f_scale, exact, rid, found)
+        _constants(info, h, (lead_json, stiff_json), coef, se, resid, f_scale, exact, found)
         pre = x_all @ coef  # every tick's compensation, ungated
         pending = pre > 5.0 * resid + 1e-9 * f_scale
         levels, slack = math.nan, 0.0
@@ -306,41 +307,34 @@ def _compensation(run: Run, h: float, found: list[Finding]) -> tuple:
         slack = 5.0 * sigma_f
     lower, upper = deadband_bounds(f[k], fc[k] > 0.0, pending, slack)
     db = info.force_deadband_n
-    if lower >= upper:
-        found.append(
-            Finding(
-                "force_deadband_n",
-                db,
-                lower,
-                math.nan,
-                rid,
-                f"which readings give no force is not a deadband: a reading of "
-                f"{lower:.4g} N gave none, one of {upper:.4g} N gave one",
-            )
-        )
-    elif not (lower <= db < upper):
-        used = 0.5 * (lower + upper) if math.isfinite(lower) else upper
+    verdict = deadband_used(lower, upper, db)
+    if verdict is not None:
+        used, half = verdict
         found.append(
             Finding(
                 "force_deadband_n",
                 db,
                 used,
-                0.5 * (upper - lower) if math.isfinite(lower) else math.inf,
+                half,
                 rid,
-                f"force_deadband_n used between {max(lower, 0.0):.4g} and {upper:.4g} N, "
+                f"which readings give no force is not a deadband: a reading of "
+                f"{lower:.4g} N gave none, one of {upper:.4g} N gave one"
+                if lower >= upper
+                else f"force_deadband_n used between {max(lower, 0.0):.4g} and {upper:.4g} N, "
                 f"JSON says {db:.4g} N",
             )
         )
     return coef, se, resid, (lower, upper), levels
 
 
-def _constants(info, h, coef, se, resid, f_scale, exact, rid, found: list[Finding]) -> None:
-    """The findings of the compensation's solved constants (and, when no
-    constant makes the law exact, that)."""
+def _constants(info, h, stated, coef, se, resid, f_scale, exact, found: list[Finding]) -> None:
+    """The findings of the compensation's solved constants against the
+    ``stated`` lead and MDC stiffness (and, when no constant makes the law
+    exact, that)."""
     a, lead, stiff, off = (float(c) for c in coef)
     a_se, lead_se, stiff_se, off_se = (float(s) for s in se)
-    lead_json = info.lead_time_s if info.compensator in ("SDC", "SDMDC") else 0.0
-    stiff_json = info.contact_stiffness_n_per_m if info.compensator in ("MDC", "SDMDC") else 0.0
+    lead_json, stiff_json = stated
+    rid = (info.run_id,)
     if not exact:
         found.append(
             Finding(

@@ -24,6 +24,7 @@ __all__ = [
     "block_means",
     "block_ticks",
     "deadband_bounds",
+    "deadband_used",
     "linear_fit",
     "reading_noise",
     "stated_law_levels",
@@ -139,3 +140,17 @@ def deadband_bounds(
     lower = float(np.max(level[gated])) - slack if gated.any() else -math.inf
     upper = float(np.min(level[open_])) + slack if open_.any() else math.inf
     return lower, upper
+
+
+def deadband_used(lower: float, upper: float, stated: float) -> tuple[float, float] | None:
+    """What the bounds ``[lower, upper)`` of :func:`deadband_bounds` say of a
+    stated dead band: None where it lies within them; else the dead band
+    used and its half-width (inf where a bound is open). With ``lower >=
+    upper`` the readings gated are not a dead band at all: ``(lower, nan)``."""
+    if lower >= upper:
+        return lower, math.nan
+    if lower <= stated < upper:
+        return None
+    if math.isfinite(lower) and math.isfinite(upper):
+        return 0.5 * (lower + upper), 0.5 * (upper - lower)
+    return (lower if math.isfinite(lower) else upper), math.inf

@@ -68,6 +68,7 @@ from hybridtable.measurement.audit_fit import (
     NOISE_LEVELS,
     block_ticks,
     deadband_bounds,
+    deadband_used,
     linear_fit,
     reading_noise,
     stated_law_levels,
@@ -315,34 +316,25 @@ def _deadband(audit: CompensationAudit6, params) -> list[AuditFinding6]:
     """The dead band's finding: the bounds it lies in against the JSON's."""
     lower, upper = audit.deadband_n
     db = params.force_deadband_n
-    if lower >= upper:
-        return [
-            AuditFinding6(
-                "deadband_error",
-                {"force_deadband_n": lower},
-                {"force_deadband_n": None},
-                f"deadband_error: which readings get no compensation is not a dead band: a "
-                f"reading of {lower:.4g} N got none, one of {upper:.4g} N got some",
-            )
-        ]
-    if lower <= db < upper:
+    verdict = deadband_used(lower, upper, db)
+    if verdict is None:
         return []
-    if math.isfinite(lower) and math.isfinite(upper):
-        used = 0.5 * (lower + upper)
+    used, half = verdict
+    if lower >= upper:
+        said = (
+            f"which readings get no compensation is not a dead band: a reading of "
+            f"{lower:.4g} N got none, one of {upper:.4g} N got some"
+        )
+    elif math.isfinite(upper):
+        said = f"its dead band is between {max(lower, 0.0):.4g} and {upper:.4g} N"
     else:
-        used = lower if math.isfinite(lower) else upper
+        said = f"its dead band is above {lower:.4g} N (no reading got a compensation)"
     return [
         AuditFinding6(
             "deadband_error",
             {"force_deadband_n": used},
-            {"force_deadband_n": 0.5 * (upper - lower) if math.isfinite(upper - lower) else None},
-            "deadband_error: its dead band is "
-            + (
-                f"between {max(lower, 0.0):.4g} and {upper:.4g} N"
-                if math.isfinite(upper)
-                else f"above {lower:.4g} N (no reading got a compensation)"
-            )
-            + f", the JSON's {db:.4g} N",
+            {"force_deadband_n": half if math.isfinite(half) else None},
+            f"deadband_error: {said}" + ("" if lower >= upper else f", the JSON's {db:.4g} N"),
         )
     ]
 
