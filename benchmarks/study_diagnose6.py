@@ -231,6 +231,7 @@ def run_set(item: dict, workers: int, timeout_s: float, keep: Path | None) -> di
         "sentence": doc.get("sentence", result["sentence"]),
         "nominal_errors": doc.get("nominal_errors"),
         "final_errors": doc.get("final_errors"),
+        "separating_runs": doc.get("separating_runs"),
         "exit_code": result["exit_code"],
         "stderr": result["stderr"],
         "generate_s": gen_s,

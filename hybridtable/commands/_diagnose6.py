@@ -74,7 +74,7 @@ def diagnose6(args: argparse.Namespace) -> int:
             print(f"audit: {result.audit.sentence()}")
         for name, why in result.refused.items():
             print(f"left out: {name} cannot act on this rig ({why})")
-        for line in _rounds(result):
+        for line in _rounds(result) + _separations(result):
             print(line)
         if report:
             print(f"report: {report[0]}")
@@ -109,6 +109,17 @@ def _rounds(result) -> list[str]:
     return lines
 
 
+def _separations(result) -> list[str]:
+    """Each selected effect's separating runs from its look-alikes, in words."""
+    if not result.separations:
+        return []
+    from hybridtable.effects.selection import separation_words
+
+    return [
+        separation_words(s, s["effects"]) for found in result.separations.values() for s in found
+    ]
+
+
 def _report(folder, runs, result) -> list[str]:
     """The compare report of ``runs`` (and of them with the effects found,
     fitted), the diagnosis above it; returns the files written."""
@@ -126,7 +137,8 @@ def _report(folder, runs, result) -> list[str]:
     preface = [f"**{result.sentence()}**", ""]
     if result.audit is not None:
         preface += [f"Audit: {result.audit.sentence()}.", ""]
-    preface += [f"- {line}" for line in _rounds(result)] + [""] * bool(result.steps)
+    lines = _rounds(result) + _separations(result)
+    preface += [f"- {line}" for line in lines] + [""] * bool(lines)
     with staged_folder(folder) as stage:
         files = write_report6(
             nominal,

@@ -113,13 +113,4 @@ def separating_run(
     )
     if best is None:
         return None
-    return {
-        "run": best.design[0],
-        "changes": best.design[1],
-        "distance": best.distance,
-        "recorded_distance": recorded,
-        # One such run would tell them apart at the BIC threshold.
-        "separates": best.separates,
-        # Independent runs add their squared distances.
-        "runs_needed": best.runs_needed,
-    }
+    return best.to_dict(recorded)

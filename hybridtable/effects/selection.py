@@ -18,7 +18,8 @@ them here:
 - **the separating run**: of candidate runs, the one on which two models'
   predictions differ most in noise units; independent runs add their squared
   distances, so it says how many such runs would separate them at a
-  threshold.
+  threshold (:func:`separation_words`: the words both ``diagnose`` front ends
+  say it in).
 """
 
 from __future__ import annotations
@@ -28,7 +29,16 @@ from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from typing import TypeVar
 
-__all__ = ["Block", "bic", "delta_bic", "lookalikes", "most_separating"]
+__all__ = [
+    "MAX_RUNS_SUGGESTED",
+    "Block",
+    "Separation",
+    "bic",
+    "delta_bic",
+    "lookalikes",
+    "most_separating",
+    "separation_words",
+]
 
 T = TypeVar("T")
 D = TypeVar("D")
@@ -107,6 +117,45 @@ class Separation:
         """How many such runs would (None: the models agree on it)."""
         d2 = self.distance * self.distance
         return math.ceil(self.threshold / d2) if d2 > 0.0 else None
+
+    def to_dict(self, recorded_distance: float) -> dict:
+        """As ``diagnose`` reports it, for a design of (words, changes):
+        ``run``, ``changes``, ``distance``, ``recorded_distance`` (the two
+        models apart on the recorded runs), ``separates``, ``runs_needed``."""
+        words, changes = self.design
+        return {
+            "run": words,
+            "changes": changes,
+            "distance": self.distance,
+            "recorded_distance": recorded_distance,
+            "separates": self.separates,
+            "runs_needed": self.runs_needed,
+        }
+
+
+#: Most runs of one kind a separation's words suggest.
+MAX_RUNS_SUGGESTED = 5
+
+
+def separation_words(s: dict, pair: Sequence[str]) -> str:
+    """What run (``s``: :meth:`Separation.to_dict`, with the look-alike's
+    ``hint``) would tell ``pair[0]`` from the others, in words."""
+    head = (
+        f"{pair[0]} and {', '.join(pair[1:])} are indistinguishable on "
+        f"these runs (predictions {s['recorded_distance']:.3g} noise units apart)"
+    )
+    if s.get("separates"):
+        return f"{head}; a run with {s['run']} would put them {s['distance']:.3g} apart."
+    needed = s.get("runs_needed")
+    if needed is not None and needed <= MAX_RUNS_SUGGESTED:
+        return (
+            f"{head}; {needed} runs with {s['run']} would separate them "
+            f"({s['distance']:.3g} noise units apart each)."
+        )
+    return (
+        f"{head}; none of the runs tried separates them (at most {s['distance']:.3g} "
+        f"apart, with {s['run']}): {s.get('hint') or 'another kind of measurement'}."
+    )
 
 
 def most_separating(

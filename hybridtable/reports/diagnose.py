@@ -21,6 +21,7 @@ from hybridtable.diagnosis.candidates import Candidate, Diagnosis
 from hybridtable.diagnosis.evaluate import RunData  # noqa: E402
 from hybridtable.diagnosis.goodness import WINDOW_ERROR_FLOOR  # noqa: E402
 from hybridtable.effects.registry import get_effect  # noqa: E402
+from hybridtable.effects.selection import separation_words  # noqa: E402
 from hybridtable.measurement.phases import PHASES, contact_mask, loop_energy  # noqa: E402
 from hybridtable.reports.compare import figure_stem  # noqa: E402
 from hybridtable.reports.figure_text import literal  # noqa: E402
@@ -211,30 +212,11 @@ def format_ranking(d: Diagnosis) -> str:
     return "\n".join(lines)
 
 
-#: Most runs of one kind a separation message suggests.
-MAX_RUNS_SUGGESTED = 5
-
-
 def separation_text(c: Candidate) -> str:
-    """What run would tell ``c`` from its look-alikes, in words."""
+    """What run would tell ``c`` from its look-alikes, in words
+    (:func:`~hybridtable.effects.selection.separation_words`)."""
     s = c.separation
-    pair = s.get("effects") or [c.effect, *c.indistinguishable_from]
-    head = (
-        f"{pair[0]} and {', '.join(pair[1:])} are indistinguishable on "
-        f"these runs (predictions {s['recorded_distance']:.3g} noise units apart)"
-    )
-    if s.get("separates"):
-        return f"{head}; a run with {s['run']} would put them {s['distance']:.3g} apart."
-    needed = s.get("runs_needed")
-    if needed is not None and needed <= MAX_RUNS_SUGGESTED:
-        return (
-            f"{head}; {needed} runs with {s['run']} would separate them "
-            f"({s['distance']:.3g} noise units apart each)."
-        )
-    return (
-        f"{head}; none of the runs tried separates them (at most {s['distance']:.3g} "
-        f"apart, with {s['run']}): {s.get('hint') or 'another kind of measurement'}."
-    )
+    return separation_words(s, s.get("effects") or [c.effect, *c.indistinguishable_from])
 
 
 # -- figures -------------------------------------------------------------------

@@ -42,6 +42,14 @@ the candidates (every registered effect with ``apply6``, or those named):
    whose exponent came back to 1 is a stiffness). A look-alike chosen first
    (one that fitted another effect's misfit in its round) cannot block the
    right effect so.
+6. a separating run (the 1-D diagnose's, on the core's
+   :func:`~hybridtable.effects.selection.most_separating`): for each selected
+   effect and each of its first :data:`MAX_SEPARATED` look-alikes, the
+   candidate run on which the two fitted models differ most
+   (:func:`~hybridtable.six_dof.design6.separating_run6`: a faster or slower
+   approach, another spacecraft mass, more pitch, the compensator off), and
+   whether one such run would tell them apart, how many would, or that none
+   of them does (the look-alike's hint at another measurement).
 
 Effects of the rig computer (``stage="closed_loop"``: ``com_offset``) act
 on no replay: the audit of the computer's spacecraft
@@ -73,6 +81,7 @@ from hybridtable.effects.workers import pool_map
 from hybridtable.errors import ParameterError, SimulationError
 from hybridtable.six_dof.audit6 import audit_runs6
 from hybridtable.six_dof.compare6 import replay_residuals
+from hybridtable.six_dof.design6 import separating_run6
 from hybridtable.six_dof.fit6 import Fit6, blocks, fit_runs6
 from hybridtable.six_dof.physics6 import physics_with, rig_scale
 from hybridtable.six_dof.run6 import Run6
@@ -84,10 +93,13 @@ from hybridtable.six_dof.verdict6 import (
     public_entry,
 )
 
-__all__ = ["MAX_EFFECTS", "diagnose_runs6"]
+__all__ = ["MAX_EFFECTS", "MAX_SEPARATED", "diagnose_runs6"]
 
 #: The most effects forward selection adds.
 MAX_EFFECTS = 3
+
+#: The most look-alikes of one selected effect a separating run is sought for.
+MAX_SEPARATED = 3
 
 
 def _fit_job(runs: Sequence[Run6], job: tuple) -> Fit6 | str:
@@ -173,7 +185,9 @@ def _swap_step(runs: Sequence[Run6], out: Diagnosis6, workers: int, progress: bo
             if r["replaces"] != swapped and abs(r["delta_bic"]) < INDISTINGUISHABLE_BIC:
                 alike = out.lookalikes_of.setdefault(r["replaces"], [])
                 alike += [r["effect"]] * (r["effect"] not in alike)
+                out.pairs[r["replaces"], r["effect"]] = (before, r["fit"])
 
+    before = out.fit  # the selection the swaps are scored against
     if not better:
         note_lookalikes(None)
         return
@@ -200,6 +214,11 @@ def _swap_step(runs: Sequence[Run6], out: Diagnosis6, workers: int, progress: bo
         and best["delta_bic"] - r["delta_bic"] < INDISTINGUISHABLE_BIC
     ]
     out.lookalikes_of[new] = alike
+    out.pairs = {k: v for k, v in out.pairs.items() if k[0] != gone}
+    out.pairs[new, gone] = (best["fit"], before)
+    out.pairs.update(
+        {(new, r["effect"]): (best["fit"], r["fit"]) for r in scored if r["effect"] in alike}
+    )
     note_lookalikes(gone)
 
 
@@ -231,6 +250,7 @@ def diagnose_runs6(
     progress: bool = False,
     max_effects: int = MAX_EFFECTS,
     swap: bool = True,
+    separate: bool = True,
 ) -> Diagnosis6:
     """Forward selection of the effects the runs' model misses (see the module).
 
@@ -245,6 +265,9 @@ def diagnose_runs6(
         The most effects the model gains.
     swap : bool
         Try the swap step after the forward selection (step 5 of the module).
+    separate : bool
+        Look for the runs that would separate the selected effects from
+        their look-alikes (step 6 of the module).
 
     Raises
     ------
@@ -353,20 +376,37 @@ def diagnose_runs6(
         fit = out.fit = best["fit"]
         out.final_errors = best["errors"]
         current = blocks(runs, fit.residuals)
-        out.lookalikes_of[best["effect"]] = [
-            r["effect"]
-            for r in lookalikes(
-                best,
-                relevant,
-                INDISTINGUISHABLE_BIC,
-                lambda r: r["delta_bic"],
-                lambda r: (r["effect"],),
-                inclusive=False,
-            )
-        ]
+        alike = lookalikes(
+            best,
+            relevant,
+            INDISTINGUISHABLE_BIC,
+            lambda r: r["delta_bic"],
+            lambda r: (r["effect"],),
+            inclusive=False,
+        )
+        out.lookalikes_of[best["effect"]] = [r["effect"] for r in alike]
+        for r in alike:  # the selection so far with the one, or the other
+            out.pairs[best["effect"], r["effect"]] = (best["fit"], r["fit"])
         return best["effect"]
 
     forward(effects, out.selected, max_effects, round_)
     if out.selected and out.fit is not None and swap:
         _swap_step(runs, out, workers, progress)
+    if separate:
+        _separate(runs, out)
     return out
+
+
+def _separate(runs: Sequence[Run6], out: Diagnosis6) -> None:
+    """Each selected effect's separating runs from its first
+    :data:`MAX_SEPARATED` look-alikes (step 6 of the module)."""
+    for name in out.selected:
+        found = []
+        for other in out.lookalikes_of.get(name, [])[:MAX_SEPARATED]:
+            pair = out.pairs.get((name, other))
+            sep = None if pair is None else separating_run6(runs, *pair)
+            if sep is not None:
+                hint = get_effect(other).separation_hint
+                found.append({"effects": [name, other], **sep, "hint": hint})
+        if found:
+            out.separations[name] = found

@@ -93,6 +93,13 @@ class Diagnosis6:
     audit: Audit6 | None = None
     #: The scale the effects' bounds were taken at (the first run's scenario).
     scale: RigScale | None = None
+    #: (selected effect, look-alike) -> the two models fitted: the one with
+    #: the selected effect, the same with the look-alike in its place.
+    pairs: dict[tuple[str, str], tuple[Fit6, Fit6]] = field(default_factory=dict, repr=False)
+    #: Each selected effect's look-alikes' separating runs
+    #: (:func:`~hybridtable.six_dof.design6.separating_run6`, with ``effects``
+    #: and ``hint``).
+    separations: dict[str, list[dict]] = field(default_factory=dict)
 
     @property
     def lookalikes(self) -> list[str]:
@@ -208,6 +215,7 @@ class Diagnosis6:
             "lookalikes": self.lookalikes,
             "lookalikes_of": {s: self.lookalikes_of.get(s, []) for s in self.selected},
             "at_bounds": self.at_bounds(),
+            "separating_runs": {s: self.separations.get(s, []) for s in self.selected},
             "rounds": [
                 {"kind": s.kind, "ranking": s.ranking, "chosen": s.chosen, "why": s.why}
                 for s in self.steps
