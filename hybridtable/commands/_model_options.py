@@ -6,7 +6,7 @@ module or a ``.py`` file before anything else reads the registry; installed
 packages register theirs through the entry-point group
 ``hybridtable.effects`` without a flag. ``--add EFFECT[:param=value,...]``
 (repeatable) adds effects; ``--model FILE`` reads a model file
-(``hybridtable-model/1``, :mod:`hybridtable.diagnosis.model_file`).
+(``hybridtable-model/1``, :mod:`hybridtable.effects.model_file`).
 """
 
 from __future__ import annotations
@@ -106,10 +106,10 @@ def parse_added_given(args: argparse.Namespace, why: str):
 
 
 def load_model_arg(args: argparse.Namespace):
-    """The :class:`~hybridtable.diagnosis.model_file.RigModel` of ``--model`` (or None)."""
+    """The :class:`~hybridtable.effects.model_file.RigModel` of ``--model`` (or None)."""
     if not getattr(args, "model", None):
         return None
-    from hybridtable.diagnosis.model_reader import load_model
+    from hybridtable.effects.model_reader import load_model
 
     return load_model(args.model)
 

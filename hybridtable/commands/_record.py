@@ -112,7 +112,7 @@ def run_record(args: argparse.Namespace, model) -> dict:
     """``simulate --record DIR``: write the runs and ``truth.json``."""
     from hybridtable._files import staged_folder
     from hybridtable.commands._common import check_outputs, write_json
-    from hybridtable.diagnosis.model_file import tool_version
+    from hybridtable.effects.model_file import tool_version
     from hybridtable.measurement.recorder import record_run, write_run
     from hybridtable.measurement.rig import computer_with_model_mass
     from hybridtable.systems.noise import MeasurementNoiseParams

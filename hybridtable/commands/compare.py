@@ -132,7 +132,7 @@ def run(args: argparse.Namespace) -> int:
         document["contact_events"] = [s.to_dict() for s in splits]
     if args.save_model:
         if model is None:
-            from hybridtable.diagnosis.model_file import RigModel
+            from hybridtable.effects.model_file import RigModel
 
             model = RigModel.from_runs(runs, [], source="compare")
         write_model(args.save_model, model)

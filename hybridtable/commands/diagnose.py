@@ -151,7 +151,7 @@ def run(args: argparse.Namespace) -> int:
         for s in splits:
             print(s.sentence())
     if args.save_model:
-        from hybridtable.diagnosis.model_file import model_from_diagnosis
+        from hybridtable.diagnosis.diagnose import model_from_diagnosis
 
         model = model_from_diagnosis(d)
         write_model(args.save_model, model)

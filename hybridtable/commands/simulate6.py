@@ -339,7 +339,7 @@ def _record(args: argparse.Namespace, result, hidden: list, physics) -> dict:
         write_text_atomic(stage.path / "run1.json", json.dumps(run6_json(run), indent=2) + "\n")
         # always written: a run recorded again with --force has no older truth beside it
         from hybridtable.commands._record import TRUTH_FORMAT
-        from hybridtable.diagnosis.model_file import tool_version
+        from hybridtable.effects.model_file import tool_version
 
         truth = {
             "format": TRUTH_FORMAT,

@@ -12,8 +12,9 @@
 - :mod:`~hybridtable.diagnosis.diagnose`: :func:`diagnose`, the forward selection;
 - :mod:`~hybridtable.diagnosis.add_effect`: the model with effects added
   (fitted where not given), compared with the runs (``compare --add``);
-- :mod:`~hybridtable.diagnosis.model_file`: the model as a file
-  (``--save-model``, ``--model``);
+- :func:`~hybridtable.diagnosis.diagnose.model_from_diagnosis`: the model
+  a diagnosis found, as the effect core's model file
+  (:mod:`~hybridtable.effects.model_file`: ``--save-model``, ``--model``);
 - :mod:`~hybridtable.diagnosis.settings`: thresholds.
 """
 
@@ -27,7 +28,7 @@ __all__, __getattr__, __dir__ = lazy_exports(
             "Candidate",
             "Diagnosis",
         ),
-        "diagnose": ("diagnose",),
+        "diagnose": ("diagnose", "model_from_diagnosis"),
         "effects": (
             "Effect",
             "EffectParameter",
@@ -39,9 +40,10 @@ __all__, __getattr__, __dir__ = lazy_exports(
             "load_plugin",
             "parse_effect_spec",
             "register_effect",
+            "FittedEffect",
+            "RigModel",
+            "load_model",
         ),
         "fit": ("fit_effect", "fit_given"),
-        "model_file": ("FittedEffect", "RigModel", "model_from_diagnosis"),
-        "model_reader": ("load_model",),
     },
 )

@@ -1,7 +1,7 @@
 """The rig model with effects added, compared with recorded runs (``compare --add``,
 ``compare --model``).
 
-:func:`model_with_effects` builds a :class:`~hybridtable.diagnosis.model_file.RigModel`
+:func:`model_with_effects` builds a :class:`~hybridtable.effects.model_file.RigModel`
 from effects given on the command line (``EFFECT[:param=value,...]``, several
 at once), on top of a model file's effects if one is given: the values given
 are held, the others fitted jointly to the runs, with their standard errors.
@@ -14,8 +14,8 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 from hybridtable.diagnosis.fit import fit_given
-from hybridtable.diagnosis.model_file import FittedEffect, RigModel
 from hybridtable.effects.effect import Effect
+from hybridtable.effects.model_file import FittedEffect, RigModel
 from hybridtable.effects.spec import RigScale
 from hybridtable.errors import ParameterError
 from hybridtable.measurement.comparison import RunComparison, compare_run, pool_noise_floors

@@ -79,6 +79,7 @@ from hybridtable.diagnosis.fit import (
 from hybridtable.diagnosis.goodness import goodness_of_fit
 from hybridtable.diagnosis.search import pairs_and_swaps
 from hybridtable.diagnosis.settings import EXPLAINED_MAX_ERROR, FIT_ACCURACY
+from hybridtable.effects.model_file import FittedEffect, RigModel
 from hybridtable.effects.registry import default_effects, get_effect
 from hybridtable.effects.search import forward
 from hybridtable.effects.spec import ModelSpec, RigScale
@@ -88,6 +89,7 @@ from hybridtable.measurement.run_format import Run
 
 __all__ = [
     "diagnose",
+    "model_from_diagnosis",
 ]
 
 
@@ -317,4 +319,34 @@ def diagnose(
         lookalikes=lookalikes,
         wall_time_s=time.perf_counter() - t0,
         notes=notes,
+    )
+
+
+def model_from_diagnosis(d: Diagnosis) -> RigModel:
+    """The model a :class:`~hybridtable.diagnosis.candidates.Diagnosis` found:
+    its physical effects with their fitted values and standard errors, the
+    audit's rig computer per run, and the evidence of the verdict."""
+    effects = [
+        FittedEffect(
+            n,
+            dict(d.selected_values[n]),
+            dict(d.selected_std.get(n, {})),
+            tuple(d.selected_values[n]),
+        )
+        for n in d.selected
+    ]
+    remaining = d.remaining()
+    evidence = {
+        "verdict": d.verdict,
+        "explained": d.explained,
+        "named": list(d.named),
+        "heldout_error": remaining["heldout_error"],
+        "error": remaining["error"],
+        "end_test_passed": remaining["test_passed"],
+        "end_test_p_value": remaining["p_value"],
+        "error_unit": "RMS residual / noise RMS, pooled over runs, f_mea and p_act",
+    }
+    computer = {x.run_id: d.audit.computer_changes(x.run_id) for x in d.data}
+    return RigModel.from_runs(
+        [x.run for x in d.data], effects, computer, source="diagnose", evidence=evidence
     )

@@ -15,7 +15,11 @@ may be missing, declared once.
 - :mod:`~hybridtable.effects.search`: the one search for models of several
   effects (the combinations a screen ranks best, those of the best single
   effects, swaps);
-- :mod:`~hybridtable.effects.workers`: the forked worker pool of the fits.
+- :mod:`~hybridtable.effects.workers`: the forked worker pool of the fits;
+- :mod:`~hybridtable.effects.model_file` and
+  :mod:`~hybridtable.effects.model_reader`: the model a front end found, as a
+  file (``--save-model``, ``--model``), whose effect entries a six-axis
+  rig's model file shares.
 
 ``diagnose`` (recorded runs) and ``explain`` (a CoR table) are front ends over
 these: each keeps its data, its noise model, its screen and its words.
@@ -28,6 +32,8 @@ __all__, __getattr__, __dir__ = lazy_exports(
     {
         "spec": ("ModelSpec", "RigScale", "LoopChange"),
         "effect": ("Effect", "EffectParameter", "Signature", "STAGES", "FRONT_ENDS"),
+        "model_file": ("FittedEffect", "RigModel"),
+        "model_reader": ("load_model",),
         "registry": (
             "effect_names",
             "get_effect",

@@ -6,8 +6,8 @@
 A :class:`RigModel6` holds the scenario of the runs it was fitted to (their
 JSON's ``scenario``, the nominal rig), the scale its effects' bounds were
 taken at, the effects with their values, standard errors and which were
-fitted (the 1-D model file's entries: :func:`~hybridtable.diagnosis.model_file.effects_json`,
-read back by :func:`~hybridtable.diagnosis.model_reader.effect_from_json`),
+fitted (the 1-D model file's entries: :func:`~hybridtable.effects.model_file.effects_json`,
+read back by :func:`~hybridtable.effects.model_reader.effect_from_json`),
 the runs (id, CSV, SHA-256), the evidence and where it came from. An effect
 of the rig computer the audit solved (``com_offset``, ``lead_time_error``,
 ``compensator_stiffness_error``) is one of the effects; the audit's other
@@ -25,7 +25,6 @@ findings (a mass, an inertia, a gain or a dead band of the compensation: the
 from __future__ import annotations
 
 import copy
-import hashlib
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
@@ -33,18 +32,21 @@ from pathlib import Path
 from typing import Any
 
 from hybridtable._files import read_user_json
-from hybridtable.diagnosis.model_file import (
+from hybridtable.effects.model_file import (
     MODEL6_FORMAT,
     FittedEffect,
     created_now,
+    csv_digest,
     describe_effects,
     effects_json,
+    file_header,
     tool_version,
 )
-from hybridtable.diagnosis.model_reader import (
+from hybridtable.effects.model_reader import (
     check_document,
-    effect_from_json,
+    effects_from_json,
     provenance,
+    runs_from_json,
     scale_from_json,
 )
 from hybridtable.effects.registry import effect_names, get_effect
@@ -115,11 +117,7 @@ class RigModel6:
 
     def to_json(self) -> dict:
         return {
-            "format": MODEL6_FORMAT,
-            "tool_version": self.tool_version,
-            "created": self.created,
-            "source": self.source,
-            "description": self.describe(),
+            **file_header(MODEL6_FORMAT, self),
             "scenario": copy.deepcopy(dict(self.scenario)),
             "scale": asdict(self.scale),
             "effects": effects_json(self.effects),
@@ -175,9 +173,8 @@ def model6_of_runs(
                     left.append(f.sentence)
     records = []
     for r in runs:
-        path = Path(r.csv_path) if r.csv_path else None
-        digest = hashlib.sha256(path.read_bytes()).hexdigest() if path else None
-        records.append({"run_id": r.run_id, "csv": str(path) if path else None, "sha256": digest})
+        csv, sha256 = csv_digest(r.csv_path)
+        records.append({"run_id": r.run_id, "csv": csv, "sha256": sha256})
     evidence = dict(evidence or {})
     if audit is not None:
         evidence["audit"] = audit.sentence()
@@ -217,30 +214,17 @@ def model6_from_json(data: Any, where: str) -> RigModel6:
         raise ParameterError(f"{where}: key scenario must be an object (a scenario's sections)")
     parse_scenario(data["scenario"], f"{where}: scenario")  # checked here, once
     scale = scale_from_json(data["scale"], where)
-    if not isinstance(data["effects"], list):
-        raise ParameterError(f"{where}: key effects must be a list")
-    effects = tuple(
-        effect_from_json(raw, scale, f"{where}: effects[{i}]")
-        for i, raw in enumerate(data["effects"])
-    )
-    names = [e.name for e in effects]
-    if len(set(names)) != len(names):
-        raise ParameterError(f"{where}: an effect is listed twice ({', '.join(names)})")
+    effects = effects_from_json(data["effects"], scale, where)
     for i, e in enumerate(effects):
         if e.effect.apply6 is None:
             raise ParameterError(
                 f"{where}: effects[{i}] ({e.name}) acts on the 1-D loop only (no apply6)"
             )
-    runs = data.get("runs", [])
-    if not isinstance(runs, list) or not all(
-        isinstance(r, dict) and isinstance(r.get("run_id"), str) for r in runs
-    ):
-        raise ParameterError(f"{where}: key runs must be a list of objects with a run_id")
     return RigModel6(
         scenario=data["scenario"],
         scale=scale,
         effects=effects,
-        runs=tuple(runs),
+        runs=tuple(runs_from_json(data, where)),
         **provenance(data),
     )
 

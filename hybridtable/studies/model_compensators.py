@@ -1,7 +1,7 @@
 """Every compensator on the rig as a model file describes it
 (``hybridtable compensators --model``), and the loop of a modelled rig.
 
-The rig of a :class:`~hybridtable.diagnosis.model_file.RigModel`: its sampled
+The rig of a :class:`~hybridtable.effects.model_file.RigModel`: its sampled
 rig computer (:func:`~hybridtable.measurement.rig.rig_params` of its nominal
 run: clamp, gate, dead band, sample rate), at each approach velocity of the
 runs the model was fitted to (or the nominal one), with the model's physics:
@@ -85,14 +85,14 @@ def physics_loop_params(params, physics, mass_ratio: float = 1.0):
 def model_loop_params(model, params, physics=None, rig_computer: bool = True):
     """``params`` as the model's rig runs them (:func:`physics_loop_params`
     with the model's physics and, when ``rig_computer``, its mass ratio, as
-    :meth:`~hybridtable.diagnosis.model_file.RigModel.linear_params` has it)."""
+    :meth:`~hybridtable.effects.model_file.RigModel.linear_params` has it)."""
     physics = physics or model_physics(model)
     return physics_loop_params(params, physics, model.spec().mass_ratio if rig_computer else 1.0)
 
 
 def model_transform(model):
     """``params -> params`` with the model's physics as the linear models see
-    it (:meth:`~hybridtable.diagnosis.model_file.RigModel.linear_params`,
+    it (:meth:`~hybridtable.effects.model_file.RigModel.linear_params`,
     the compensator kept). On a sampled rig an extra delay may put the sensor
     delay between two ticks, which the sampled model reads as the two
     neighbouring samples mixed, as the rig computer does."""

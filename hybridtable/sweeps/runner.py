@@ -112,7 +112,7 @@ def _model(spec: SweepSpec):
         return None
     key = spec.fingerprint()
     if key not in _MODELS:
-        from hybridtable.diagnosis.model_reader import model_from_json
+        from hybridtable.effects.model_reader import model_from_json
 
         _MODELS[key] = model_from_json(spec.model, spec.model_path or "model")
     return _MODELS[key]

@@ -468,7 +468,7 @@ def _model(value: Any, folder: Path) -> tuple[dict[str, Any] | None, str | None]
     if not isinstance(value, str) or not value:
         raise ParameterError(f"model: must be the path of a model file (got {value!r})")
     from hybridtable._files import read_user_json
-    from hybridtable.diagnosis.model_reader import model_from_json
+    from hybridtable.effects.model_reader import model_from_json
 
     path = Path(value) if Path(value).is_absolute() else folder / value
     with _Key("model"):

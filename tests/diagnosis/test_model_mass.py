@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hybridtable.diagnosis.model_file import FittedEffect, RigModel
+from hybridtable.effects.model_file import FittedEffect, RigModel
 from hybridtable.effects.spec import RigScale
 from hybridtable.measurement.rig import model_mass_kg, rig_params, run_with_model_mass
 from hybridtable.measurement.run_format import Run, RunInfo

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from hybridtable.diagnosis.model_file import FittedEffect, RigModel
+from hybridtable.effects.model_file import FittedEffect, RigModel
 from hybridtable.effects.spec import ModelSpec
 from hybridtable.measurement.recorder import record_run, write_run
 from hybridtable.measurement.run_format import RunInfo
@@ -64,7 +64,7 @@ def write_damped_model(
 
 @pytest.fixture(scope="module")
 def damped_model(tmp_path_factory):
-    from hybridtable.diagnosis.model_reader import load_model
+    from hybridtable.effects.model_reader import load_model
 
     return load_model(write_damped_model(tmp_path_factory.mktemp("rig")))
 
@@ -89,7 +89,7 @@ def test_the_reference_is_the_damped_contact_and_sdmdc_beats_none(damped_model):
 
 
 def test_the_points_are_the_runs_approach_velocities(tmp_path):
-    from hybridtable.diagnosis.model_reader import load_model
+    from hybridtable.effects.model_reader import load_model
     from hybridtable.studies.model_compensators import rig_points, run_model_compensators
 
     model = load_model(write_damped_model(tmp_path, velocities=(0.1, 0.05)))
@@ -103,7 +103,7 @@ def test_the_points_are_the_runs_approach_velocities(tmp_path):
 
 
 def test_the_models_rig_computer_and_mass_reach_every_compensator(tmp_path):
-    from hybridtable.diagnosis.model_reader import load_model
+    from hybridtable.effects.model_reader import load_model
     from hybridtable.measurement.rig import rig_params
     from hybridtable.studies.model_compensators import model_loop_params, rig_points
 
@@ -122,7 +122,7 @@ def test_the_models_rig_computer_and_mass_reach_every_compensator(tmp_path):
 
 
 def test_the_linear_view_keeps_an_extra_delay_between_ticks(damped_model, tmp_path):
-    from hybridtable.diagnosis.model_reader import load_model
+    from hybridtable.effects.model_reader import load_model
     from hybridtable.measurement.rig import rig_params
     from hybridtable.studies.model_compensators import model_transform
 

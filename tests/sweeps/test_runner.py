@@ -121,7 +121,7 @@ def test_the_stewart_table_gives_nearly_the_second_order_tables_cor():
 
 
 def test_a_model_file_reaches_every_run(tmp_path):
-    from hybridtable.diagnosis.model_reader import load_model
+    from hybridtable.effects.model_reader import load_model
     from hybridtable.studies.model_compensators import simulate_model
 
     model = tmp_path / "model.json"

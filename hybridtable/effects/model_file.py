@@ -1,6 +1,11 @@
-"""The model of a rig as a file (``hybridtable-model/1``): what ``diagnose`` or
-``compare --add`` found, carried into ``simulate``, ``margins``,
-``compensators`` and ``compare``.
+"""The model of a rig as a file (``hybridtable-model/1``): what ``diagnose``
+(:func:`~hybridtable.diagnosis.diagnose.model_from_diagnosis`) or ``compare
+--add`` found, carried into ``simulate``, ``margins``, ``compensators``,
+``compare`` and ``sweep``. It is the effect core's, not a front end's: the
+effects with their values, standard errors and provenance, whichever front
+end fitted them; a six-axis rig's model file (:mod:`~hybridtable.six_dof.model6`)
+shares its entries (:func:`effects_json`, :func:`file_header`,
+:func:`csv_digest`, and the reader's checks).
 
 A :class:`RigModel` holds
 
@@ -24,7 +29,7 @@ The file is JSON::
                                   "std": 4.1, "unit": "N s/m", "fitted": true}}}],
      "computer": {}, "runs": [...], "evidence": {...}}
 
-:func:`~hybridtable.diagnosis.model_reader.load_model` reads it back,
+:func:`~hybridtable.effects.model_reader.load_model` reads it back,
 checking every key.
 """
 
@@ -35,6 +40,7 @@ import hashlib
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
 from typing import Any
 
 from hybridtable.effects.effect import Effect
@@ -54,8 +60,9 @@ __all__ = [
     "RigModel",
     "tool_version",
     "created_now",
-    "model_from_diagnosis",
     "describe_effects",
+    "file_header",
+    "csv_digest",
     "effects_json",
 ]
 
@@ -169,17 +176,7 @@ class RigModel:
                 cor, _, _ = record_cor(r)
             except ValueError:
                 cor = None
-            digest = hashlib.sha256(r.csv_path.read_bytes()).hexdigest() if r.csv_path else None
-            model_runs.append(
-                ModelRun(
-                    r.run_id,
-                    r.info,
-                    c,
-                    cor,
-                    str(r.csv_path) if r.csv_path else None,
-                    digest,
-                )
-            )
+            model_runs.append(ModelRun(r.run_id, r.info, c, cor, *csv_digest(r.csv_path)))
         return cls(
             nominal=runs[0].info,
             scale=RigScale.from_runs(runs),
@@ -269,11 +266,7 @@ class RigModel:
     # -- the file ------------------------------------------------------------
     def to_json(self) -> dict:
         return {
-            "format": MODEL_FORMAT,
-            "tool_version": self.tool_version,
-            "created": self.created,
-            "source": self.source,
-            "description": self.describe(),
+            **file_header(MODEL_FORMAT, self),
             "nominal": self.nominal.to_dict(),
             "scale": asdict(self.scale),
             "effects": effects_json(self.effects),
@@ -291,6 +284,25 @@ class RigModel:
             ],
             "evidence": dict(self.evidence),
         }
+
+
+def file_header(fmt: str, model: Any) -> dict:
+    """The first keys of a model file of format ``fmt`` (1-D or six-axis):
+    where ``model`` came from and its one-line description."""
+    return {
+        "format": fmt,
+        "tool_version": model.tool_version,
+        "created": model.created,
+        "source": model.source,
+        "description": model.describe(),
+    }
+
+
+def csv_digest(path: str | Path | None) -> tuple[str | None, str | None]:
+    """A run's CSV as a model file names it: its path and SHA-256 (None, None: no file)."""
+    if not path:
+        return None, None
+    return str(path), hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
 def describe_effects(effects: Sequence[FittedEffect]) -> str:
@@ -334,33 +346,3 @@ def effects_json(effects: Sequence[FittedEffect]) -> list[dict]:
             }
         )
     return out
-
-
-def model_from_diagnosis(d: Any) -> RigModel:
-    """The model a :class:`~hybridtable.diagnosis.candidates.Diagnosis` found:
-    its physical effects with their fitted values and standard errors, the
-    audit's rig computer per run, and the evidence of the verdict."""
-    effects = [
-        FittedEffect(
-            n,
-            dict(d.selected_values[n]),
-            dict(d.selected_std.get(n, {})),
-            tuple(d.selected_values[n]),
-        )
-        for n in d.selected
-    ]
-    remaining = d.remaining()
-    evidence = {
-        "verdict": d.verdict,
-        "explained": d.explained,
-        "named": list(d.named),
-        "heldout_error": remaining["heldout_error"],
-        "error": remaining["error"],
-        "end_test_passed": remaining["test_passed"],
-        "end_test_p_value": remaining["p_value"],
-        "error_unit": "RMS residual / noise RMS, pooled over runs, f_mea and p_act",
-    }
-    computer = {x.run_id: d.audit.computer_changes(x.run_id) for x in d.data}
-    return RigModel.from_runs(
-        [x.run for x in d.data], effects, computer, source="diagnose", evidence=evidence
-    )

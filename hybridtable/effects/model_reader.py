@@ -19,7 +19,7 @@ from typing import Any
 from hybridtable._files import read_user_json
 from hybridtable._validation import check_choice
 from hybridtable.compensators.registry import compensator_names
-from hybridtable.diagnosis.model_file import (
+from hybridtable.effects.model_file import (
     MODEL6_FORMAT,
     MODEL_FORMAT,
     FittedEffect,
@@ -42,6 +42,8 @@ __all__ = [
     "check_document",
     "provenance",
     "effect_from_json",
+    "effects_from_json",
+    "runs_from_json",
     "scale_from_json",
 ]
 
@@ -68,24 +70,11 @@ def model_from_json(data: Any, where: str) -> RigModel:
     )
     nominal = _info(data["nominal"], f"{where}: nominal")
     scale = scale_from_json(data["scale"], where)
-    raw_effects = data["effects"]
-    if not isinstance(raw_effects, list):
-        raise ParameterError(f"{where}: key effects must be a list")
-    effects = []
-    for i, raw in enumerate(raw_effects):
-        effects.append(effect_from_json(raw, scale, f"{where}: effects[{i}]"))
-    names = [e.name for e in effects]
-    if len(set(names)) != len(names):
-        raise ParameterError(f"{where}: an effect is listed twice ({', '.join(names)})")
+    effects = effects_from_json(data["effects"], scale, where)
     computer = _computer(data.get("computer", {}), f"{where}: computer")
     runs = []
-    raw_runs = data.get("runs", [])
-    if not isinstance(raw_runs, list):
-        raise ParameterError(f"{where}: key runs must be a list")
-    for i, raw in enumerate(raw_runs):
+    for i, raw in enumerate(runs_from_json(data, where)):
         w = f"{where}: runs[{i}]"
-        if not isinstance(raw, dict) or not isinstance(raw.get("run_id"), str):
-            raise ParameterError(f"{w}: must be an object with a run_id")
         cor = raw.get("cor_measured")
         if cor is not None and not (_finite(cor) and 0.0 <= float(cor) <= 100.0):
             raise ParameterError(
@@ -105,7 +94,7 @@ def model_from_json(data: Any, where: str) -> RigModel:
     return RigModel(
         nominal=nominal,
         scale=scale,
-        effects=tuple(effects),
+        effects=effects,
         computer=computer,
         runs=tuple(runs),
         **provenance(data),
@@ -249,6 +238,32 @@ def effect_from_json(raw: Any, scale: RigScale, where: str) -> FittedEffect:
     except ParameterError as err:
         raise ParameterError(f"{where}: {err}") from None
     return FittedEffect(name, values, std, tuple(fitted))
+
+
+def effects_from_json(raw: Any, scale: RigScale, where: str) -> tuple[FittedEffect, ...]:
+    """The model file's ``effects`` (a list; each :func:`effect_from_json`,
+    none twice), of a 1-D or a six-axis rig."""
+    if not isinstance(raw, list):
+        raise ParameterError(f"{where}: key effects must be a list")
+    effects = tuple(
+        effect_from_json(item, scale, f"{where}: effects[{i}]") for i, item in enumerate(raw)
+    )
+    names = [e.name for e in effects]
+    if len(set(names)) != len(names):
+        raise ParameterError(f"{where}: an effect is listed twice ({', '.join(names)})")
+    return effects
+
+
+def runs_from_json(data: dict, where: str) -> list[dict]:
+    """The model file's ``runs`` (none: empty), each an object with a
+    ``run_id``, of a 1-D or a six-axis rig."""
+    raw = data.get("runs", [])
+    if not isinstance(raw, list):
+        raise ParameterError(f"{where}: key runs must be a list")
+    for i, item in enumerate(raw):
+        if not isinstance(item, dict) or not isinstance(item.get("run_id"), str):
+            raise ParameterError(f"{where}: runs[{i}]: must be an object with a run_id")
+    return raw
 
 
 # -- files ---------------------------------------------------------------------
