@@ -163,7 +163,13 @@ def run(args: argparse.Namespace) -> int:
     from hybridtable.six_dof.registry import linear_law
 
     # A plug-in that declares no linear law has no margins (not the "none" loop's).
-    modes = contact_modes(params) if linear_law(params.compensator) is not None else None
+    # the margins of the rig simulated: the scenario's, with the model's or
+    # --add's effects where it has them
+    modes = (
+        contact_modes(params, physics=physics)
+        if linear_law(params.compensator) is not None
+        else None
+    )
     m = result.metrics
     sim_s = float(result.time_s[-1]) if len(result.time_s) else 0.0
     out = {
@@ -201,6 +207,11 @@ def run(args: argparse.Namespace) -> int:
         out["note"] = "; ".join(notes)
     if modes is not None and math.isinf(modes.critical_delay_s):
         out["margins"]["note"] = "critical_delay_s inf: no mode grows at any delay up to 50 ms"
+    if modes is not None and physics is not None:
+        out["margins"]["rig"] = (
+            "the scenario with the effects of --model/--add (the delay scanned is the "
+            "scenario's; the loop in contact: the MDC term's gate is not in it)"
+        )
     if not quiet:
         if reference is not None:
             print(docking_verdict(params.compensator, m, reference))

@@ -179,6 +179,8 @@ def _swap_step(runs: Sequence[Run6], out: Diagnosis6, workers: int, progress: bo
     )
     out.steps.append(step)
 
+    before = out.fit  # the selection the swaps are scored against
+
     def note_lookalikes(swapped: str | None) -> None:
         # a swap of another effect that scored as well as the selection
         for r in scored:
@@ -187,7 +189,6 @@ def _swap_step(runs: Sequence[Run6], out: Diagnosis6, workers: int, progress: bo
                 alike += [r["effect"]] * (r["effect"] not in alike)
                 out.pairs[r["replaces"], r["effect"]] = (before, r["fit"])
 
-    before = out.fit  # the selection the swaps are scored against
     if not better:
         note_lookalikes(None)
         return

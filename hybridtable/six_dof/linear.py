@@ -28,11 +28,15 @@ import numpy as np
 from hybridtable.analysis.critical import critical_delay
 from hybridtable.errors import ParameterError
 from hybridtable.loop.params import believed
+from hybridtable.six_dof.compensator import stiffness_model_of
 from hybridtable.six_dof.contact import DockingContact
 from hybridtable.six_dof.params import DockingLoopParams
+from hybridtable.six_dof.physics6 import DockingPhysics
 from hybridtable.six_dof.pose import skew
 from hybridtable.six_dof.registry import linear_law
-from hybridtable.six_dof.table import table_tick_matrices
+from hybridtable.six_dof.table import pose_table_tick
+from hybridtable.systems.measurement_chain import low_pass_system, mount_system
+from hybridtable.systems.resonant_table import StructuralModeParams
 from hybridtable.systems.sensor import sample_taps
 
 __all__ = ["ContactModes", "contact_modes", "tick_matrix", "critical_delay_s"]
@@ -94,48 +98,74 @@ class ContactModes:
 
 
 def tick_matrix(
-    params: DockingLoopParams, K: np.ndarray, C: np.ndarray, delay_ticks: float | None = None
+    params: DockingLoopParams,
+    K: np.ndarray,
+    C: np.ndarray,
+    delay_ticks: float | None = None,
+    physics: DockingPhysics | None = None,
 ) -> np.ndarray:
     """``A`` of the linearized loop over one tick (see the module docstring),
-    with the contact's ``K``, ``C`` (6x6; the MDC's are them times the stiffness
-    the compensator believes over the contact's, ``sdmdc-online``'s the
-    contact's: where its estimate converges) and a delay of ``delay_ticks`` ticks
+    with the contact's ``K``, ``C`` (6x6) and a delay of ``delay_ticks`` ticks
     (default: the scenario's), which the SDC's lead follows unless the
     scenario states one (:func:`~hybridtable.loop.params.believed`, as in the
     1-D loop). A delay between ticks reads the two neighbouring samples mixed,
-    as the sensor does (:func:`~hybridtable.systems.sensor.sample_taps`)."""
+    as the sensor does (:func:`~hybridtable.systems.sensor.sample_taps`). The
+    MDC's ``K`` and ``C`` are its own stiffness model's
+    (:func:`~hybridtable.six_dof.compensator.stiffness_model_of`: the contact
+    it believes, or its given matrix) at the docked pose; ``sdmdc-online``'s
+    the contact's, where its estimate converges.
+
+    ``physics``: the rig as an effect model says it is
+    (:class:`~hybridtable.six_dof.physics6.DockingPhysics`): its table, delay
+    and contact (``K``, ``C`` are then of :meth:`DockingPhysics.apply
+    <hybridtable.six_dof.physics6.DockingPhysics.apply>`'s contact), the
+    table's gain and structural mode, the sensor's gain, low pass and mount
+    (the diagram's Drake primitives, as matrices), and the rig computer of
+    :meth:`DockingPhysics.computer
+    <hybridtable.six_dof.physics6.DockingPhysics.computer>`; a delay scanned is
+    the scenario's, the rig's being that plus what the model adds."""
     h = params.sample_period_s
-    M, alpha = params.delay_taps if delay_ticks is None else sample_taps(float(delay_ticks), 1.0)
+    delay_s = None if delay_ticks is None else float(delay_ticks) * h
+    plant = computer = params
+    if physics is not None:
+        stated = params if delay_s is None else params.with_(sensor_delay_s=delay_s)
+        plant, computer = physics.apply(stated), physics.computer(stated)
+    if delay_ticks is None or physics is not None:
+        M, alpha = plant.delay_taps
+    else:
+        M, alpha = sample_taps(float(delay_ticks), 1.0)
     L = M + (1 if alpha else 0)  # samples the delay line holds
-    body = params.spacecraft
+    body = computer.spacecraft
     m = body.mass_kg
     r = body.port_position_m  # attitude deviations about the aligned pose
     I_inv = np.linalg.inv(body.inertia)
-    ideal = math.isinf(params.table_response_hz)
-    tick = (
-        None
-        if ideal
-        else table_tick_matrices(params.table_response_hz, params.table_damping_ratio, h)
+    mode = None if physics is None or physics.table_mode is None else physics.table_mode
+    tick = pose_table_tick(
+        plant.plant.table.response, h, None if mode is None else StructuralModeParams(*mode)
     )
-    linear = linear_law(params.compensator)
+    T = None if physics is None or physics.table_gain is None else np.array(physics.table_gain)
+    chain = _sensor_chain(physics, h)
+    linear = linear_law(computer.compensator)
     if linear is None:
         raise ParameterError(
-            f"compensator {params.compensator!r} declares no linear law "
+            f"compensator {computer.compensator!r} declares no linear law "
             "(register_wrench_compensator(..., linear=LinearLaw(...))): no linear model"
         )
     kind = linear.law
-    # The MDC's K and C are the contact's scaled by the stiffness the
-    # compensator believes; an online identifier's converge to the contact's.
-    belief = (
-        params.believed_contact.contact_stiffness_n_per_m / params.contact.contact_stiffness_n_per_m
-    )
-    if linear.identifies_stiffness:
-        belief = 1.0
-    delay_s = None if delay_ticks is None else float(delay_ticks) * h
-    lead = believed(params, "lead_time_s", delay_s) if kind in ("SDC", "SDMDC") else 0.0
+    lead = believed(computer, "lead_time_s", delay_s) if kind in ("SDC", "SDMDC") else 0.0
     mdc = kind in ("MDC", "SDMDC")
-    n_table = 0 if tick is None else 12
-    sizes = {"body": 12, "table": n_table, "delay": 6 * L, "prev": 6}
+    if mdc and not linear.identifies_stiffness:
+        K_c, C_c = stiffness_model_of(computer)(plant.nominal_pose(), None)
+    else:
+        K_c, C_c = K, C
+    n_state = 0 if tick is None else tick[0].shape[0]
+    sizes = {
+        "body": 12,
+        "table": 6 * n_state,
+        "chain": sum(a.shape[0] for a, *_ in chain),
+        "delay": 6 * L,
+        "prev": 6,
+    }
     n = sum(sizes.values())
     start = {}
     i = 0
@@ -154,16 +184,28 @@ def tick_matrix(
     def step(x: np.ndarray) -> np.ndarray:
         b = x[0:12]
         command = G @ b
+        seen = command if T is None else np.concatenate([T @ command[:6], T @ command[6:]])
         out = np.zeros(n)
         if tick is None:
-            table = command
+            table = seen
         else:
             Phi, Gamma = tick
-            s = x[start["table"] : start["table"] + 12].reshape(6, 2)
-            y = s @ Phi.T + np.outer(command[:6], Gamma[:, 0])
-            table = np.concatenate([y[:, 0], y[:, 1]])
-            out[start["table"] : start["table"] + 12] = y.ravel()
+            s = x[start["table"] : start["table"] + 6 * n_state].reshape(6, n_state)
+            y = s @ Phi.T + np.outer(seen[:6], Gamma[:, 0])
+            if Gamma.shape[1] > 1:  # a structural mode reads the command's rate too
+                y = y + np.outer(seen[6:], Gamma[:, 1])
+            table = np.concatenate([y[:, n_state - 2], y[:, n_state - 1]])
+            out[start["table"] : start["table"] + 6 * n_state] = y.ravel()
         w_act = -K @ table[:6] - C @ table[6:]
+        j = start["chain"]
+        for a, bm, c, d in chain:  # the sensor's gain, low pass and mount
+            if a.shape[0]:
+                z = x[j : j + a.shape[0]]
+                out[j : j + a.shape[0]] = a @ z + bm @ w_act
+                w_act = c @ z + d @ w_act
+                j += a.shape[0]
+            else:
+                w_act = d @ w_act
         # line[j] is the contact's wrench of tick k - L + j
         line = x[start["delay"] : start["delay"] + 6 * L].reshape(L, 6) if L else None
         w_mea = w_act if M == 0 else line[L - M]
@@ -175,11 +217,7 @@ def tick_matrix(
         prev = x[start["prev"] : start["prev"] + 6]
         w = w_mea + (lead / h) * (w_mea - prev)
         if mdc:
-            w = (
-                w
-                - belief * (K @ (command[:6] - table[:6]))
-                - belief * (C @ (command[6:] - table[6:]))
-            )
+            w = w - K_c @ (command[:6] - table[:6]) - C_c @ (command[6:] - table[6:])
         out[start["prev"] : start["prev"] + 6] = w_mea
         f, tau = w[3:], w[:3] + np.cross(r, w[3:])
         v = b[6:9] + h * f / m
@@ -193,6 +231,24 @@ def tick_matrix(
     return np.column_stack([step(e) for e in np.eye(n)])
 
 
+def _sensor_chain(physics: DockingPhysics | None, h: float) -> list[tuple]:
+    """The F/T sensor's parts before its delay, in the diagram's order
+    (:func:`~hybridtable.six_dof.builder.add_rig_part`): its gain, low pass
+    and mount, each ``(A, B, C, D)`` of a discrete system with feedthrough
+    (a gain has no state)."""
+    if physics is None:
+        return []
+    chain = []
+    if physics.sensor_gain is not None:
+        none = np.zeros((0, 0))
+        chain.append((none, np.zeros((0, 6)), np.zeros((6, 0)), np.array(physics.sensor_gain)))
+    if physics.sensor_time_constant_s > 0.0:
+        chain.append(low_pass_system(physics.sensor_time_constant_s, h, channels=6))
+    if physics.sensor_mount is not None:
+        chain.append(mount_system(*physics.sensor_mount, h, channels=6))
+    return chain
+
+
 def _modes(A: np.ndarray, h: float):
     lam = np.linalg.eigvals(A)
     lam = lam[np.abs(lam - 1.0) > _FREE]
@@ -203,7 +259,11 @@ def _modes(A: np.ndarray, h: float):
 
 
 def critical_delay_s(
-    params: DockingLoopParams, K: np.ndarray, C: np.ndarray, max_delay_s: float = 0.05
+    params: DockingLoopParams,
+    K: np.ndarray,
+    C: np.ndarray,
+    max_delay_s: float = 0.05,
+    physics: DockingPhysics | None = None,
 ) -> float:
     """The shortest sensor delay (up to ``max_delay_s``) at which the
     linearized loop is not asymptotically stable (a mode whose growth rate is
@@ -212,22 +272,28 @@ def critical_delay_s(
     undamped contact's is 0). The 1-D loop's search
     (:func:`~hybridtable.analysis.critical.critical_delay`) on this loop's
     fastest mode: whole ticks scanned, the tick of the crossing refined (the
-    rig computer reads a delay between ticks as the mix of its neighbours)."""
+    rig computer reads a delay between ticks as the mix of its neighbours).
+    With ``physics`` (:func:`tick_matrix`) the delay scanned is the
+    scenario's: the rig's is that plus what the model adds."""
     h = params.sample_period_s
 
     def growth(delay_s: float) -> float:
-        _, s = _modes(tick_matrix(params, K, C, delay_s / h), h)
+        _, s = _modes(tick_matrix(params, K, C, delay_s / h, physics), h)
         return float(np.max(s.real)) if s.size else -math.inf
 
     return critical_delay(growth, max_delay_s, h, tolerance=_NEUTRAL_PER_S)
 
 
-def contact_modes(params: DockingLoopParams, max_delay_s: float = 0.05) -> ContactModes:
-    """The modes of the loop linearized in contact, and its critical delay."""
-    contact = DockingContact(params.contact)
-    K, C = contact.stiffness(params.nominal_pose())
+def contact_modes(
+    params: DockingLoopParams, max_delay_s: float = 0.05, physics: DockingPhysics | None = None
+) -> ContactModes:
+    """The modes of the loop linearized in contact, and its critical delay;
+    with ``physics``, of the rig as an effect model says it is (its contact
+    linearized at its own docked pose: :func:`tick_matrix`)."""
+    plant = params if physics is None else physics.apply(params)
+    K, C = DockingContact(plant.contact).stiffness(plant.nominal_pose())
     h = params.sample_period_s
-    lam, s = _modes(tick_matrix(params, K, C), h)
+    lam, s = _modes(tick_matrix(params, K, C, None, physics), h)
     growth = float(s.real.max()) if s.size else 0.0
     # Modes of the contact, not of the table or the delay line: below the
     # Nyquist rate and among the slowest; and the fastest-growing, if it grows.
@@ -243,6 +309,6 @@ def contact_modes(params: DockingLoopParams, max_delay_s: float = 0.05) -> Conta
         damping_ratios=tuple(float(-v.real / abs(v)) if abs(v) > 0 else 0.0 for v in s),
         max_growth_rate_per_s=growth,
         stable=bool(growth <= _NEUTRAL_PER_S),
-        critical_delay_s=critical_delay_s(params, K, C, max_delay_s),
+        critical_delay_s=critical_delay_s(params, K, C, max_delay_s, physics),
         spectral_radius=float(np.abs(lam_all).max()) if lam_all.size else 1.0,
     )

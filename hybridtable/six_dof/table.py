@@ -29,7 +29,7 @@ from hybridtable.laws.table import held_tick, second_order_tick
 from hybridtable.systems.resonant_table import StructuralModeParams, resonant_table_matrices
 from hybridtable.systems.table import TableParams
 
-__all__ = ["PoseTable", "add_pose_table", "table_tick_matrices"]
+__all__ = ["PoseTable", "add_pose_table", "pose_table_tick", "table_tick_matrices"]
 
 
 def table_tick_matrices(
@@ -40,6 +40,22 @@ def table_tick_matrices(
     (:func:`hybridtable.laws.table.second_order_tick`)."""
     Phi, gamma = second_order_tick(response_hz, damping_ratio, period_s)
     return Phi, gamma[:, None]
+
+
+def pose_table_tick(
+    table: TableParams, period_s: float, mode: StructuralModeParams | None = None
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """One pose coordinate's ``(Phi, Gamma)`` over a held tick: the
+    second-order response (:func:`table_tick_matrices`), or with ``mode`` the
+    servo then the structural mode (4 states; ``Gamma``'s columns the
+    command's position and rate); None for the ideal table. The device's
+    position and rate are the last two states."""
+    if mode is not None:
+        A4, B4, _, _ = resonant_table_matrices(table, mode)
+        return held_tick(A4, B4, period_s)
+    if table.is_ideal:
+        return None
+    return table_tick_matrices(table.response_frequency_hz, table.damping_ratio, period_s)
 
 
 class PoseTable:
@@ -85,14 +101,11 @@ def add_pose_table(
     one passes its command through) on each of the six pose coordinates,
     stepped over the rig computer's held tick; with ``mode``, a structural
     mode between its servo and the device on each (see the module)."""
-    if mode is not None:
-        A4, B4, _, _ = resonant_table_matrices(table, mode)
-        Phi, Gamma = held_tick(A4, B4, period_s)
-    elif table.is_ideal:
+    tick = pose_table_tick(table, period_s, mode)
+    if tick is None:
         system = builder.AddNamedSystem("table", PassThrough(12))
         return PoseTable(system, None)
-    else:
-        Phi, Gamma = table_tick_matrices(table.response_frequency_hz, table.damping_ratio, period_s)
+    Phi, Gamma = tick
     n, m = Gamma.shape
     A = np.zeros((6 * n, 6 * n))
     B = np.zeros((6 * n, 12))

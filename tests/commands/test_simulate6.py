@@ -198,3 +198,18 @@ def test_the_verdict_says_when_the_compensator_pushes_harder_than_the_contact():
     assert (
         "matches the ideal rig" in words and "up to 4861 N, 3.2 times the contact's peak" in words
     )
+
+
+def test_the_margins_are_of_the_rig_simulated(tmp_path, capsys):
+    """With --add the margins are of the rig with the effect (an extra 2 ms
+    of sensor delay grows the axial mode faster), and the JSON says whose."""
+    argv = ["simulate6", str(EXAMPLES / "on_axis.toml"), "--compensator", "SDC"]
+    docs = []
+    for extra in ([], ["--add", "extra_delay:extra_delay_s=0.002"]):
+        out = tmp_path / f"r{len(docs)}.json"
+        assert main([*argv, *extra, "--json", str(out), "--no-progress", "--no-reference"]) == 0
+        docs.append(json.loads(out.read_text()))
+    nominal, added = (d["margins"] for d in docs)
+    assert "rig" not in nominal and "--add" in added["rig"]
+    assert added["max_growth_rate_per_s"] > nominal["max_growth_rate_per_s"] + 0.02
+    assert docs[1]["cor_normal"] > docs[0]["cor_normal"]

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
+import numpy as np
 import pytest
 
 from hybridtable.six_dof.linear import contact_modes
@@ -89,3 +91,87 @@ def test_the_lead_follows_the_searched_delay_unless_the_scenario_states_it():
     assert 0.001 < critical < 0.005
     assert contact_modes(held.with_(sensor_delay_s=0.97 * critical)).stable
     assert not contact_modes(held.with_(sensor_delay_s=1.03 * critical)).stable
+
+
+def _predicted_cor(modes) -> float:
+    f, sigma = _axial(modes)
+    return math.exp(sigma * math.pi / (2 * math.pi * f))
+
+
+def _gain(value: float) -> tuple:
+    return tuple(tuple(row) for row in value * np.eye(6))
+
+
+#: (compensator, effect, its values) of a model whose margins are checked
+#: against its simulation; "sensor_gain" and "table_gain" are DockingPhysics'
+#: own (every axis scaled alike: no coupling of the axial mode to the others).
+MODELS = [
+    ("SDC", "stiffness_error", {"contact_stiffness_n_per_m": 1.3e5}),
+    ("SDC", "extra_delay", {"extra_delay_s": 0.002}),
+    ("SDC", "sensor_filter", {"time_constant_s": 0.002}),
+    ("SDC", "mount_resonance", {"mount_frequency_hz": 60.0, "mount_damping_ratio": 0.3}),
+    ("SDC", "table_response", {"table_response_ratio": 0.8}),
+    ("SDC", "lead_time_error", {"lead_error_s": -0.002}),
+    ("SDC", "sensor_gain", 1.2),
+    ("SDC", "table_gain", 0.9),
+    ("SDMDC", "stiffness_error", {"contact_stiffness_n_per_m": 1.3e5}),
+    ("SDMDC", "extra_delay", {"extra_delay_s": 0.002}),
+    ("SDMDC", "compensator_stiffness_error", {"compensator_stiffness_ratio": 0.7}),
+    ("SDMDC", "sensor_gain", 1.05),
+]
+
+
+@pytest.mark.parametrize(("compensator", "effect", "values"), MODELS)
+def test_the_margins_of_a_model_are_of_its_rig(compensator, effect, values):
+    """The loop linearized with an effect model's physics (its contact,
+    delay, table, the sensor's gain, low pass and mount, the computer's lead
+    and stiffness) predicts the CoR of the same rig simulated, as the
+    nominal loop's does (within 0.5 % of CoR - 1 plus 1e-3), where the
+    effect moves the prediction by several times that."""
+    from hybridtable.effects.registry import get_effect
+    from hybridtable.six_dof.physics6 import DockingPhysics, physics_with, rig_scale
+
+    params = docking_params(
+        sensor_delay_s=0.005,
+        table_response_hz=25.0,
+        compensator=compensator,
+        stiffness_model="nominal",
+    )
+    if effect in ("sensor_gain", "table_gain"):
+        physics = DockingPhysics(**{effect: _gain(values)})
+    else:
+        physics = physics_with([(get_effect(effect), values)], rig_scale(params))
+    predicted = _predicted_cor(contact_modes(params, physics=physics))
+    simulated = simulate6(params, physics=physics).metrics.cor_normal
+    tolerance = 0.005 * abs(simulated - 1) + 1e-3
+    assert predicted == pytest.approx(simulated, abs=tolerance)
+    assert abs(predicted - _predicted_cor(contact_modes(params))) > 2.0 * tolerance
+
+
+def test_a_model_and_a_scenario_that_say_the_same_rig_have_the_same_margins():
+    """A contact 30 % stiffer than the scenario, which the rig computer does
+    not know (a model's stiffness_error), is the scenario of that contact
+    whose compensator believes the old stiffness; and a given MDC matrix of
+    half the contact's is a compensator believing half the stiffness (the
+    given matrix was once ignored)."""
+    from hybridtable.effects.registry import get_effect
+    from hybridtable.six_dof.contact import DockingContact
+    from hybridtable.six_dof.physics6 import physics_with, rig_scale
+
+    params = docking_params(sensor_delay_s=0.005, table_response_hz=25.0, compensator="SDMDC")
+    k = params.contact.contact_stiffness_n_per_m
+    physics = physics_with(
+        [(get_effect("stiffness_error"), {"contact_stiffness_n_per_m": 1.3 * k})], rig_scale(params)
+    )
+    told = params.with_(
+        contact=replace(params.contact, contact_stiffness_n_per_m=1.3 * k),
+        compensator_stiffness_n_per_m=k,
+    )
+    assert contact_modes(params, physics=physics) == contact_modes(told)
+    K, _ = DockingContact(params.contact).stiffness(params.nominal_pose())
+    given = params.with_(stiffness_model="given", compensator_stiffness_matrix=0.5 * K)
+    half = params.with_(compensator_stiffness_n_per_m=0.5 * k)
+    a, b = contact_modes(given), contact_modes(half)
+    assert a.max_growth_rate_per_s == pytest.approx(b.max_growth_rate_per_s, rel=1e-9)
+    assert a.frequencies_hz == pytest.approx(b.frequencies_hz, rel=1e-9)
+    assert a.max_growth_rate_per_s > contact_modes(params).max_growth_rate_per_s + 1e-3
