@@ -208,10 +208,7 @@ def run(args: argparse.Namespace) -> int:
     if modes is not None and math.isinf(modes.critical_delay_s):
         out["margins"]["note"] = "critical_delay_s inf: no mode grows at any delay up to 50 ms"
     if modes is not None and physics is not None:
-        out["margins"]["rig"] = (
-            "the scenario with the effects of --model/--add (the delay scanned is the "
-            "scenario's; the loop in contact: the MDC term's gate is not in it)"
-        )
+        out["margins"]["rig"] = _margins_rig(params, physics)
     if not quiet:
         if reference is not None:
             print(docking_verdict(params.compensator, m, reference))
@@ -221,6 +218,8 @@ def run(args: argparse.Namespace) -> int:
                 f"{m.energy_ratio:.4f}."
             )
         print(format_docking(params.compensator, m, reference, modes, result.wall_time_s, sim_s))
+        if modes is not None and physics is not None:
+            print(f"margins: {_margins_rig(params, physics)}")
         if identified is not None:
             print(
                 f"identified contact stiffness {identified:.4g} N/m at the end (the compensator "
@@ -262,6 +261,29 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         write_json(args.json, out, args)
     return 0
+
+
+def _margins_rig(params, physics) -> str:
+    """Whose margins ``simulate6`` reports with effects, in words, and where
+    the loop linearized in contact may not give the CoR: an MDC term of a
+    constant stiffness (``nominal``, ``given``) gated by a reading that lags
+    the contact (a low pass, a mount) pushes after the release."""
+    from hybridtable.six_dof.registry import linear_law
+
+    words = (
+        "of the rig with the effects of --model/--add (the sensor delay scanned is the "
+        "scenario's; the rig's is that plus the model's)"
+    )
+    law = linear_law(params.compensator)
+    lags = physics.sensor_time_constant_s > 0.0 or physics.sensor_mount is not None
+    if law is not None and law.law in ("MDC", "SDMDC") and lags:
+        if params.stiffness_model in ("nominal", "given"):
+            words += (
+                "; the reading lags the contact, and the MDC term's gate reads it: after the "
+                "release the term still pushes, which the loop in contact does not see "
+                "(its CoR may be far from these margins'; docs/run6-format.md)"
+            )
+    return words
 
 
 def _hidden_physics(args: argparse.Namespace, params):

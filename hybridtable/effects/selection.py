@@ -139,11 +139,12 @@ MAX_RUNS_SUGGESTED = 5
 
 def separation_words(s: dict, pair: Sequence[str]) -> str:
     """What run (``s``: :meth:`Separation.to_dict`, with the look-alike's
-    ``hint``) would tell ``pair[0]`` from the others, in words."""
-    head = (
-        f"{pair[0]} and {', '.join(pair[1:])} are indistinguishable on "
-        f"these runs (predictions {s['recorded_distance']:.3g} noise units apart)"
-    )
+    ``hint``; ``run`` None and ``why``: none was sought) would tell
+    ``pair[0]`` from the others, in words."""
+    head = f"{pair[0]} and {', '.join(pair[1:])} are indistinguishable on these runs"
+    if s.get("run") is None:
+        return f"{head}; no run that would separate them was sought: {s.get('why')}."
+    head += f" (predictions {s['recorded_distance']:.3g} noise units apart)"
     if s.get("separates"):
         return f"{head}; a run with {s['run']} would put them {s['distance']:.3g} apart."
     needed = s.get("runs_needed")

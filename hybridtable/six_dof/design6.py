@@ -33,14 +33,23 @@ import numpy as np
 
 from hybridtable.diagnosis.settings import BIC_THRESHOLD
 from hybridtable.effects.selection import most_separating
-from hybridtable.errors import ParameterError, SimulationError
+from hybridtable.errors import DivergenceError, ParameterError, SimulationError
 from hybridtable.six_dof.compare6 import noise_levels_of, replay_residuals
 from hybridtable.six_dof.fit6 import Fit6
 from hybridtable.six_dof.params import DockingLoopParams
 from hybridtable.six_dof.run6 import Run6, run6_of_docking
-from hybridtable.six_dof.simulation import simulate6
+from hybridtable.six_dof.simulation import expected_end_s, simulate6
 
-__all__ = ["DESIGNS", "PITCH_STEP_RAD", "design_distance", "mean_levels", "separating_run6"]
+__all__ = [
+    "DESIGNS",
+    "PITCH_STEP_RAD",
+    "candidate_runs",
+    "design_distance",
+    "mean_levels",
+    "separating_run6",
+    "separation",
+    "try_distance",
+]
 
 #: The pitch a candidate run adds to the approach's (2 degrees).
 PITCH_STEP_RAD = math.radians(2.0)
@@ -86,6 +95,11 @@ DESIGNS: tuple[tuple[str, Callable[[Sequence[Run6]], dict | None]], ...] = (
 )
 
 
+def candidate_runs(runs: Sequence[Run6]) -> list[tuple[str, dict]]:
+    """The candidate runs of :data:`DESIGNS` for ``runs``: (words, changes)."""
+    return [(words, changes) for words, of in DESIGNS if (changes := of(runs)) is not None]
+
+
 def _noise_free(params: DockingLoopParams, changes: dict) -> DockingLoopParams:
     return params.with_(
         **changes,
@@ -113,7 +127,14 @@ def design_distance(
     levels = mean_levels(runs) if levels is None else levels
     first = runs[0]
     params = _noise_free(first.params, changes)
-    loop = simulate6(params, physics=a.physics)
+    try:
+        loop = simulate6(params, physics=a.physics)
+    except DivergenceError:
+        raise
+    except SimulationError:  # a contact that does not end by itself (a reading held
+        # above the dead band by a bias): the run as long as one is expected to be
+        params = params.with_(duration_s=expected_end_s(params))
+        loop = simulate6(params, physics=a.physics)
     design = replace(run6_of_docking(loop, f"{first.run_id}-design", first.scenario), params=params)
     da = replay_residuals(design, a.physics, levels)
     db = replay_residuals(design, b.physics, levels)
@@ -126,26 +147,38 @@ def mean_levels(runs: Sequence[Run6]) -> dict[str, np.ndarray]:
     return {k: np.mean([e[k] for e in each], axis=0) for k in each[0]}
 
 
+def try_distance(
+    runs: Sequence[Run6], a: Fit6, b: Fit6, changes: dict, levels: dict
+) -> float | None:
+    """:func:`design_distance`, or None where the run cannot be made or
+    replayed on this rig (a candidate passed over)."""
+    try:
+        return design_distance(runs, a, b, changes, levels)
+    except (SimulationError, ParameterError, ValueError):
+        return None
+
+
 def separating_run6(runs: Sequence[Run6], a: Fit6, b: Fit6) -> dict | None:
     """Of :data:`DESIGNS`, the run on which the fitted models ``a`` and ``b``
-    differ most (see the module), or None if none could be simulated.
-
-    Returns ``run`` (words), ``changes`` (flat names), ``distance`` and
-    ``recorded_distance`` (the two models' replays of the recorded runs
-    apart, noise levels), ``separates`` (one such run's squared distance
-    exceeds :data:`~hybridtable.diagnosis.settings.BIC_THRESHOLD`) and
-    ``runs_needed`` (how many such runs would; None: the models agree).
-    """
+    differ most (see the module), or None if none could be simulated
+    (:func:`separation` of each candidate's :func:`try_distance`)."""
     levels = mean_levels(runs)
-    designs = [(words, changes) for words, of in DESIGNS if (changes := of(runs)) is not None]
+    designs = candidate_runs(runs)
+    distances = {words: try_distance(runs, a, b, changes, levels) for words, changes in designs}
+    return separation(a, b, designs, distances)
 
-    def distance(design) -> float | None:
-        try:
-            return design_distance(runs, a, b, design[1], levels)
-        except (SimulationError, ParameterError, ValueError):
-            return None
 
-    best = most_separating(designs, distance, BIC_THRESHOLD)
+def separation(
+    a: Fit6, b: Fit6, designs: Sequence[tuple[str, dict]], distances: dict[str, float | None]
+) -> dict | None:
+    """The separating run of models ``a`` and ``b`` from each candidate's
+    distance (words -> noise levels; None: passed over), or None if no
+    candidate ran. Returns ``run`` (words), ``changes`` (flat names),
+    ``distance`` and ``recorded_distance`` (the two models' replays of the
+    recorded runs apart, noise levels), ``separates`` (one such run's squared
+    distance exceeds :data:`~hybridtable.diagnosis.settings.BIC_THRESHOLD`)
+    and ``runs_needed`` (how many such runs would; None: the models agree)."""
+    best = most_separating(designs, lambda d: distances[d[0]], BIC_THRESHOLD)
     if best is None:
         return None
     out = best.to_dict(float(np.linalg.norm(b.residuals - a.residuals)))

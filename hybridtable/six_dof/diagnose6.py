@@ -81,7 +81,7 @@ from hybridtable.effects.workers import pool_map
 from hybridtable.errors import ParameterError, SimulationError
 from hybridtable.six_dof.audit6 import audit_runs6
 from hybridtable.six_dof.compare6 import replay_residuals
-from hybridtable.six_dof.design6 import separating_run6
+from hybridtable.six_dof.design6 import candidate_runs, mean_levels, separation, try_distance
 from hybridtable.six_dof.fit6 import Fit6, blocks, fit_runs6
 from hybridtable.six_dof.physics6 import physics_with, rig_scale
 from hybridtable.six_dof.run6 import Run6
@@ -187,7 +187,8 @@ def _swap_step(runs: Sequence[Run6], out: Diagnosis6, workers: int, progress: bo
             if r["replaces"] != swapped and abs(r["delta_bic"]) < INDISTINGUISHABLE_BIC:
                 alike = out.lookalikes_of.setdefault(r["replaces"], [])
                 alike += [r["effect"]] * (r["effect"] not in alike)
-                out.pairs[r["replaces"], r["effect"]] = (before, r["fit"])
+                if swapped is None:  # else ``before`` holds the effect swapped out
+                    out.pairs[r["replaces"], r["effect"]] = (before, r["fit"])
 
     if not better:
         note_lookalikes(None)
@@ -217,8 +218,12 @@ def _swap_step(runs: Sequence[Run6], out: Diagnosis6, workers: int, progress: bo
     out.lookalikes_of[new] = alike
     out.pairs = {k: v for k, v in out.pairs.items() if k[0] != gone}
     out.pairs[new, gone] = (best["fit"], before)
-    out.pairs.update(
-        {(new, r["effect"]): (best["fit"], r["fit"]) for r in scored if r["effect"] in alike}
+    out.pairs.update(  # the other replacements of the same effect
+        {
+            (new, r["effect"]): (best["fit"], r["fit"])
+            for r in scored
+            if r["replaces"] == gone and r["effect"] in alike
+        }
     )
     note_lookalikes(gone)
 
@@ -394,20 +399,44 @@ def diagnose_runs6(
     if out.selected and out.fit is not None and swap:
         _swap_step(runs, out, workers, progress)
     if separate:
-        _separate(runs, out)
+        _separate(runs, out, workers, progress)
     return out
 
 
-def _separate(runs: Sequence[Run6], out: Diagnosis6) -> None:
+def _design_job(shared: tuple, job: tuple[int, int]) -> float | None:
+    """One candidate run's distance between one pair of models."""
+    runs, pairs, designs, levels = shared
+    i, j = job
+    return try_distance(runs, *pairs[i], designs[j][1], levels)
+
+
+def _separate(runs: Sequence[Run6], out: Diagnosis6, workers: int, progress: bool) -> None:
     """Each selected effect's separating runs from its first
-    :data:`MAX_SEPARATED` look-alikes (step 6 of the module)."""
-    for name in out.selected:
-        found = []
-        for other in out.lookalikes_of.get(name, [])[:MAX_SEPARATED]:
-            pair = out.pairs.get((name, other))
-            sep = None if pair is None else separating_run6(runs, *pair)
-            if sep is not None:
-                hint = get_effect(other).separation_hint
-                found.append({"effects": [name, other], **sep, "hint": hint})
-        if found:
-            out.separations[name] = found
+    :data:`MAX_SEPARATED` look-alikes (step 6 of the module), the candidate
+    runs of every pair in ``workers`` processes; a look-alike it cannot seek
+    one for says why."""
+    wanted = [(s, o) for s in out.selected for o in out.lookalikes_of.get(s, [])[:MAX_SEPARATED]]
+    pairs = [p for p in wanted if p in out.pairs]
+    designs = candidate_runs(runs)
+    jobs = [(i, j) for i in range(len(pairs)) for j in range(len(designs))]
+    shared = (list(runs), [out.pairs[p] for p in pairs], designs, mean_levels(runs))
+    results = pool_map(
+        _design_job, jobs, workers, progress=progress, label="separating runs", shared=shared
+    )
+    distances: dict[tuple[str, str], dict[str, float | None]] = {p: {} for p in pairs}
+    for (i, j), d in zip(jobs, results, strict=True):
+        distances[pairs[i]][designs[j][0]] = d
+    for name, other in wanted:
+        entry: dict = {"effects": [name, other], "run": None}
+        if (name, other) not in out.pairs:
+            entry["why"] = (
+                "the swap step changed the selection after the look-alike was found, so "
+                "no two fitted models differ in these effects alone"
+            )
+        else:
+            sep = separation(*out.pairs[name, other], designs, distances[name, other])
+            if sep is None:
+                entry["why"] = "none of the candidate runs could be simulated on this rig"
+            else:
+                entry.update(sep, hint=get_effect(other).separation_hint)
+        out.separations.setdefault(name, []).append(entry)

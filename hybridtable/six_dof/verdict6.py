@@ -97,8 +97,8 @@ class Diagnosis6:
     #: the selected effect, the same with the look-alike in its place.
     pairs: dict[tuple[str, str], tuple[Fit6, Fit6]] = field(default_factory=dict, repr=False)
     #: Each selected effect's look-alikes' separating runs
-    #: (:func:`~hybridtable.six_dof.design6.separating_run6`, with ``effects``
-    #: and ``hint``).
+    #: (:func:`~hybridtable.six_dof.design6.separation`, with ``effects``
+    #: and ``hint``; ``run`` None and ``why`` where none was sought).
     separations: dict[str, list[dict]] = field(default_factory=dict)
 
     @property

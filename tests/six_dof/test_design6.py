@@ -98,10 +98,31 @@ def test_a_series_compliance_and_the_softer_spring_are_never_separated(linear_ru
     assert sep["runs_needed"] is None or sep["runs_needed"] > 1e6
 
 
-def test_a_design_that_cannot_run_is_passed_over(linear_runs):
+def test_a_design_that_cannot_run_is_passed_over(linear_runs, monkeypatch):
+    """A candidate run the rig cannot make (a negative approach speed) is
+    left out, and the best of the others is the answer; with none left,
+    there is no answer (None), not a made-up one."""
+    import hybridtable.six_dof.design6 as design6
+
     a = _model(linear_runs, {"contact_damping": {"damping_n_s_per_m": 400.0}})
-    with pytest.raises(Exception, match="initial_velocity"):
-        design_distance(linear_runs, a, a, {"initial_velocity_m_per_s": -1.0})
+    b = _model(linear_runs, {"contact_damping": {"damping_n_s_per_m": 800.0}})
+    bad = ("a reversed approach", lambda r: {"initial_velocity_m_per_s": -0.1})
+    good = ("twice the approach velocity", lambda r: {"initial_velocity_m_per_s": 0.2})
+    monkeypatch.setattr(design6, "DESIGNS", (bad, good))
+    sep = separating_run6(linear_runs, a, b)
+    assert sep["run"] == "twice the approach velocity"
+    monkeypatch.setattr(design6, "DESIGNS", (bad,))
+    assert separating_run6(linear_runs, a, b) is None
+
+
+def test_a_model_whose_reading_never_falls_back_still_gets_its_runs(linear_runs):
+    """A force bias above the dead band keeps the reading on after the
+    release, so the contact never ends by itself: the candidate run is
+    simulated for as long as a contact is expected to take instead of being
+    dropped."""
+    bias = {"force_bias": {"bias_n": 50.0}}
+    a, b = _model(linear_runs, bias), _model(linear_runs, {})
+    assert design_distance(linear_runs, a, b, {"initial_velocity_m_per_s": 0.2}) > 1.0
 
 
 def test_diagnose_names_no_run_for_one_law_and_says_why(tmp_path):

@@ -197,3 +197,49 @@ def test_the_swap_step_names_the_simpler_of_two_look_alikes(tmp_path):
     assert values["coulomb_friction"]["friction_force_n"] == pytest.approx(friction, rel=0.02)
     swap = [step for step in result.steps if step.kind == "swap"]
     assert len(swap) == 1
+
+
+def test_after_a_swap_each_look_alike_is_paired_with_the_model_it_replaces(monkeypatch):
+    """The swap step's bookkeeping with stand-in fits (no simulation): a
+    candidate that could replace either selected effect is paired, for the
+    separating run, with the model in which it replaces the swapped one, so
+    the two models differ in those two effects alone; a look-alike of
+    another effect noted in a swap that changed the selection gets no pair
+    (its models would hold the effect swapped out)."""
+    import hybridtable.six_dof.diagnose6 as d6
+    from hybridtable.six_dof.verdict6 import Diagnosis6, Step6
+
+    a, b, x, y = "contact_damping", "sensor_filter", "extra_delay", "table_damping"
+
+    class Fit:
+        def __init__(self, names):
+            self.names = frozenset(names)
+            self.values = {n: {} for n in names}
+            self.std = {}
+            self.residuals = self.names
+
+    scores = {frozenset({b, y}): 20.0, frozenset({b, x}): 16.0, frozenset({a, x}): 2.0}
+    monkeypatch.setattr(d6, "pool_map", lambda fn, jobs, workers, **kw: [Fit(n) for n, _ in jobs])
+    monkeypatch.setattr(d6, "blocks", lambda runs, residuals: residuals)
+    monkeypatch.setattr(d6, "delta_bic", lambda cur, new, dk, *rest: scores[new])
+    monkeypatch.setattr(d6, "component_errors", lambda runs, residuals: {})
+    monkeypatch.setattr(d6, "compatible", lambda names: True)
+    out = Diagnosis6(run_ids=["r"], candidates=[a, b, x, y], nominal_errors={})
+    out.selected, out.fit = [a, b], Fit([a, b])
+    round1 = [
+        {"effect": a, "delta_bic": 100.0, "values": {a: {}}},
+        {"effect": y, "delta_bic": 98.0, "values": {y: {}}},
+        {"effect": x, "delta_bic": 60.0, "values": {x: {}}},
+    ]
+    round2 = [
+        {"effect": b, "delta_bic": 50.0, "values": {a: {}, b: {}}},
+        {"effect": x, "delta_bic": 30.0, "values": {a: {}, x: {}}},
+    ]
+    out.steps = [Step6(round1, a, ""), Step6(round2, b, "")]
+    out.lookalikes_of = {a: [y], b: []}
+    d6._swap_step(["run"], out, 1, False)
+    assert out.selected == [y, b]
+    assert x in out.lookalikes_of[y] and x in out.lookalikes_of[b]
+    for (selected, other), (one, two) in out.pairs.items():
+        assert one.names ^ two.names == {selected, other}
+    assert (y, x) in out.pairs and (b, x) not in out.pairs
