@@ -39,7 +39,13 @@ from hybridtable.systems.measurement_chain import low_pass_system, mount_system
 from hybridtable.systems.resonant_table import StructuralModeParams
 from hybridtable.systems.sensor import sample_taps
 
-__all__ = ["ContactModes", "contact_modes", "tick_matrix", "critical_delay_s"]
+__all__ = [
+    "ContactModes",
+    "contact_modes",
+    "critical_delay_s",
+    "mdc_stiffness_of",
+    "tick_matrix",
+]
 
 #: Eigenvalues closer than this to 1 are free directions (not modes in contact).
 _FREE = 1e-6
@@ -103,6 +109,7 @@ def tick_matrix(
     C: np.ndarray,
     delay_ticks: float | None = None,
     physics: DockingPhysics | None = None,
+    mdc_stiffness: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> np.ndarray:
     """``A`` of the linearized loop over one tick (see the module docstring),
     with the contact's ``K``, ``C`` (6x6) and a delay of ``delay_ticks`` ticks
@@ -123,7 +130,9 @@ def tick_matrix(
     (the diagram's Drake primitives, as matrices), and the rig computer of
     :meth:`DockingPhysics.computer
     <hybridtable.six_dof.physics6.DockingPhysics.computer>`; a delay scanned is
-    the scenario's, the rig's being that plus what the model adds."""
+    the scenario's, the rig's being that plus what the model adds.
+    ``mdc_stiffness``: the MDC's ``(K, C)`` found once by a caller that scans
+    the delay (:func:`mdc_stiffness_of`)."""
     h = params.sample_period_s
     delay_s = None if delay_ticks is None else float(delay_ticks) * h
     plant = computer = params
@@ -154,10 +163,7 @@ def tick_matrix(
     kind = linear.law
     lead = believed(computer, "lead_time_s", delay_s) if kind in ("SDC", "SDMDC") else 0.0
     mdc = kind in ("MDC", "SDMDC")
-    if mdc and not linear.identifies_stiffness:
-        K_c, C_c = stiffness_model_of(computer)(plant.nominal_pose(), None)
-    else:
-        K_c, C_c = K, C
+    K_c, C_c = mdc_stiffness or mdc_stiffness_of(params, K, C, physics)
     n_state = 0 if tick is None else tick[0].shape[0]
     sizes = {
         "body": 12,
@@ -231,6 +237,26 @@ def tick_matrix(
     return np.column_stack([step(e) for e in np.eye(n)])
 
 
+def mdc_stiffness_of(
+    params: DockingLoopParams,
+    K: np.ndarray,
+    C: np.ndarray,
+    physics: DockingPhysics | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The ``K`` and ``C`` of the MDC term at the docked pose: its own
+    stiffness model's (:func:`~hybridtable.six_dof.compensator.stiffness_model_of`
+    of the rig computer), or an online identifier's, the contact's ``K``,
+    ``C`` (where its estimate converges)."""
+    linear = linear_law(params.compensator)
+    if linear is None or linear.law not in ("MDC", "SDMDC") or linear.identifies_stiffness:
+        return K, C
+    plant = params if physics is None else physics.apply(params)
+    computer = params if physics is None else physics.computer(params)
+    if computer.stiffness_model == "linearized" and computer.believed_contact == plant.contact:
+        return K, C  # the same contact at the same pose
+    return stiffness_model_of(computer)(plant.nominal_pose(), None)
+
+
 def _sensor_chain(physics: DockingPhysics | None, h: float) -> list[tuple]:
     """The F/T sensor's parts before its delay, in the diagram's order
     (:func:`~hybridtable.six_dof.builder.add_rig_part`): its gain, low pass
@@ -264,6 +290,7 @@ def critical_delay_s(
     C: np.ndarray,
     max_delay_s: float = 0.05,
     physics: DockingPhysics | None = None,
+    mdc_stiffness: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> float:
     """The shortest sensor delay (up to ``max_delay_s``) at which the
     linearized loop is not asymptotically stable (a mode whose growth rate is
@@ -276,9 +303,10 @@ def critical_delay_s(
     With ``physics`` (:func:`tick_matrix`) the delay scanned is the
     scenario's: the rig's is that plus what the model adds."""
     h = params.sample_period_s
+    mdc = mdc_stiffness or mdc_stiffness_of(params, K, C, physics)
 
     def growth(delay_s: float) -> float:
-        _, s = _modes(tick_matrix(params, K, C, delay_s / h, physics), h)
+        _, s = _modes(tick_matrix(params, K, C, delay_s / h, physics, mdc), h)
         return float(np.max(s.real)) if s.size else -math.inf
 
     return critical_delay(growth, max_delay_s, h, tolerance=_NEUTRAL_PER_S)
@@ -293,7 +321,8 @@ def contact_modes(
     plant = params if physics is None else physics.apply(params)
     K, C = DockingContact(plant.contact).stiffness(plant.nominal_pose())
     h = params.sample_period_s
-    lam, s = _modes(tick_matrix(params, K, C, None, physics), h)
+    mdc = mdc_stiffness_of(params, K, C, physics)
+    lam, s = _modes(tick_matrix(params, K, C, None, physics, mdc), h)
     growth = float(s.real.max()) if s.size else 0.0
     # Modes of the contact, not of the table or the delay line: below the
     # Nyquist rate and among the slowest; and the fastest-growing, if it grows.
@@ -309,6 +338,6 @@ def contact_modes(
         damping_ratios=tuple(float(-v.real / abs(v)) if abs(v) > 0 else 0.0 for v in s),
         max_growth_rate_per_s=growth,
         stable=bool(growth <= _NEUTRAL_PER_S),
-        critical_delay_s=critical_delay_s(params, K, C, max_delay_s, physics),
+        critical_delay_s=critical_delay_s(params, K, C, max_delay_s, physics, mdc),
         spectral_radius=float(np.abs(lam_all).max()) if lam_all.size else 1.0,
     )
