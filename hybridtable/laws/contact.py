@@ -16,6 +16,7 @@ from hybridtable.laws.select import both, select
 
 __all__ = [
     "critical_damping_n_s_per_m",
+    "hunt_crossley_force",
     "mass_for_contact_frequency_kg",
     "spring_contact_force",
     "spring_contact_force_rate",
@@ -33,6 +34,19 @@ def critical_damping_n_s_per_m(stiffness_n_per_m: float, mass_kg: float) -> floa
     """The damping ``2 sqrt(k m)`` [N s/m] at which the contact on the mass
     ``mass_kg`` stops rebounding (damping ratio 1)."""
     return 2.0 * math.sqrt(stiffness_n_per_m * mass_kg)
+
+
+def hunt_crossley_force(elastic_n: Any, elastic_rate_n_per_m: Any, factor_s_per_m: Any, v: Any):
+    """Hunt–Crossley dissipation on an elastic force: ``f = f_e (1 + alpha v)``
+    of the elastic force ``f_e`` (N, its derivative by the penetration
+    ``df_e/dp``, N/m) at penetration rate ``v`` (m/s), ``alpha`` in s/m; returns
+    ``f`` and its derivatives by the penetration and by ``v``. Drake's
+    compliant point contact is it with ``f_e = k p``
+    (:mod:`hybridtable.six_dof.pads`); the 1-D contact law adds it to any
+    elastic law (:func:`~hybridtable.systems.contact_law.contact_law_force`).
+    Plain arithmetic: floats, arrays, ``AutoDiffXd``, and compiled by numba."""
+    gain = 1.0 + factor_s_per_m * v
+    return elastic_n * gain, elastic_rate_n_per_m * gain, elastic_n * factor_s_per_m
 
 
 def _touching(p: Any, f: Any, bilateral: bool) -> Any:

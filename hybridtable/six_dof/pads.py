@@ -22,6 +22,7 @@ from pydrake.math import RigidTransform
 from pydrake.multibody.plant import CoulombFriction
 
 from hybridtable.laws.compiled import compiled_kernel
+from hybridtable.laws.contact import hunt_crossley_force
 from hybridtable.six_dof.pose import rotation_exp, rotation_jacobian, skew
 from hybridtable.systems.contact_law import ContactLawParams, contact_law_force
 
@@ -218,17 +219,15 @@ def _pad_forces(U, X, V, FN, mu):
 
 def _drake_law(X, V, k, d):
     """Drake's point contact of each pressing pad: its normal force ``k x (1 +
-    d xdot)`` (``xdot = -n . v_C``), and its derivatives by ``x`` and
-    ``xdot``: ``(FN, KX, KV)``."""
+    d xdot)`` (``xdot = -n . v_C``: the Hunt–Crossley law,
+    :func:`~hybridtable.laws.contact.hunt_crossley_force`, on the spring ``k
+    x``), and its derivatives by ``x`` and ``xdot``: ``(FN, KX, KV)``."""
     m = X.shape[0]
     FN = np.zeros(m)
     KX = np.zeros(m)
     KV = np.zeros(m)
     for i in range(m):
-        n_vc = -V[i, 2]
-        FN[i] = k * X[i] * (1.0 - d * n_vc)
-        KX[i] = k * (1.0 - d * n_vc)
-        KV[i] = k * X[i] * d
+        FN[i], KX[i], KV[i] = hunt_crossley_force(k * X[i], k, d, V[i, 2])
     return FN, KX, KV
 
 
@@ -293,6 +292,7 @@ def _pad_wrench(q, qd, centres, r, k, d, mu):
 
 
 _HELPERS = (
+    hunt_crossley_force,
     skew,
     rotation_exp,
     rotation_jacobian,

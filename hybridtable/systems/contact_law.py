@@ -13,6 +13,7 @@ from pydrake.systems.framework import LeafSystem_
 from pydrake.systems.scalar_conversion import TemplateSystem
 
 from hybridtable._validation import check_nonnegative, check_positive
+from hybridtable.laws.contact import hunt_crossley_force
 
 __all__ = [
     "ContactLawParams",
@@ -145,15 +146,16 @@ def contact_law_force(params: ContactLawParams, p, v, a=0.0):
     fe, dfe = _elastic(params, p)
     alpha, c = params.hunt_crossley_s_per_m, params.damping_n_s_per_m
     big_f, vf = params.friction_force_n, params.friction_velocity_m_per_s
-    f = fe * (1.0 + alpha * v) + c * v
-    dfdv = fe * alpha + c
+    f, dfdp, dfdv = hunt_crossley_force(fe, dfe, alpha, v)
+    f = f + c * v
+    dfdv = dfdv + c
     if big_f > 0.0:
         th = tanh(v / vf)
         f = f + big_f * th
         dfdv = dfdv + big_f / vf * (1.0 - th * th)
     if not f > 0.0:
         return 0.0 * f, 0.0 * f
-    rate = dfe * (1.0 + alpha * v) * v + dfdv * a
+    rate = dfdp * v + dfdv * a
     return f, rate
 
 
