@@ -328,13 +328,7 @@ def compare_run6(run: Run6, physics: DockingPhysics | None = None) -> Comparison
     h = params.sample_period_s
     phase, contact = phases(run)
     replayed = _replayed(run, physics)
-    model_params = params.with_(
-        force_noise_n=0.0,
-        moment_noise_n_m=0.0,
-        position_noise_m=0.0,
-        attitude_noise_rad=0.0,
-        duration_s=run.n * h,
-    )
+    model_params = params.without_noise(duration_s=run.n * h)
     simulated = simulate6(model_params, physics=physics)
     model = run6_of_docking(simulated, f"{run.run_id}-model", run.scenario)
     looped = {b: _block(model, b) for b in ("f_mea", "m_mea", "p_act")}

@@ -36,7 +36,6 @@ from hybridtable.effects.selection import most_separating
 from hybridtable.errors import DivergenceError, ParameterError, SimulationError
 from hybridtable.six_dof.compare6 import noise_levels_of, replay_residuals
 from hybridtable.six_dof.fit6 import Fit6
-from hybridtable.six_dof.params import DockingLoopParams
 from hybridtable.six_dof.run6 import Run6, run6_of_docking
 from hybridtable.six_dof.simulation import expected_end_s, simulate6
 
@@ -69,9 +68,8 @@ def _unchanged_compensator(runs: Sequence[Run6]) -> bool:
 
 
 #: Candidate runs: (words, the recorded runs -> changes of the first run's
-#: scenario by flat name (:attr:`DockingLoopParams.FIELDS
-#: <hybridtable.six_dof.params.DockingLoopParams.FIELDS>`), or None where
-#: the run is no change).
+#: scenario by flat name, :attr:`~hybridtable.six_dof.params.DockingLoopParams.FIELDS`,
+#: or None where the run is no change).
 DESIGNS: tuple[tuple[str, Callable[[Sequence[Run6]], dict | None]], ...] = (
     ("half the approach velocity", lambda r: {"initial_velocity_m_per_s": 0.5 * min(_speeds(r))}),
     ("twice the approach velocity", lambda r: {"initial_velocity_m_per_s": 2.0 * max(_speeds(r))}),
@@ -100,17 +98,6 @@ def candidate_runs(runs: Sequence[Run6]) -> list[tuple[str, dict]]:
     return [(words, changes) for words, of in DESIGNS if (changes := of(runs)) is not None]
 
 
-def _noise_free(params: DockingLoopParams, changes: dict) -> DockingLoopParams:
-    return params.with_(
-        **changes,
-        force_noise_n=0.0,
-        moment_noise_n_m=0.0,
-        position_noise_m=0.0,
-        attitude_noise_rad=0.0,
-        duration_s=None,
-    )
-
-
 def design_distance(
     runs: Sequence[Run6], a: Fit6, b: Fit6, changes: dict, levels: dict | None = None
 ) -> float:
@@ -126,7 +113,7 @@ def design_distance(
     """
     levels = mean_levels(runs) if levels is None else levels
     first = runs[0]
-    params = _noise_free(first.params, changes)
+    params = first.params.without_noise(**changes, duration_s=None)
     try:
         loop = simulate6(params, physics=a.physics)
     except DivergenceError:

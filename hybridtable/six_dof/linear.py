@@ -204,14 +204,11 @@ def tick_matrix(
             out[start["table"] : start["table"] + 6 * n_state] = y.ravel()
         w_act = -K @ table[:6] - C @ table[6:]
         j = start["chain"]
-        for a, bm, c, d in chain:  # the sensor's gain, low pass and mount
-            if a.shape[0]:
-                z = x[j : j + a.shape[0]]
-                out[j : j + a.shape[0]] = a @ z + bm @ w_act
-                w_act = c @ z + d @ w_act
-                j += a.shape[0]
-            else:
-                w_act = d @ w_act
+        for a, bm, c, d in chain:  # the sensor's gain (no state), low pass and mount
+            z = x[j : j + a.shape[0]]
+            out[j : j + a.shape[0]] = a @ z + bm @ w_act
+            w_act = c @ z + d @ w_act
+            j += a.shape[0]
         # line[j] is the contact's wrench of tick k - L + j
         line = x[start["delay"] : start["delay"] + 6 * L].reshape(L, 6) if L else None
         w_mea = w_act if M == 0 else line[L - M]

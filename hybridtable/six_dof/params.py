@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, field, fields, is_dataclass, replace
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -602,6 +602,18 @@ class DockingLoopParams(NestedParams):
         """On-axis contact frequency sqrt(k / m) / 2 pi (Hz)."""
         k = self.contact.contact_stiffness_n_per_m
         return math.sqrt(k / self.spacecraft.mass_kg) / (2.0 * math.pi)
+
+    def without_noise(self, **changes: Any) -> DockingLoopParams:
+        """The same loop with ``changes`` (flat names) and no noise in it: the
+        F/T sensor's and the encoders' (a model's run of a recorded one, a
+        candidate run)."""
+        return self.with_(
+            **changes,
+            force_noise_n=0.0,
+            moment_noise_n_m=0.0,
+            position_noise_m=0.0,
+            attitude_noise_rad=0.0,
+        )
 
     def ideal_rig(self) -> DockingLoopParams:
         """The same docking on the ideal rig: no sensor delay, the ideal table
