@@ -12,7 +12,7 @@ import numpy as np
 
 from hybridtable.diagnosis.evaluate import Evaluator
 from hybridtable.diagnosis.settings import BIC_THRESHOLD, CHANNELS
-from hybridtable.effects.selection import most_separating
+from hybridtable.effects.selection import most_separating, scaled_runs
 from hybridtable.effects.spec import ModelSpec
 from hybridtable.errors import MeasurementError, SimulationError
 from hybridtable.measurement.replay import replay_command
@@ -25,28 +25,11 @@ __all__ = [
 
 
 # -- separating runs -----------------------------------------------------------
-#: Candidate runs of :func:`separating_run`: (label, changes of the run's JSON).
-DESIGNS: tuple[tuple[str, Callable[[Run], dict]], ...] = (
-    ("half the approach velocity", lambda r: {"initial_velocity_m_per_s": 0.5 * _vmin(r)}),
-    ("twice the approach velocity", lambda r: {"initial_velocity_m_per_s": 2.0 * _vmax(r)}),
-    ("three times the approach velocity", lambda r: {"initial_velocity_m_per_s": 3.0 * _vmax(r)}),
-    (
-        "a quarter of the spacecraft mass",
-        lambda r: {"spacecraft_mass_kg": 0.25 * r[0].info.spacecraft_mass_kg},
-    ),
-    (
-        "four times the spacecraft mass",
-        lambda r: {"spacecraft_mass_kg": 4.0 * r[0].info.spacecraft_mass_kg},
-    ),
+#: Candidate runs of :func:`separating_run`: (label, changes of the run's JSON),
+#: the effect core's :data:`~hybridtable.effects.selection.SCALED_RUNS`.
+DESIGNS: tuple[tuple[str, Callable[[Run], dict]], ...] = scaled_runs(
+    lambda run, name: getattr(run.info, name)
 )
-
-
-def _vmin(runs) -> float:
-    return min(x.info.initial_velocity_m_per_s for x in runs)
-
-
-def _vmax(runs) -> float:
-    return max(x.info.initial_velocity_m_per_s for x in runs)
 
 
 def _design_run(run: Run, changes: dict) -> Run:

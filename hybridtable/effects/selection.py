@@ -27,16 +27,18 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
-from typing import TypeVar
+from typing import Any, TypeVar
 
 __all__ = [
     "MAX_RUNS_SUGGESTED",
+    "SCALED_RUNS",
     "Block",
     "Separation",
     "bic",
     "delta_bic",
     "lookalikes",
     "most_separating",
+    "scaled_runs",
     "separation_words",
 ]
 
@@ -131,6 +133,36 @@ class Separation:
             "separates": self.separates,
             "runs_needed": self.runs_needed,
         }
+
+
+def _first(values: Sequence[float]) -> float:
+    return values[0]
+
+
+#: The candidate runs both ``diagnose`` front ends try (the 1-D run's JSON and
+#: a six-axis scenario name these quantities alike): (words, the quantity,
+#: its factor, of the recorded runs' slowest, fastest or first value).
+SCALED_RUNS: tuple[tuple[str, str, float, Callable[[Sequence[float]], float]], ...] = (
+    ("half the approach velocity", "initial_velocity_m_per_s", 0.5, min),
+    ("twice the approach velocity", "initial_velocity_m_per_s", 2.0, max),
+    ("three times the approach velocity", "initial_velocity_m_per_s", 3.0, max),
+    ("a quarter of the spacecraft mass", "spacecraft_mass_kg", 0.25, _first),
+    ("four times the spacecraft mass", "spacecraft_mass_kg", 4.0, _first),
+)
+
+
+def scaled_runs(
+    quantity: Callable[[Any, str], float],
+) -> tuple[tuple[str, Callable[[Sequence[Any]], dict]], ...]:
+    """:data:`SCALED_RUNS` as a front end's designs: (words, the recorded runs
+    -> the changes), ``quantity(run, name)`` reading a run's value."""
+    return tuple(
+        (
+            words,
+            lambda runs, n=name, f=factor, of=pick: {n: f * of([quantity(r, n) for r in runs])},
+        )
+        for words, name, factor, pick in SCALED_RUNS
+    )
 
 
 #: Most runs of one kind a separation's words suggest.

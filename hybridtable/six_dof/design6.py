@@ -32,7 +32,7 @@ from dataclasses import replace
 import numpy as np
 
 from hybridtable.diagnosis.settings import BIC_THRESHOLD
-from hybridtable.effects.selection import most_separating
+from hybridtable.effects.selection import most_separating, scaled_runs
 from hybridtable.errors import DivergenceError, ParameterError, SimulationError
 from hybridtable.six_dof.compare6 import noise_levels_of, replay_residuals
 from hybridtable.six_dof.fit6 import Fit6
@@ -54,10 +54,6 @@ __all__ = [
 PITCH_STEP_RAD = math.radians(2.0)
 
 
-def _speeds(runs: Sequence[Run6]) -> list[float]:
-    return [r.params.approach.initial_velocity_m_per_s for r in runs]
-
-
 def _pitched(runs: Sequence[Run6]) -> dict:
     roll, pitch = runs[0].params.approach.misalignment_rad
     return {"misalignment_rad": (roll, pitch + PITCH_STEP_RAD)}
@@ -71,20 +67,8 @@ def _unchanged_compensator(runs: Sequence[Run6]) -> bool:
 #: scenario by flat name, :attr:`~hybridtable.six_dof.params.DockingLoopParams.FIELDS`,
 #: or None where the run is no change).
 DESIGNS: tuple[tuple[str, Callable[[Sequence[Run6]], dict | None]], ...] = (
-    ("half the approach velocity", lambda r: {"initial_velocity_m_per_s": 0.5 * min(_speeds(r))}),
-    ("twice the approach velocity", lambda r: {"initial_velocity_m_per_s": 2.0 * max(_speeds(r))}),
-    (
-        "three times the approach velocity",
-        lambda r: {"initial_velocity_m_per_s": 3.0 * max(_speeds(r))},
-    ),
-    (
-        "a quarter of the spacecraft mass",
-        lambda r: {"spacecraft_mass_kg": 0.25 * r[0].params.spacecraft_mass_kg},
-    ),
-    (
-        "four times the spacecraft mass",
-        lambda r: {"spacecraft_mass_kg": 4.0 * r[0].params.spacecraft_mass_kg},
-    ),
+    # the 1-D diagnose's (the effect core's), then pitch and the compensator
+    *scaled_runs(lambda run, name: getattr(run.params, name)),
     ("2 degrees more pitch in the approach", _pitched),
     (
         "the compensator off",
